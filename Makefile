@@ -1,0 +1,37 @@
+# rotorcheck: every target creates and uses its own virtual environment in .venv
+PY ?= python3
+VENV := .venv
+BIN := $(VENV)/bin
+STAMP := $(VENV)/.installed
+
+.PHONY: venv demo test lint samples golden bench clean
+
+$(STAMP): pyproject.toml
+	$(PY) -m venv $(VENV)
+	$(BIN)/python -m pip install --quiet --upgrade pip
+	$(BIN)/python -m pip install --quiet -e ".[dev]"
+	touch $(STAMP)
+
+venv: $(STAMP)
+
+demo: $(STAMP)
+	MPLBACKEND=Agg $(BIN)/python -m rotorcheck.demo
+
+test: $(STAMP)
+	$(BIN)/ruff check rotorcheck tests bench
+	MPLBACKEND=Agg $(BIN)/python -m pytest -q
+
+lint: $(STAMP)
+	$(BIN)/ruff check rotorcheck tests bench
+
+samples: $(STAMP)
+	$(BIN)/python -m rotorcheck.sweep.samples data_samples
+
+golden: $(STAMP)
+	MPLBACKEND=Agg $(BIN)/python -m rotorcheck.golden --write
+
+bench: $(STAMP)
+	MPLBACKEND=Agg $(BIN)/python -m bench
+
+clean:
+	rm -rf $(VENV) rotorcheck-out .pytest_cache

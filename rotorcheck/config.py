@@ -1,0 +1,573 @@
+"""Rig description (YAML), validated on load.
+
+Two model kinds share one config family:
+
+- ``kind: rotor``: a Timoshenko finite element rotor (stations, shaft elements, discs, bearings).
+- ``kind: lumped``: masses, springs and dampers to ground or between masses (the three-mass example).
+
+Bare numbers are SI; strings such as ``"16 mm"`` or ``"224.08 GPa"`` are converted (see
+:mod:`rotorcheck.units`). Unknown keys are rejected. Errors name the file and the field by path,
+e.g. ``configs/x.yaml: bearings[1].kxx: must be > 0``.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from pathlib import Path
+from typing import Annotated, Any, Literal
+
+import yaml
+from pydantic import (
+    BaseModel,
+    BeforeValidator,
+    ConfigDict,
+    Field,
+    ValidationError,
+    model_validator,
+)
+
+from rotorcheck.units import parse_quantity
+
+# --------------------------------------------------------------------------------------------
+# quantity types
+
+
+def _q(dimension: str) -> Any:
+    return BeforeValidator(lambda v: parse_quantity(v, dimension))
+
+
+Length = Annotated[float, _q("length")]
+Mass = Annotated[float, _q("mass")]
+Density = Annotated[float, _q("density")]
+Pressure = Annotated[float, _q("pressure")]
+Stiffness = Annotated[float, _q("stiffness")]
+Damping = Annotated[float, _q("damping")]
+Inertia = Annotated[float, _q("inertia")]
+FrequencyHz = Annotated[float, _q("frequency")]
+SpeedRpm = Annotated[float, _q("speed")]
+Force = Annotated[float, _q("force")]
+Unbalance = Annotated[float, _q("unbalance")]
+Angle = Annotated[float, _q("angle")]
+Ratio = Annotated[float, _q("dimensionless")]
+
+
+class Strict(BaseModel):
+    """Base: unknown keys are errors."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+# --------------------------------------------------------------------------------------------
+# rotor parts
+
+
+class Material(Strict):
+    density: Density = Field(gt=0, description="kg/m^3")
+    youngs_modulus: Pressure = Field(gt=0, description="Pa")
+    shear_modulus: Pressure | None = Field(default=None, gt=0, description="Pa")
+    poisson: Ratio | None = Field(default=None, ge=0, lt=0.5, description="Poisson's ratio")
+
+    @model_validator(mode="after")
+    def _shear(self) -> Material:
+        if self.shear_modulus is None and self.poisson is None:
+            raise ValueError("give shear_modulus or poisson")
+        return self
+
+    @property
+    def G(self) -> float:
+        """Shear modulus (Pa), from ``poisson`` when not given."""
+        if self.shear_modulus is not None:
+            return self.shear_modulus
+        assert self.poisson is not None
+        return self.youngs_modulus / (2.0 * (1.0 + self.poisson))
+
+    @property
+    def nu(self) -> float:
+        """Poisson's ratio, from E and G when not given."""
+        if self.poisson is not None:
+            return self.poisson
+        return self.youngs_modulus / (2.0 * self.G) - 1.0
+
+
+class ShaftElement(Strict):
+    """A shaft segment between two stations (1-based), optionally split into ``refine`` elements."""
+
+    start: int = Field(ge=1, description="first station (1-based)")
+    end: int = Field(ge=1, description="second station (1-based)")
+    material: str
+    outer_diameter: Length = Field(gt=0, description="m")
+    inner_diameter: Length = Field(default=0.0, ge=0, description="m")
+    refine: int = Field(default=1, ge=1, le=64, description="sub-elements")
+    modulus_factor: Ratio = Field(default=1.0, gt=0, description="E multiplier (open crack)")
+
+    @model_validator(mode="after")
+    def _geometry(self) -> ShaftElement:
+        if self.end != self.start + 1:
+            raise ValueError("end must be start + 1 (elements join neighbouring stations)")
+        if self.inner_diameter >= self.outer_diameter:
+            raise ValueError("inner_diameter must be < outer_diameter")
+        return self
+
+
+class Disc(Strict):
+    name: str = "disc"
+    station: int = Field(ge=1)
+    mass: Mass = Field(gt=0, description="kg")
+    polar_inertia: Inertia = Field(ge=0, description="kg m^2")
+    transverse_inertia: Inertia = Field(ge=0, description="kg m^2")
+
+
+class SpeedTable(Strict):
+    """A coefficient tabulated against speed, linearly interpolated (held constant outside)."""
+
+    speed_rpm: list[SpeedRpm] = Field(min_length=1)
+    values: list[float] = Field(min_length=1)
+
+    @model_validator(mode="after")
+    def _table(self) -> SpeedTable:
+        if len(self.speed_rpm) != len(self.values):
+            raise ValueError("speed_rpm and values must have the same length")
+        if any(b <= a for a, b in zip(self.speed_rpm, self.speed_rpm[1:])):
+            raise ValueError("speed_rpm must be strictly increasing")
+        return self
+
+    def at(self, speed_rpm: float) -> float:
+        import numpy as np
+
+        return float(np.interp(speed_rpm, self.speed_rpm, self.values))
+
+
+class Bearing(Strict):
+    """Linear bearing at a station: direct and cross stiffness (N/m) and damping (N s/m)."""
+
+    name: str = "bearing"
+    station: int = Field(ge=1)
+    kxx: Stiffness | SpeedTable
+    kyy: Stiffness | SpeedTable
+    kxy: Stiffness | SpeedTable = 0.0
+    kyx: Stiffness | SpeedTable = 0.0
+    cxx: Damping | SpeedTable = 0.0
+    cyy: Damping | SpeedTable = 0.0
+    cxy: Damping | SpeedTable = 0.0
+    cyx: Damping | SpeedTable = 0.0
+
+    @model_validator(mode="after")
+    def _signs(self) -> Bearing:
+        for name in ("kxx", "kyy"):
+            v = getattr(self, name)
+            vals = v.values if isinstance(v, SpeedTable) else [v]
+            if any(x <= 0 for x in vals):
+                raise ValueError(f"{name}: must be > 0")
+        for name in ("cxx", "cyy"):
+            v = getattr(self, name)
+            vals = v.values if isinstance(v, SpeedTable) else [v]
+            if any(x < 0 for x in vals):
+                raise ValueError(f"{name}: must be >= 0")
+        return self
+
+    def coefficients(self, speed_rpm: float) -> dict[str, float]:
+        """All eight coefficients at ``speed_rpm`` (SI)."""
+        out = {}
+        for name in ("kxx", "kyy", "kxy", "kyx", "cxx", "cyy", "cxy", "cyx"):
+            v = getattr(self, name)
+            out[name] = v.at(speed_rpm) if isinstance(v, SpeedTable) else float(v)
+        return out
+
+
+class StationSpring(Strict):
+    """Extra linear spring/damper from a station to ground (e.g. a coupling)."""
+
+    name: str = "spring"
+    station: int = Field(ge=1)
+    kxx: Stiffness = Field(default=0.0, ge=0)
+    kyy: Stiffness = Field(default=0.0, ge=0)
+    cxx: Damping = Field(default=0.0, ge=0)
+    cyy: Damping = Field(default=0.0, ge=0)
+    k_rot: Stiffness = Field(default=0.0, ge=0, description="rotational stiffness, N m/rad")
+
+
+class ModalDamping(Strict):
+    """Damping built from the undamped modes: C = M Phi diag(2 zeta_i w_i) Phi^T M."""
+
+    kind: Literal["modal"] = "modal"
+    ratios: list[Ratio] = Field(min_length=1, description="zeta per mode; the last value repeats")
+
+    @model_validator(mode="after")
+    def _ratios(self) -> ModalDamping:
+        if any(not (0 <= z < 1) for z in self.ratios):
+            raise ValueError("ratios: each must be in [0, 1)")
+        return self
+
+
+class RayleighDamping(Strict):
+    """C = alpha M + beta K."""
+
+    kind: Literal["rayleigh"] = "rayleigh"
+    alpha: float = Field(ge=0, description="1/s")
+    beta: float = Field(ge=0, description="s")
+
+
+class NoDamping(Strict):
+    kind: Literal["none"] = "none"
+
+
+DampingModel = Annotated[ModalDamping | RayleighDamping | NoDamping, Field(discriminator="kind")]
+
+
+# --------------------------------------------------------------------------------------------
+# lumped parts
+
+
+class LumpedMass(Strict):
+    name: str
+    mass: Mass = Field(gt=0, description="kg")
+
+
+class LumpedSpring(Strict):
+    """Spring and damper between two masses, or a mass and ``ground``."""
+
+    name: str
+    between: tuple[str, str]
+    stiffness: Stiffness = Field(ge=0, description="N/m")
+    damping: Damping = Field(default=0.0, ge=0, description="N s/m")
+
+
+# --------------------------------------------------------------------------------------------
+# ports, damage, uncertainty, faults, measurement
+
+
+class Port(Strict):
+    """A measurement or damage port: a rotor station and direction, or a lumped mass."""
+
+    station: int | None = Field(default=None, ge=1)
+    direction: Literal["x", "y"] = "x"
+    mass: str | None = None
+
+
+class Ports(Strict):
+    actuator: Port
+    sensor: Port
+
+
+class DamagePort(Strict):
+    port: Port
+    element: int | None = Field(default=None, ge=1, description="suspected element (rotor)")
+
+
+class Uncertainty(Strict):
+    """Uncertainty structure for validation (method.md).
+
+    ``parameter`` names a model parameter for the parametric structure, as a dotted path:
+    ``masses.m1.mass``, ``discs.disc.mass``, ``bearings.nme.kxx``, ``shaft.4.youngs_modulus``.
+    """
+
+    structure: Literal["additive", "multiplicative", "parametric"] = "additive"
+    parameter: str | None = None
+
+    @model_validator(mode="after")
+    def _param(self) -> Uncertainty:
+        if self.structure == "parametric" and not self.parameter:
+            raise ValueError("parameter: required for the parametric structure")
+        return self
+
+
+class Crack(Strict):
+    """A crack in one shaft element (see rotorcheck.faults).
+
+    ``model``: ``open`` (modulus factor), ``mayes_davies`` (cosine breathing, eq. 5.13/5.21),
+    ``gasch`` (hinge, eq. 5.10-5.12), ``jun`` (series, eq. 5.14-5.16).
+    """
+
+    kind: Literal["crack"] = "crack"
+    element: int = Field(ge=1, description="cracked element (1-based, between stations e and e+1)")
+    model: Literal["open", "mayes_davies", "gasch", "jun"]
+    modulus_factor: Ratio | None = Field(default=None, gt=0, le=1, description="open crack E factor")
+    depth_ratio: Ratio | None = Field(default=None, gt=0, lt=2, description="depth / radius")
+    compliance_xi: float | None = Field(default=None, ge=0, description="F_xi(alpha)")
+    compliance_eta: float | None = Field(default=None, ge=0, description="F_eta(alpha)")
+    section_length: Length | None = Field(default=None, gt=0, description="l in eq. 5.25, m")
+    poisson: Ratio | None = Field(default=None, ge=0, lt=0.5)
+    angle: Angle = Field(default=0.0, description="crack direction at t = 0 (rad; 0 = closed)")
+    jun_b_xi: list[float] = Field(default_factory=list, description="k_xixi cosine series / k0")
+    jun_b_eta: list[float] = Field(default_factory=list, description="k_etaeta cosine series / k0")
+    jun_a: list[float] = Field(default_factory=list, description="k_xieta sine series / k0")
+
+    @model_validator(mode="after")
+    def _inputs(self) -> Crack:
+        if self.model == "open" and self.modulus_factor is None:
+            raise ValueError("modulus_factor: required for an open crack")
+        if self.model in ("mayes_davies", "gasch"):
+            for f in ("compliance_xi", "compliance_eta", "section_length"):
+                if getattr(self, f) is None:
+                    raise ValueError(f"{f}: required for the {self.model} model")
+        return self
+
+
+class SpringChange(Strict):
+    """A lumped spring whose stiffness changes (the three-mass damage k3 -> kd)."""
+
+    kind: Literal["spring_change"] = "spring_change"
+    spring: str
+    stiffness: Stiffness = Field(ge=0, description="N/m")
+
+
+Fault = Annotated[Crack | SpringChange, Field(discriminator="kind")]
+
+
+class UnbalanceMass(Strict):
+    station: int = Field(ge=1)
+    amount: Unbalance = Field(ge=0, description="kg m")
+    phase: Angle = Field(default=0.0, description="rad, from +x towards +y at t = 0")
+
+
+class Misalignment(Strict):
+    """A 2X synchronous force at a station (bearing misalignment)."""
+
+    station: int = Field(ge=1)
+    force_2x: Force = Field(ge=0, description="N, amplitude at 1000 rpm, scales with speed^2")
+    phase: Angle = 0.0
+
+
+class Measurement(Strict):
+    """How the simulator plays a stepped-sine measurement on this rig (truth configs)."""
+
+    force_amplitude: Force = Field(default=1.0, gt=0, description="N, actuator force amplitude")
+    n_periods: int = Field(default=64, ge=1)
+    settle_periods: int = Field(default=16, ge=0)
+    output_noise_std: Length = Field(default=0.0, ge=0, description="m, per sample")
+    input_noise_std: Force = Field(default=0.0, ge=0, description="N, per sample")
+    samples_per_period: int = Field(default=64, ge=8)
+    unbalance: list[UnbalanceMass] = Field(default_factory=list)
+    misalignment: Misalignment | None = None
+
+
+class Analysis(Strict):
+    band_hz: tuple[FrequencyHz, FrequencyHz] = (30.0, 600.0)
+    speeds_rpm: list[SpeedRpm] = Field(default_factory=lambda: [0.0])
+    campbell_max_rpm: SpeedRpm = Field(default=10000.0, gt=0)
+    n_modes: int = Field(default=6, ge=1)
+
+    @model_validator(mode="after")
+    def _band(self) -> Analysis:
+        if not (0 <= self.band_hz[0] < self.band_hz[1]):
+            raise ValueError("band_hz: must be [low, high] with 0 <= low < high")
+        return self
+
+
+# --------------------------------------------------------------------------------------------
+# the rig
+
+
+class RigConfig(Strict):
+    """A rig: nominal model or simulated truth."""
+
+    schema_: Literal["rotorcheck.rig"] = Field(default="rotorcheck.rig", alias="schema")
+    version: Literal[1] = 1
+    rig_id: str = Field(min_length=1)
+    kind: Literal["rotor", "lumped"] = "rotor"
+    description: str = ""
+    # rotor
+    materials: dict[str, Material] = Field(default_factory=dict)
+    stations: list[Length] = Field(default_factory=list, description="axial positions, m")
+    shaft: list[ShaftElement] = Field(default_factory=list)
+    discs: list[Disc] = Field(default_factory=list)
+    bearings: list[Bearing] = Field(default_factory=list)
+    springs: list[StationSpring] = Field(default_factory=list)
+    # lumped
+    masses: list[LumpedMass] = Field(default_factory=list)
+    lumped_springs: list[LumpedSpring] = Field(default_factory=list)
+    # common
+    damping: DampingModel = Field(default_factory=NoDamping)
+    ports: Ports
+    damage: DamagePort | None = None
+    uncertainty: Uncertainty = Field(default_factory=Uncertainty)
+    faults: dict[str, Fault] = Field(default_factory=dict)
+    measurement: Measurement = Field(default_factory=Measurement)
+    analysis: Analysis = Field(default_factory=Analysis)
+
+    model_config = ConfigDict(extra="forbid", frozen=True, populate_by_name=True)
+
+    @model_validator(mode="after")
+    def _consistency(self) -> RigConfig:
+        if self.kind == "rotor":
+            self._check_rotor()
+        else:
+            self._check_lumped()
+        return self
+
+    # -- rotor checks ------------------------------------------------------------------------
+    def _check_rotor(self) -> None:
+        n = len(self.stations)
+        if n < 2:
+            raise ValueError("stations: a rotor needs at least 2 stations")
+        if any(b <= a for a, b in zip(self.stations, self.stations[1:])):
+            raise ValueError("stations: positions must be strictly increasing")
+        if not self.shaft:
+            raise ValueError("shaft: a rotor needs shaft elements")
+        covered = sorted(e.start for e in self.shaft)
+        if covered != list(range(1, n)):
+            raise ValueError(f"shaft: elements must join every pair of neighbouring stations 1..{n}")
+        for i, e in enumerate(self.shaft):
+            if e.end > n:
+                raise ValueError(f"shaft[{i}].end: station {e.end} out of range 1..{n}")
+            if e.material not in self.materials:
+                raise ValueError(f"shaft[{i}].material: unknown material {e.material!r}")
+        for group in ("discs", "bearings", "springs"):
+            for i, part in enumerate(getattr(self, group)):
+                if part.station > n:
+                    raise ValueError(f"{group}[{i}].station: {part.station} out of range 1..{n}")
+        for name in ("actuator", "sensor"):
+            p = getattr(self.ports, name)
+            if p.station is None or p.station > n:
+                raise ValueError(f"ports.{name}.station: must be a station in 1..{n}")
+        if self.damage is not None:
+            p = self.damage.port
+            if p.station is None or p.station > n:
+                raise ValueError(f"damage.port.station: must be a station in 1..{n}")
+            if self.damage.element is not None and self.damage.element > n - 1:
+                raise ValueError(f"damage.element: {self.damage.element} out of range 1..{n - 1}")
+        for key, f in self.faults.items():
+            if isinstance(f, Crack) and f.element > n - 1:
+                raise ValueError(f"faults.{key}.element: {f.element} out of range 1..{n - 1}")
+            if isinstance(f, SpringChange):
+                raise ValueError(f"faults.{key}: spring_change applies to lumped models only")
+        for i, u in enumerate(self.measurement.unbalance):
+            if u.station > n:
+                raise ValueError(f"measurement.unbalance[{i}].station: out of range 1..{n}")
+        mis = self.measurement.misalignment
+        if mis is not None and mis.station > n:
+            raise ValueError(f"measurement.misalignment.station: out of range 1..{n}")
+
+    # -- lumped checks -----------------------------------------------------------------------
+    def _check_lumped(self) -> None:
+        names = [m.name for m in self.masses]
+        if not names:
+            raise ValueError("masses: a lumped model needs masses")
+        if len(set(names)) != len(names):
+            raise ValueError("masses: names must be unique")
+        known = {*names, "ground"}
+        for i, s in enumerate(self.lumped_springs):
+            for end in s.between:
+                if end not in known:
+                    raise ValueError(f"lumped_springs[{i}].between: unknown mass {end!r}")
+            if s.between[0] == s.between[1]:
+                raise ValueError(f"lumped_springs[{i}].between: a spring needs two ends")
+        for name in ("actuator", "sensor"):
+            p = getattr(self.ports, name)
+            if p.mass not in names:
+                raise ValueError(f"ports.{name}.mass: must name a mass ({', '.join(names)})")
+        if self.damage is not None and self.damage.port.mass not in names:
+            raise ValueError("damage.port.mass: must name a mass")
+        springs = {s.name for s in self.lumped_springs}
+        for key, f in self.faults.items():
+            if isinstance(f, SpringChange) and f.spring not in springs:
+                raise ValueError(f"faults.{key}.spring: unknown spring {f.spring!r}")
+            if isinstance(f, Crack):
+                raise ValueError(f"faults.{key}: a crack applies to rotor models only")
+
+    # -- derived -----------------------------------------------------------------------------
+    def sha256(self) -> str:
+        """Hash of the validated content (insensitive to comments, layout and unit spelling)."""
+        doc = json.dumps(self.model_dump(mode="json", by_alias=True), sort_keys=True)
+        return hashlib.sha256(doc.encode()).hexdigest()
+
+
+# --------------------------------------------------------------------------------------------
+# loading
+
+
+class ConfigError(ValueError):
+    """An unusable rig file. ``str()`` names the file and the field."""
+
+    def __init__(self, file: str | Path, field: str, message: str):
+        self.file, self.field, self.message = str(file), field, message
+        where = f"{self.file}: {field}: " if field else f"{self.file}: "
+        super().__init__(where + message)
+
+
+def _loc(loc: tuple[Any, ...]) -> str:
+    out = ""
+    for part in loc:
+        if isinstance(part, int):
+            out += f"[{part}]"
+        elif str(part).startswith("function-") or part in ("SpeedTable", "float"):
+            continue
+        else:
+            out += ("." if out else "") + str(part)
+    return out
+
+
+def _message(err: dict[str, Any]) -> str:
+    t, ctx = err.get("type", ""), err.get("ctx") or {}
+    if t == "greater_than":
+        return f"must be > {ctx.get('gt')}"
+    if t == "greater_than_equal":
+        return f"must be >= {ctx.get('ge')}"
+    if t == "less_than":
+        return f"must be < {ctx.get('lt')}"
+    if t == "less_than_equal":
+        return f"must be <= {ctx.get('le')}"
+    if t == "missing":
+        return "required field is missing"
+    if t == "extra_forbidden":
+        return "unknown key"
+    msg = str(err.get("msg", "invalid"))
+    for prefix in ("Value error, ", "Assertion failed, "):
+        if msg.startswith(prefix):
+            msg = msg[len(prefix) :]
+    return msg
+
+
+def _first_error(exc: ValidationError) -> tuple[str, str]:
+    """The most specific error: prefer the deepest location (unions report every branch)."""
+    errs = exc.errors()
+    # for unions of float | SpeedTable, a unit error shows on the float branch: prefer that
+    best = max(errs, key=lambda e: (e.get("type") != "model_type", len(e.get("loc", ()))))
+    field = _loc(tuple(best.get("loc", ())))
+    msg = _message(best)
+    # a model-level validator message "name: text" refines the field path
+    if ":" in msg and best.get("type") == "value_error":
+        head, tail = msg.split(":", 1)
+        if " " not in head.strip():
+            field = f"{field}.{head.strip()}" if field else head.strip()
+            msg = tail.strip()
+    return field, msg
+
+
+def parse_config(data: Any, source: str | Path = "<config>") -> RigConfig:
+    """Validate a mapping (already parsed YAML) into a :class:`RigConfig`."""
+    if not isinstance(data, dict):
+        raise ConfigError(source, "", "the top level must be a mapping of keys")
+    try:
+        return RigConfig.model_validate(data)
+    except ValidationError as exc:
+        field, msg = _first_error(exc)
+        raise ConfigError(source, field, msg) from None
+
+
+def load_config(path: str | Path) -> RigConfig:
+    """Read and validate a rig YAML file; raises :class:`ConfigError` naming file and field."""
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise ConfigError(p, "", "file not found") from None
+    except OSError as exc:
+        raise ConfigError(p, "", f"cannot read: {exc.strerror}") from None
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f"line {mark.line + 1}, column {mark.column + 1}: " if mark else ""
+        problem = getattr(exc, "problem", None) or str(exc)
+        raise ConfigError(p, "", f"malformed YAML: {where}{problem}") from None
+    return parse_config(data, p)
+
+
+def json_schema() -> dict[str, Any]:
+    """JSON Schema of the rig file, for editors."""
+    schema = RigConfig.model_json_schema(by_alias=True)
+    schema["$schema"] = "https://json-schema.org/draft/2020-12/schema"
+    schema["title"] = "rotorcheck rig"
+    return schema

@@ -1,0 +1,101 @@
+"""The linear second-order model every other part of rotorcheck consumes.
+
+    M q'' + (C(Omega) + Omega G) q' + K(Omega) q = f(t)
+
+SI units; Omega in rad/s. Rotor models carry four lateral DOF per node, ordered as in Friswell et
+al. (eq. 5.23): ``[u (x), v (y), theta (rotation about x), psi (rotation about y)]``; node ``s``
+(1-based station index after refinement maps, see :attr:`MechanicalSystem.station_node`) owns DOF
+``4*(node) .. 4*(node)+3``. Lumped models carry one DOF per mass.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+
+RPM_TO_RAD_S = 2.0 * np.pi / 60.0
+DIRECTION_OFFSET = {"x": 0, "y": 1, "theta": 2, "psi": 3}
+
+
+@dataclass(frozen=True)
+class BeamElementInfo:
+    """Geometry and material of one finite beam element (after refinement).
+
+    ``segment`` is the 1-based config element (between config stations ``segment`` and
+    ``segment + 1``) that this element belongs to.
+    """
+
+    index: int  # 0-based element index in the mesh
+    segment: int  # 1-based config element it came from
+    node_i: int  # 0-based mesh node
+    node_j: int
+    length: float  # m
+    youngs_modulus: float  # Pa (after modulus_factor)
+    shear_modulus: float  # Pa
+    density: float  # kg/m^3
+    outer_diameter: float  # m
+    inner_diameter: float  # m
+    poisson: float
+
+    @property
+    def area(self) -> float:
+        """Cross-section area (m^2)."""
+        return np.pi / 4.0 * (self.outer_diameter**2 - self.inner_diameter**2)
+
+    @property
+    def second_moment(self) -> float:
+        """Second moment of area I (m^4)."""
+        return np.pi / 64.0 * (self.outer_diameter**4 - self.inner_diameter**4)
+
+    @property
+    def dofs(self) -> np.ndarray:
+        """The element's 8 global DOF indices (u1, v1, theta1, psi1, u2, v2, theta2, psi2)."""
+        return np.r_[4 * self.node_i : 4 * self.node_i + 4, 4 * self.node_j : 4 * self.node_j + 4]
+
+
+@dataclass(frozen=True)
+class MechanicalSystem:
+    """Assembled matrices of a rig at any speed.
+
+    ``matrices(speed_rpm)`` returns ``(M, C, G, K)`` with C the (modal or Rayleigh) structural
+    damping plus bearing damping at that speed, G the gyroscopic matrix per unit spin speed
+    (multiply by Omega in rad/s), K the stiffness including bearings at that speed.
+    """
+
+    kind: str  # "rotor" | "lumped"
+    n_dof: int
+    labels: tuple[str, ...]  # one per DOF, e.g. "s6.x" or "m1"
+    _matrices: Callable[[float], tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]
+    station_node: tuple[int, ...] = ()  # config station (1-based) -> 0-based mesh node
+    node_positions: np.ndarray = field(default_factory=lambda: np.zeros(0))  # m, per mesh node
+    elements: tuple[BeamElementInfo, ...] = ()
+    mass_index: dict[str, int] = field(default_factory=dict)  # lumped: mass name -> DOF
+
+    def matrices(self, speed_rpm: float = 0.0) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """(M, C, G, K) at ``speed_rpm``; dense float arrays of shape (n_dof, n_dof)."""
+        return self._matrices(float(speed_rpm))
+
+    def dof(self, station: int | None = None, direction: str = "x", mass: str | None = None) -> int:
+        """Global DOF index of a port: rotor ``station`` (1-based) and direction, or lumped ``mass``."""
+        if self.kind == "lumped":
+            if mass is None or mass not in self.mass_index:
+                raise KeyError(f"unknown mass {mass!r}")
+            return self.mass_index[mass]
+        if station is None or not (1 <= station <= len(self.station_node)):
+            raise KeyError(f"station {station} out of range 1..{len(self.station_node)}")
+        return 4 * self.station_node[station - 1] + DIRECTION_OFFSET[direction]
+
+    def port_dof(self, port: object) -> int:
+        """DOF of a config :class:`rotorcheck.config.Port`."""
+        return self.dof(
+            getattr(port, "station", None), getattr(port, "direction", "x"), getattr(port, "mass", None)
+        )
+
+    def dynamic_stiffness(self, freq_hz: np.ndarray, speed_rpm: float = 0.0) -> np.ndarray:
+        """Z(w) = K - w^2 M + j w (C + Omega G), shape (f, n, n), complex (N/m)."""
+        M, C, G, K = self.matrices(speed_rpm)
+        w = 2.0 * np.pi * np.atleast_1d(np.asarray(freq_hz, dtype=float))
+        D = C + speed_rpm * RPM_TO_RAD_S * G
+        return K[None] - (w**2)[:, None, None] * M[None] + 1j * w[:, None, None] * D[None]
