@@ -27,6 +27,7 @@ from pydantic import (
     model_validator,
 )
 
+from rotorcheck.errors import InputError
 from rotorcheck.units import parse_quantity
 
 # --------------------------------------------------------------------------------------------
@@ -477,13 +478,8 @@ class RigConfig(Strict):
 # loading
 
 
-class ConfigError(ValueError):
+class ConfigError(InputError):
     """An unusable rig file. ``str()`` names the file and the field."""
-
-    def __init__(self, file: str | Path, field: str, message: str):
-        self.file, self.field, self.message = str(file), field, message
-        where = f"{self.file}: {field}: " if field else f"{self.file}: "
-        super().__init__(where + message)
 
 
 def _loc(loc: tuple[Any, ...]) -> str:

@@ -1,0 +1,5 @@
+"""``python -m rotorcheck`` runs the command line."""
+
+from rotorcheck.cli import run
+
+run()

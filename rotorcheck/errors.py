@@ -1,0 +1,20 @@
+"""Errors that the command line turns into exit code 2 with a message naming the file and field."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+
+class InputError(ValueError):
+    """Unusable input: ``str()`` is ``"<file>: <field>: <message>"`` (parts omitted when empty)."""
+
+    def __init__(self, file: str | Path | None, field: str, message: str):
+        self.file = "" if file is None else str(file)
+        self.field = field
+        self.message = message
+        parts = [p for p in (self.file, field) if p]
+        super().__init__(": ".join([*parts, message]))
+
+
+class OutputExistsError(InputError):
+    """An output file exists and ``--force`` was not given."""

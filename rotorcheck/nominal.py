@@ -1,0 +1,154 @@
+"""Step 1: the nominal engineering model of a rig as an augmented plant per frequency.
+
+One 3x3 complex matrix P(w) per frequency maps the inputs ``[u_delta, f_d, w]`` (uncertainty
+output, extra force at the damage port, actuator force) to the outputs ``[y_delta, d, z]``
+(uncertainty input, damage-port displacement, sensor displacement):
+
+- validation uses ``Me = P[[0, 2]][:, [0, 2]]`` (damage channel open) with ``u_delta = gamma Delta
+  y_delta`` (upper LFT);
+- identification uses ``E = P[1:, 1:]`` (``E11 = H_dd``, ``E12 = H_d,in``, ``E21 = H_out,d``,
+  ``E22 = H_out,in``) with the damage dynamics as a lower LFT ``f_d = D d``; a stiffness loss dk
+  gives D = +dk (method.md).
+
+Structures (``uncertainty.structure`` in the rig file):
+
+- ``additive``: z = (G + Delta) w on the io channel;
+- ``multiplicative``: z = (1 + Delta) (G w + E21 f_d) (output multiplicative);
+- ``parametric``: a named parameter p enters the dynamic stiffness as Z(p + delta) = Z(p) + L delta R^T
+  (rank one: a lumped mass or spring, a disc mass in one direction, a bearing coefficient).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from rotorcheck.config import RigConfig
+from rotorcheck.errors import InputError
+from rotorcheck.fe.system import MechanicalSystem
+
+TWO_PI = 2.0 * np.pi
+
+
+@dataclass(frozen=True)
+class NominalModel:
+    """The augmented plant of a rig at one speed on a frequency grid (SI, Hz)."""
+
+    rig_id: str
+    speed_rpm: float
+    frequency_hz: np.ndarray  # (f,)
+    P: np.ndarray  # (f, 3, 3) complex, [y_delta, d, z] <- [u_delta, f_d, w]
+    structure: str  # "additive" | "multiplicative" | "parametric"
+    parameter: str | None  # parametric: dotted name; gamma is then in the parameter's unit
+
+    @property
+    def me(self) -> np.ndarray:
+        """Validation matrix Me (f, 2, 2): [[Me11, Me12], [Me21, Me22]] on [u_delta, w]."""
+        return self.P[:, [0, 2]][:, :, [0, 2]]
+
+    @property
+    def E(self) -> np.ndarray:
+        """Engineering system (f, 2, 2): [[E11, E12], [E21, E22]] on [f_d, w] -> [d, z]."""
+        return self.P[:, 1:, 1:]
+
+    @property
+    def frf(self) -> np.ndarray:
+        """Nominal receptance sensor/actuator G = Me22 = E22 (f,), m/N."""
+        return self.P[:, 2, 2]
+
+
+def _parameter_factors(
+    config: RigConfig, system: MechanicalSystem, name: str, freq_hz: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """L (f, n) and R (n,) with dZ = L delta R^T for a rank-one parameter ``name`` (dotted path)."""
+    parts = name.split(".")
+    n = system.n_dof
+    w2 = (TWO_PI * freq_hz) ** 2
+    unit = np.zeros(n)
+    if len(parts) == 3 and parts[0] == "masses" and parts[2] == "mass":
+        if parts[1] not in system.mass_index:
+            raise InputError(None, "uncertainty.parameter", f"unknown mass {parts[1]!r}")
+        unit[system.mass_index[parts[1]]] = 1.0
+        return -w2[:, None] * unit[None, :], unit
+    if len(parts) == 3 and parts[0] == "lumped_springs" and parts[2] == "stiffness":
+        springs = {s.name: s for s in config.lumped_springs}
+        if parts[1] not in springs:
+            raise InputError(None, "uncertainty.parameter", f"unknown spring {parts[1]!r}")
+        a, b = springs[parts[1]].between
+        if a != "ground":
+            unit[system.mass_index[a]] += 1.0
+        if b != "ground":
+            unit[system.mass_index[b]] -= 1.0
+        return np.ones_like(freq_hz)[:, None] * unit[None, :], unit
+    if len(parts) == 3 and parts[0] == "bearings" and parts[2] in ("kxx", "kyy"):
+        bearings = {b.name: b for b in config.bearings}
+        if parts[1] not in bearings:
+            raise InputError(None, "uncertainty.parameter", f"unknown bearing {parts[1]!r}")
+        unit[system.dof(bearings[parts[1]].station, parts[2][1])] = 1.0
+        return np.ones_like(freq_hz)[:, None] * unit[None, :], unit
+    raise InputError(
+        None,
+        "uncertainty.parameter",
+        f"{name!r} is not a supported rank-one parameter (masses.<m>.mass, "
+        "lumped_springs.<k>.stiffness, bearings.<b>.kxx|kyy)",
+    )
+
+
+def nominal_model(
+    config: RigConfig,
+    freq_hz: np.ndarray,
+    speed_rpm: float = 0.0,
+    system: MechanicalSystem | None = None,
+) -> NominalModel:
+    """Build the augmented plant P(w) of ``config`` at ``speed_rpm`` on ``freq_hz`` (Hz)."""
+    from rotorcheck.fe.assembly import build_system
+
+    if config.damage is None:
+        raise InputError(None, "damage", "the rig has no damage port; identification needs one")
+    sys_ = system if system is not None else build_system(config)
+    f = np.atleast_1d(np.asarray(freq_hz, dtype=float))
+    Z = sys_.dynamic_stiffness(f, speed_rpm)  # (f, n, n)
+    n = sys_.n_dof
+    i_in = sys_.port_dof(config.ports.actuator)
+    i_out = sys_.port_dof(config.ports.sensor)
+    i_d = sys_.port_dof(config.damage.port)
+    structure = config.uncertainty.structure
+
+    # columns we need H = Z^-1 applied to: damage port, actuator, and (parametric) L
+    rhs = np.zeros((len(f), n, 3), dtype=complex)
+    rhs[:, i_d, 0] = 1.0
+    rhs[:, i_in, 1] = 1.0
+    R = None
+    if structure == "parametric":
+        assert config.uncertainty.parameter is not None
+        L, R = _parameter_factors(config, sys_, config.uncertainty.parameter, f)
+        rhs[:, :, 2] = -L
+    X = np.linalg.solve(Z, rhs)  # (f, n, 3): H e_d, H b, -H L
+    Hd, Hb, HL = X[:, :, 0], X[:, :, 1], X[:, :, 2]
+    E11, E12 = Hd[:, i_d], Hb[:, i_d]
+    E21, E22 = Hd[:, i_out], Hb[:, i_out]
+
+    P = np.zeros((len(f), 3, 3), dtype=complex)
+    P[:, 1, 1], P[:, 1, 2], P[:, 2, 1], P[:, 2, 2] = E11, E12, E21, E22
+    if structure == "additive":
+        P[:, 0, 2] = 1.0
+        P[:, 2, 0] = 1.0
+    elif structure == "multiplicative":
+        P[:, 0, 1], P[:, 0, 2] = E21, E22
+        P[:, 2, 0] = 1.0
+    else:
+        assert R is not None
+        P[:, 0, 0] = HL @ R
+        P[:, 0, 1] = Hd @ R
+        P[:, 0, 2] = Hb @ R
+        P[:, 1, 0] = HL[:, i_d]
+        P[:, 2, 0] = HL[:, i_out]
+    return NominalModel(
+        rig_id=config.rig_id,
+        speed_rpm=float(speed_rpm),
+        frequency_hz=f,
+        P=P,
+        structure=structure,
+        parameter=config.uncertainty.parameter,
+    )
