@@ -93,6 +93,36 @@ def model(
 
 
 @app.command()
+def info(
+    sweep: Annotated[Path, typer.Argument(help="Sweep file (HDF5, rotorcheck.sweep v1).")],
+    as_json: JsonOpt = False,
+    confidence: Annotated[float, typer.Option(help="Family-wise confidence of the noise bound.")] = 0.99,
+) -> int:
+    """Validate a sweep file and summarise it: runs, speeds, grid, channels, noise estimate."""
+    from rotorcheck.sweep.format import read_sweep, sweep_sha256
+    from rotorcheck.sweep.summary import summarize
+
+    sw = read_sweep(sweep)
+    doc = summarize(sw, confidence=confidence)
+    doc["file"] = str(sweep)
+    doc["sha256"] = sweep_sha256(sweep)
+    err.print(f"{sweep}: valid rotorcheck.sweep v1, rig_id {sw.rig_id!r}, source {sw.source}, {sw.generator}")
+    chans = ", ".join(f"{c.name} ({c.role} s{c.node}.{c.direction} {c.unit})" for c in sw.channels)
+    err.print(f"channels: {chans}")
+    for run in doc["runs"]:
+        g, nz = run["grid"], run["noise"]["all_outputs"]
+        err.print(
+            f"run {run['run_id']}: {run['speed_rpm']:g} rpm, {g['n']} points "
+            f"{g['min_hz']:g}-{g['max_hz']:g} Hz, {run['n_periods_min']}-{run['n_periods_max']} periods; "
+            f"noise std median {nz['median_std_m']:.3g} m, "
+            f"family-wise {confidence:.0%} bound {nz['sidak_bound_m']:.3g} m"
+        )
+    if as_json:
+        _emit_json(doc)
+    return EXIT_OK
+
+
+@app.command()
 def schema(
     out: Annotated[Path | None, typer.Option("--out", help="Write to this file instead of stdout.")] = None,
     force: ForceOpt = False,
@@ -120,7 +150,7 @@ def main(argv: list[str] | None = None) -> int:
     command = typer.main.get_command(app)
     try:
         rc = command.main(args=argv, prog_name="rotorcheck", standalone_mode=False)
-    except InputError as exc:
+    except (InputError, FileExistsError) as exc:
         err.print(f"[bold red]error:[/] {escape(str(exc))}")
         return EXIT_INPUT
     except typer.Exit as exc:
@@ -129,6 +159,9 @@ def main(argv: list[str] | None = None) -> int:
         err.print("aborted")
         return EXIT_INPUT
     except Exception as exc:  # the contract: an unexpected exception is 2, never 1
+        if type(exc).__name__ == "SweepFormatError":  # names the file, the path inside and the reason
+            err.print(f"[bold red]error:[/] {escape(str(exc))}")
+            return EXIT_INPUT
         if hasattr(exc, "show") and hasattr(exc, "exit_code"):  # click/typer usage errors
             exc.show(file=sys.stderr)
             return EXIT_INPUT if exc.exit_code else EXIT_OK

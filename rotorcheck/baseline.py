@@ -1,0 +1,121 @@
+"""The baseline file (``baseline.h5``): noise bound (step 2) and healthy uncertainty bound (step 3).
+
+Root attributes: ``schema = "rotorcheck.baseline"``, ``schema_version = 1``, ``stage`` (``"noise"``
+after fit-noise, ``"validated"`` after validate), ``rig_id``, ``rig_sha256``, ``sweep_sha256``
+(comma-separated when several healthy sweeps), ``run_id``, ``speed_rpm``, ``noise_bound_m``,
+``noise_method``, ``noise_confidence``, ``uncertainty``, ``parameter``, ``enclose``, ``created_utc``.
+Datasets (validated stage): ``frequency_hz`` (f), ``gamma`` (f), ``gamma_lower`` (f),
+``gamma_status`` (f, text), ``model_frf`` (f, 1, 1) complex (the nominal Me22),
+``input_phasor`` (f, n_in) and ``output_phasor`` (f, n_out) copied from the (first) healthy sweep.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import h5py
+import numpy as np
+
+from rotorcheck.errors import InputError
+from rotorcheck.fileio import atomic_path
+
+SCHEMA = "rotorcheck.baseline"
+SCHEMA_VERSION = 1
+
+
+@dataclass
+class Baseline:
+    """Noise bound and, once validated, the per-frequency uncertainty bound gamma."""
+
+    rig_id: str
+    rig_sha256: str
+    sweep_sha256: list[str]
+    run_id: str
+    speed_rpm: float
+    noise_bound_m: float
+    noise_method: str
+    noise_confidence: float
+    uncertainty: str
+    parameter: str = ""
+    enclose: str = ""
+    stage: str = "noise"
+    created_utc: str = ""
+    frequency_hz: np.ndarray | None = None
+    gamma: np.ndarray | None = None
+    gamma_lower: np.ndarray | None = None
+    gamma_status: np.ndarray | None = None
+    model_frf: np.ndarray | None = None
+    input_phasor: np.ndarray | None = None
+    output_phasor: np.ndarray | None = None
+    extra: dict[str, str] = field(default_factory=dict)
+
+    @property
+    def validated(self) -> bool:
+        return self.stage == "validated"
+
+
+_ATTRS = ("rig_id", "rig_sha256", "run_id", "speed_rpm", "noise_bound_m", "noise_method",
+          "noise_confidence", "uncertainty", "parameter", "enclose", "stage", "created_utc")
+_DATASETS = ("frequency_hz", "gamma", "gamma_lower", "model_frf", "input_phasor", "output_phasor")
+
+
+def write_baseline(baseline: Baseline, path: str | Path) -> None:
+    """Write atomically (temp file in the same folder, then rename). Overwrite policy is the caller's."""
+    if not baseline.created_utc:
+        baseline.created_utc = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
+    with atomic_path(path) as tmp, h5py.File(tmp, "w") as h5:
+        h5.attrs["schema"] = SCHEMA
+        h5.attrs["schema_version"] = SCHEMA_VERSION
+        for name in _ATTRS:
+            h5.attrs[name] = getattr(baseline, name)
+        h5.attrs["sweep_sha256"] = ",".join(baseline.sweep_sha256)
+        for k, v in baseline.extra.items():
+            h5.attrs[f"x_{k}"] = v
+        for name in _DATASETS:
+            value = getattr(baseline, name)
+            if value is not None:
+                h5.create_dataset(name, data=value)
+        if baseline.gamma_status is not None:
+            h5.create_dataset("gamma_status", data=np.asarray(baseline.gamma_status, dtype="S"))
+
+
+def read_baseline(path: str | Path) -> Baseline:
+    """Read and check a baseline; raises InputError naming the file and the field."""
+    p = Path(path)
+    if not p.exists():
+        raise InputError(p, "", "baseline not found (run 'rotorcheck validate' first, or pass --baseline)")
+    try:
+        h5 = h5py.File(p, "r")
+    except OSError as exc:
+        raise InputError(p, "", f"not a readable HDF5 baseline ({exc})") from None
+    with h5:
+        if h5.attrs.get("schema") != SCHEMA:
+            raise InputError(p, "/@schema", f"not a rotorcheck baseline (schema {h5.attrs.get('schema')!r})")
+        if int(h5.attrs.get("schema_version", -1)) != SCHEMA_VERSION:
+            raise InputError(p, "/@schema_version", f"unknown schema_version {h5.attrs.get('schema_version')}")
+        values: dict[str, object] = {}
+        for name in _ATTRS:
+            if name not in h5.attrs:
+                raise InputError(p, f"/@{name}", "missing attribute")
+            v = h5.attrs[name]
+            values[name] = v.decode() if isinstance(v, bytes) else (v.item() if hasattr(v, "item") else v)
+        sweeps = str(h5.attrs.get("sweep_sha256", ""))
+        b = Baseline(sweep_sha256=[s for s in sweeps.split(",") if s], **values)  # type: ignore[arg-type]
+        b.extra = {k[2:]: str(v) for k, v in h5.attrs.items() if k.startswith("x_")}
+        for name in _DATASETS:
+            if name in h5:
+                setattr(b, name, h5[name][()])
+        if "gamma_status" in h5:
+            b.gamma_status = np.char.decode(h5["gamma_status"][()], "utf-8")
+    if b.validated:
+        for name in ("frequency_hz", "gamma", "model_frf"):
+            if getattr(b, name) is None:
+                raise InputError(p, f"/{name}", "missing dataset in a validated baseline")
+        n = len(b.frequency_hz)  # type: ignore[arg-type]
+        if b.gamma.shape != (n,):  # type: ignore[union-attr]
+            raise InputError(p, "/gamma", f"shape {b.gamma.shape} does not match frequency_hz ({n},)")  # type: ignore[union-attr]
+    if not np.isfinite(b.noise_bound_m) or b.noise_bound_m < 0:
+        raise InputError(p, "/@noise_bound_m", f"must be finite and >= 0, got {b.noise_bound_m}")
+    return b

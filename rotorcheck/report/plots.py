@@ -1,0 +1,148 @@
+"""Validation, detection and identification plots (matplotlib Figure API, no global state).
+
+The uncertainty band at each frequency is a disk in the complex plane (centre ``c``, radius ``rho``,
+receptance units m/N): magnitude from ``max(0, |c| - rho)`` to ``|c| + rho``; phase
+``arg(c) +/- asin(rho/|c|)``, or the full 360 degrees where the disk holds the origin (dissertation
+Fig. 43/47).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from matplotlib.figure import Figure
+
+
+def disk_band(centre: np.ndarray, radius: np.ndarray) -> dict[str, np.ndarray]:
+    """Magnitude and phase (deg) bands of disks; ``full_phase`` where a disk holds the origin."""
+    c = np.asarray(centre, dtype=complex)
+    r = np.asarray(radius, dtype=float)
+    mag = np.abs(c)
+    full = r >= mag
+    with np.errstate(divide="ignore", invalid="ignore"):
+        half = np.degrees(np.arcsin(np.clip(np.where(full, 1.0, r / mag), 0.0, 1.0)))
+    ph = np.degrees(np.angle(c))
+    half = np.where(full, 180.0, half)
+    return {
+        "phase_half_width": half,
+        "mag_lo": np.maximum(mag - r, 0.0),
+        "mag_hi": mag + r,
+        "phase_lo": np.where(full, -180.0, ph - half),
+        "phase_hi": np.where(full, 180.0, ph + half),
+        "full_phase": full,
+    }
+
+
+def _wrap_near(phase_deg: np.ndarray, ref_deg: np.ndarray) -> np.ndarray:
+    """Shift ``phase_deg`` by multiples of 360 to lie within 180 deg of ``ref_deg``."""
+    return ref_deg + (phase_deg - ref_deg + 180.0) % 360.0 - 180.0
+
+
+def bode_band_figure(
+    freq_hz: np.ndarray,
+    model_frf: np.ndarray,
+    centre: np.ndarray,
+    radius: np.ndarray,
+    healthy_frf: np.ndarray | None = None,
+    damaged_frf: np.ndarray | None = None,
+    fault: np.ndarray | None = None,
+    title: str = "",
+) -> Figure:
+    """Bode magnitude (m/N, log) and phase (deg) of model, band, healthy and damaged data."""
+    fig = Figure(figsize=(9, 7), layout="constrained")
+    ax_m, ax_p = fig.subplots(2, 1, sharex=True)
+    band = disk_band(centre, radius)
+    ref = np.unwrap(np.angle(model_frf))
+    ref_deg = np.degrees(ref)
+    floor = np.min(np.abs(model_frf)) * 1e-3
+    ax_m.fill_between(freq_hz, np.maximum(band["mag_lo"], floor), band["mag_hi"], color="tab:blue",
+                      alpha=0.25, lw=0, label="uncertainty band")
+    ax_m.semilogy(freq_hz, np.abs(model_frf), color="tab:blue", lw=1.2, label="nominal model")
+    ax_p.plot(freq_hz, ref_deg, color="tab:blue", lw=1.2)
+    centre_deg = _wrap_near(np.degrees(np.angle(centre)), ref_deg)
+    half = band["phase_half_width"]
+    ax_p.fill_between(freq_hz, centre_deg - half, centre_deg + half, color="tab:blue", alpha=0.25, lw=0)
+    for data, colour, label in ((healthy_frf, "k", "healthy data"), (damaged_frf, "tab:red", "new data")):
+        if data is None:
+            continue
+        ax_m.semilogy(freq_hz, np.abs(data), ".", ms=3, color=colour, label=label)
+        ax_p.plot(freq_hz, _wrap_near(np.degrees(np.angle(data)), ref_deg), ".", ms=3, color=colour)
+    if fault is not None and damaged_frf is not None and np.any(fault):
+        ax_m.semilogy(freq_hz[fault], np.abs(damaged_frf[fault]), "o", mfc="none", ms=7, color="tab:red",
+                      label=f"fault points ({int(np.sum(fault))})")
+        ax_p.plot(freq_hz[fault], _wrap_near(np.degrees(np.angle(damaged_frf[fault])), ref_deg[fault]), "o",
+                  mfc="none", ms=7, color="tab:red")
+    ax_m.set_ylabel("|receptance| (m/N)")
+    ax_p.set_ylabel("phase (deg)")
+    ax_p.set_xlabel("frequency (Hz)")
+    ax_m.legend(loc="best", fontsize=8)
+    ax_m.grid(True, which="both", alpha=0.3)
+    ax_p.grid(True, alpha=0.3)
+    if title:
+        ax_m.set_title(title)
+    return fig
+
+
+def complex_plane_figure(
+    freq_hz: float,
+    model: complex,
+    centre: complex,
+    radius: float,
+    healthy: complex | None = None,
+    damaged: complex | None = None,
+) -> Figure:
+    """The uncertainty disk at one frequency in the complex plane (dissertation Fig. 48)."""
+    fig = Figure(figsize=(5.5, 5.5), layout="constrained")
+    ax = fig.subplots()
+    t = np.linspace(0, 2 * np.pi, 361)
+    ax.fill(centre.real + radius * np.cos(t), centre.imag + radius * np.sin(t), color="tab:blue", alpha=0.2,
+            label="uncertainty set")
+    ax.plot(model.real, model.imag, "s", color="tab:blue", label="nominal model")
+    if healthy is not None:
+        ax.plot(healthy.real, healthy.imag, "o", color="k", label="healthy data")
+    if damaged is not None:
+        ax.plot(damaged.real, damaged.imag, "o", color="tab:red", label="new data")
+    ax.plot(0, 0, "+", color="grey")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel("Re (m/N)")
+    ax.set_ylabel("Im (m/N)")
+    ax.set_title(f"{freq_hz:.2f} Hz")
+    ax.legend(loc="best", fontsize=8)
+    ax.grid(True, alpha=0.3)
+    return fig
+
+
+def damage_dynamics_figure(
+    freq_hz: np.ndarray,
+    damage: np.ndarray,
+    bound_min_abs: np.ndarray,
+    bound_max_abs: np.ndarray,
+    phase_lo_deg: np.ndarray | None = None,
+    phase_hi_deg: np.ndarray | None = None,
+    fault: np.ndarray | None = None,
+    title: str = "",
+) -> Figure:
+    """Identified damage dynamics D_u (N/m) with its exact bound: magnitude and phase."""
+    fig = Figure(figsize=(9, 6.5), layout="constrained")
+    ax_m, ax_p = fig.subplots(2, 1, sharex=True)
+    hi = np.where(np.isfinite(bound_max_abs), bound_max_abs, np.nan)
+    floor = np.nanmax(np.abs(damage)) * 1e-4 if np.any(np.isfinite(damage)) else 1.0
+    ax_m.fill_between(freq_hz, np.maximum(bound_min_abs, floor), hi, color="tab:orange", alpha=0.3, lw=0,
+                      label="exact bound")
+    ax_m.semilogy(freq_hz, np.abs(damage), color="tab:red", lw=1.2, label="identified D_u")
+    if fault is not None and np.any(fault):
+        ax_m.semilogy(freq_hz[fault], np.abs(damage[fault]), "o", mfc="none", ms=6, color="k",
+                      label="fault points")
+    ph = np.degrees(np.angle(damage))
+    ax_p.plot(freq_hz, ph, color="tab:red", lw=1.2)
+    if phase_lo_deg is not None and phase_hi_deg is not None:
+        ax_p.fill_between(freq_hz, phase_lo_deg, phase_hi_deg, color="tab:orange", alpha=0.3, lw=0)
+    ax_m.set_ylabel("|D_u| (N/m)")
+    ax_p.set_ylabel("phase (deg)")
+    ax_p.set_xlabel("frequency (Hz)")
+    ax_p.set_ylim(-200, 200)
+    ax_m.legend(loc="best", fontsize=8)
+    ax_m.grid(True, which="both", alpha=0.3)
+    ax_p.grid(True, alpha=0.3)
+    if title:
+        ax_m.set_title(title)
+    return fig

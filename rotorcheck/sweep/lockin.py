@@ -1,0 +1,175 @@
+r"""Lock-in phasor extraction, per excitation period, and its closed form for multi-tone signals.
+
+Convention (``method.md``): ``x(t) = Re{X exp(j 2 pi f t)}``, ``X`` the peak complex amplitude.
+The lock-in phasor of period ``k`` of ``T = 1/f`` starting at ``t_k`` is
+
+    X_k = (2/T) \int_{t_k}^{t_k+T} x(t) exp(-j 2 pi f t) dt                      (continuous)
+    X_k = (2/M) \sum_{i=0}^{M-1} x(t_k + i T/M) exp(-j 2 pi f (t_k + i T/M))    (M samples)
+
+The time reference is absolute (``t`` as given), so ``x = Re{X e^{jwt}}`` returns ``X`` in every
+period. With an integer number ``M >= 3`` of samples per period the sum is exact quadrature for the
+tone at ``f`` (and rejects DC and harmonics ``2..M-2`` of ``f`` exactly).
+
+Averaging over ``N`` periods: ``mean = (1/N) sum X_k``; variance of the mean
+``var = sum |X_k - mean|^2 / (N (N - 1))``, an unbiased estimate of ``E|mean - truth|^2``.
+
+Noise. White Gaussian noise of standard deviation ``sigma`` per sample, ``M = fs T`` samples per
+period, gives a per-period phasor ``n = (2/M) sum w_i exp(-j theta_i)`` with
+``Var(Re n) = (4 sigma^2/M^2) sum cos^2 theta_i = 2 sigma^2/M``, ``Var(Im n) = 2 sigma^2/M``,
+``Cov = (4 sigma^2/M^2) sum cos theta_i sin theta_i = 0`` (for ``M >= 3``), so ``n`` is circular
+complex Gaussian with ``E|n|^2 = 4 sigma^2 / M = 4 sigma^2 / (fs T)``, independent between disjoint
+periods. See :func:`white_noise_phasor_var`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = [
+    "average_periods",
+    "lockin_periods",
+    "samples_per_period",
+    "tone_lockin",
+    "white_noise_phasor_var",
+]
+
+
+def samples_per_period(fs_hz: float, f_exc_hz: float, rtol: float = 1e-9) -> int:
+    """Integer ``M = fs/f``; raise ``ValueError`` if ``fs/f`` is not an integer >= 3."""
+    m_real = fs_hz / f_exc_hz
+    m = round(m_real)
+    if m < 3 or abs(m_real - m) > rtol * m_real:
+        raise ValueError(
+            f"fs/f = {m_real!r} must be an integer >= 3 for exact lock-in quadrature "
+            f"(fs = {fs_hz!r} Hz, f = {f_exc_hz!r} Hz)"
+        )
+    return m
+
+
+def lockin_periods(
+    x: np.ndarray,
+    fs_hz: float,
+    f_exc_hz: float,
+    t0: float = 0.0,
+    n_periods: int | None = None,
+    skip_periods: int = 0,
+) -> np.ndarray:
+    """Per-period lock-in phasors of sampled signals.
+
+    ``x``: samples (n_samples, ...) at ``t_i = t0 + i/fs`` (s); ``fs/f`` must be an integer
+    ``M >= 3``. The first ``skip_periods`` periods are dropped, then ``n_periods`` (default: all
+    complete remaining periods) are analysed. Returns (n_periods, ...) complex phasors in the
+    units of ``x``, time reference absolute ``t``.
+    """
+    x = np.asarray(x)
+    m = samples_per_period(fs_hz, f_exc_hz)
+    total = x.shape[0] // m
+    avail = total - skip_periods
+    if n_periods is None:
+        n_periods = avail
+    if n_periods < 1 or n_periods > avail:
+        raise ValueError(f"need {skip_periods} + {n_periods} periods, signal has {total}")
+    start = skip_periods * m
+    seg = x[start : start + n_periods * m]
+    seg = seg.reshape(n_periods, m, *x.shape[1:])
+    i = np.arange(m)
+    # period k starts at t0 + (skip + k) T, and exp(-j w (t0 + n T)) = exp(-j w t0) for integer n,
+    # so the reference is one phase factor times the per-sample phases 2 pi i / M (exact)
+    theta = 2.0 * np.pi * i / m
+    flat = seg.reshape(n_periods, m, -1)
+    if np.iscomplexobj(flat):
+        ph = np.exp(-1j * theta) @ flat
+    else:
+        ph = np.cos(theta) @ flat - 1j * (np.sin(theta) @ flat)  # (P, R), real matmuls
+    ph = ph.reshape(n_periods, *x.shape[1:]) * np.exp(-1j * 2.0 * np.pi * f_exc_hz * t0)
+    return (2.0 / m) * ph
+
+
+def average_periods(per_period: np.ndarray, axis: int = 0) -> tuple[np.ndarray, np.ndarray, int]:
+    """Mean phasor, variance of the mean ``sum|X_k - mean|^2 / (N (N-1))`` and ``N``.
+
+    The variance is NaN when ``N < 2`` (no scatter to estimate it from).
+    """
+    x = np.asarray(per_period)
+    n = x.shape[axis]
+    mean = x.mean(axis=axis)
+    if n < 2:
+        return mean, np.full(mean.shape, np.nan), n
+    dev = x - np.expand_dims(mean, axis)
+    var = (np.abs(dev) ** 2).sum(axis=axis) / (n * (n - 1))
+    return mean, var, n
+
+
+def _dirichlet(x: np.ndarray, m: int) -> np.ndarray:
+    """``sin(m x) / (m sin x)`` with its limit ``(-1)^(n (m-1))`` at ``x = n pi``."""
+    s = np.sin(x)
+    near = np.abs(s) < 1e-12
+    safe = np.where(near, 1.0, s)
+    val = np.sin(m * x) / (m * safe)
+    n = np.rint(x / np.pi)
+    lim = np.where(np.mod(n * (m - 1), 2) == 0, 1.0, -1.0)
+    return np.where(near, lim, val)
+
+
+def _kernel(a: np.ndarray, t_k: np.ndarray, period: float, m: int | None) -> np.ndarray:
+    """Average of ``exp(j a t)`` over each period [t_k, t_k + T]: continuous or M-sample.
+
+    ``a`` (rad/s) shape (n_tone,), ``t_k`` (n_periods,); returns (n_periods, n_tone).
+    """
+    a = a[None, :]
+    tk = t_k[:, None]
+    if m is None:
+        return np.exp(1j * a * (tk + period / 2.0)) * np.sinc(a * period / (2.0 * np.pi))
+    dt = period / m
+    return np.exp(1j * a * (tk + (m - 1) * dt / 2.0)) * _dirichlet(a * dt / 2.0, m)
+
+
+def tone_lockin(
+    tone_freqs_hz: np.ndarray,
+    tone_amps: np.ndarray,
+    f_exc_hz: float,
+    t_start: float,
+    n_periods: int,
+    samples_per_period: int | None = None,
+) -> np.ndarray:
+    r"""Exact per-period lock-in phasors of ``x(t) = Re sum_m Y_m exp(j 2 pi F_m t)``.
+
+    ``tone_freqs_hz`` (n_tone,) Hz (any real values, also negative or zero); ``tone_amps``
+    (n_tone, ...) peak complex amplitudes; the lock-in runs at ``f_exc_hz`` over ``n_periods``
+    consecutive periods starting at ``t_start`` (s), with absolute time reference.
+
+    With ``w = 2 pi f``, ``nu_m = 2 pi F_m`` and ``g(a)`` the average of ``exp(j a t)`` over
+    period k (``exp(j a (t_k + T/2)) sinc(a T / 2 pi)`` continuous, or
+    ``exp(j a (t_k + (M-1) dt/2)) sin(M a dt/2) / (M sin(a dt/2))`` for ``M`` samples,
+    ``dt = T/M``):
+
+        X_k = sum_m [ Y_m g(nu_m - w) + conj(Y_m) g(-nu_m - w) ].
+
+    ``samples_per_period=None`` gives the continuous-time integral; an integer ``M`` gives the
+    exact value of the ``M``-sample lock-in (what :func:`lockin_periods` computes on samples).
+    Returns (n_periods, ...) complex.
+    """
+    nu = 2.0 * np.pi * np.atleast_1d(np.asarray(tone_freqs_hz, dtype=np.float64))
+    amps = np.asarray(tone_amps, dtype=np.complex128)
+    if amps.ndim == 0:
+        amps = amps.reshape(1)
+    if amps.shape[0] != nu.shape[0]:
+        raise ValueError(f"tone_amps has {amps.shape[0]} rows for {nu.shape[0]} tone frequencies")
+    if samples_per_period is not None and samples_per_period < 3:
+        raise ValueError("samples_per_period must be >= 3")
+    w = 2.0 * np.pi * f_exc_hz
+    period = 1.0 / f_exc_hz
+    t_k = t_start + np.arange(n_periods) * period
+    g_pos = _kernel(nu - w, t_k, period, samples_per_period)  # (P, n_tone)
+    g_neg = _kernel(-nu - w, t_k, period, samples_per_period)
+    flat = amps.reshape(amps.shape[0], -1)
+    out = g_pos @ flat + g_neg @ np.conj(flat)
+    return out.reshape(n_periods, *amps.shape[1:])
+
+
+def white_noise_phasor_var(sample_std: float | np.ndarray, samples_per_period: float) -> np.ndarray:
+    """``E|n|^2 = 4 sigma^2 / M`` of the per-period lock-in phasor of white noise (std ``sigma``
+    per sample, ``M = fs T`` samples per period); real and imaginary parts each ``2 sigma^2/M``.
+    """
+    s = np.asarray(sample_std, dtype=np.float64)
+    return 4.0 * s**2 / float(samples_per_period)

@@ -1,0 +1,105 @@
+"""Summary of a sweep for ``rotorcheck info`` (JSON-serialisable dict).
+
+Noise estimate per run and output channel from ``output_var`` (variance of the mean output
+phasor, m^2). The averaged noise ``v`` is circular complex Gaussian with ``E|v|^2 = var``, so
+``P(|v| <= sqrt(var) sqrt(-ln(1-p))) = p``. Over a family of ``n`` points (Sidak, independent
+points) the per-point level ``p = P^(1/n)`` gives a family-wise confidence ``P`` (0.99):
+
+    V = max_k sqrt(var_k) sqrt(-ln(1 - p)),  p = P^(1/n)         (m, ``method.md`` step 2)
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from rotorcheck.sweep.format import SCHEMA_VERSION, Sweep
+
+__all__ = ["sidak_noise_bound", "summarize"]
+
+
+def sidak_noise_bound(output_var: np.ndarray, confidence: float = 0.99) -> float:
+    """``V = max sqrt(var) sqrt(-ln(1 - p))`` with ``p = confidence^(1/n)``, n = var.size (m)."""
+    var = np.asarray(output_var, dtype=np.float64).reshape(-1)
+    n = var.size
+    if n == 0:
+        raise ValueError("no points")
+    if not 0.0 < confidence < 1.0:
+        raise ValueError("confidence must be in (0, 1)")
+    # -ln(1 - p) with p = c^(1/n): 1 - p = -expm1(ln(c)/n), accurate for large n
+    one_minus_p = -math.expm1(math.log(confidence) / n)
+    return float(np.sqrt(var.max()) * math.sqrt(-math.log(one_minus_p)))
+
+
+def _noise(var: np.ndarray, confidence: float) -> dict[str, Any]:
+    s = np.sqrt(np.asarray(var, dtype=np.float64))
+    return {
+        "median_std_m": float(np.median(s)),
+        "max_std_m": float(s.max()),
+        "sidak_bound_m": sidak_noise_bound(var, confidence),
+        "n_points": int(s.size),
+    }
+
+
+def summarize(sweep: Sweep, confidence: float = 0.99) -> dict[str, Any]:
+    """Runs, speeds, grids, channels and noise estimates of a (validated) sweep.
+
+    Per run: grid (min/max Hz, n), ``n_periods`` range, and ``noise``: per output channel and over
+    all outputs together (family of ``f * n_out`` points) the median and max ``sqrt(output_var)``
+    and the Sidak family-wise bound at ``confidence``. ``shared_grid`` tells whether all runs
+    share the frequency grid bit for bit.
+    """
+    runs = []
+    grids = []
+    for run in sweep.runs.values():
+        f = np.asarray(run.frequency, dtype=np.float64)
+        grids.append(f)
+        var = np.asarray(run.output_var, dtype=np.float64)
+        per_chan = {ch.name: _noise(var[:, o], confidence) for o, ch in enumerate(sweep.outputs)}
+        runs.append(
+            {
+                "run_id": run.run_id,
+                "speed_rpm": float(run.speed_rpm),
+                "grid": {"min_hz": float(f.min()), "max_hz": float(f.max()), "n": int(f.size)},
+                "n_periods_min": int(np.min(run.n_periods)),
+                "n_periods_max": int(np.max(run.n_periods)),
+                "has_period_phasor": run.period_phasor is not None,
+                "notes": run.notes,
+                "noise": {
+                    "confidence": confidence,
+                    "all_outputs": _noise(var, confidence),
+                    "per_output": per_chan,
+                },
+            }
+        )
+    shared = all(g.shape == grids[0].shape and np.array_equal(g, grids[0]) for g in grids)
+    all_f = np.concatenate(grids)
+    return {
+        "schema_version": SCHEMA_VERSION,
+        "rig_id": sweep.rig_id,
+        "source": sweep.source,
+        "generator": sweep.generator,
+        "created_utc": sweep.created_utc,
+        "n_runs": len(runs),
+        "speeds_rpm": sorted({float(r.speed_rpm) for r in sweep.runs.values()}),
+        "grid": {
+            "min_hz": float(all_f.min()),
+            "max_hz": float(all_f.max()),
+            "n": int(grids[0].size) if shared else None,
+        },
+        "shared_grid": bool(shared),
+        "channels": [
+            {
+                "name": c.name,
+                "role": c.role,
+                "node": int(c.node),
+                "direction": c.direction,
+                "quantity": c.quantity,
+                "unit": c.unit,
+            }
+            for c in sweep.channels
+        ],
+        "runs": runs,
+    }
