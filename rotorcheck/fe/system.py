@@ -72,6 +72,8 @@ class MechanicalSystem:
     node_positions: np.ndarray = field(default_factory=lambda: np.zeros(0))  # m, per mesh node
     elements: tuple[BeamElementInfo, ...] = ()
     mass_index: dict[str, int] = field(default_factory=dict)  # lumped: mass name -> DOF
+    # (kind, name, station): "bearing" | "disc" | "spring" parts of a rotor, for plots and reports
+    features: tuple[tuple[str, str, int], ...] = ()
 
     def matrices(self, speed_rpm: float = 0.0) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """(M, C, G, K) at ``speed_rpm``; dense float arrays of shape (n_dof, n_dof)."""
@@ -92,6 +94,21 @@ class MechanicalSystem:
         return self.dof(
             getattr(port, "station", None), getattr(port, "direction", "x"), getattr(port, "mass", None)
         )
+
+    @property
+    def n_nodes(self) -> int:
+        """Mesh nodes of a rotor (0 for lumped models)."""
+        return self.n_dof // 4 if self.kind == "rotor" else 0
+
+    @property
+    def station_positions(self) -> np.ndarray:
+        """Axial position (m) of each config station (rotor)."""
+        return np.asarray(self.node_positions)[list(self.station_node)]
+
+    def plane_dofs(self) -> tuple[np.ndarray, np.ndarray]:
+        """DOF indices of the x plane (u, psi) and the y plane (v, theta) of a rotor."""
+        base = 4 * np.arange(self.n_nodes)
+        return np.sort(np.r_[base, base + 3]), np.sort(np.r_[base + 1, base + 2])
 
     def dynamic_stiffness(self, freq_hz: np.ndarray, speed_rpm: float = 0.0) -> np.ndarray:
         """Z(w) = K - w^2 M + j w (C + Omega G), shape (f, n, n), complex (N/m)."""
