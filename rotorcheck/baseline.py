@@ -94,7 +94,8 @@ def read_baseline(path: str | Path) -> Baseline:
         if h5.attrs.get("schema") != SCHEMA:
             raise InputError(p, "/@schema", f"not a rotorcheck baseline (schema {h5.attrs.get('schema')!r})")
         if int(h5.attrs.get("schema_version", -1)) != SCHEMA_VERSION:
-            raise InputError(p, "/@schema_version", f"unknown schema_version {h5.attrs.get('schema_version')}")
+            version = h5.attrs.get("schema_version")
+            raise InputError(p, "/@schema_version", f"unknown schema_version {version}")
         values: dict[str, object] = {}
         for name in _ATTRS:
             if name not in h5.attrs:

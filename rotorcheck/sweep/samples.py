@@ -1,0 +1,115 @@
+"""The bundled sample sweeps (``data_samples/``), regenerated deterministically by ``make samples``.
+
+Every sample is a seeded simulation of a truth rig (``configs/*_truth.yaml``), never of the nominal
+model, so validation has real model error to absorb. ``python -m rotorcheck.sweep.samples DIR``
+writes them; ``--check`` compares the files in DIR with what the code makes (bit for bit).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import tempfile
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from rotorcheck.config import load_config
+from rotorcheck.resources import configs_dir
+from rotorcheck.sweep.format import Sweep, compare_sweeps, read_sweep, write_sweep
+from rotorcheck.sweep.rig_sim import simulate_rig
+
+CREATED_UTC = "2026-01-01T00:00:00Z"
+
+#: 0 rpm grid: 30-800 Hz measured (analysis cut at 600 Hz), same step as the rotating grid.
+GRID_0RPM = np.linspace(30.0, 800.0, 353)
+#: 1000 rpm grid: 30-600 Hz, 262 points (dissertation section 5.7).
+GRID_1000RPM = np.linspace(30.0, 600.0, 262)
+#: three-mass grid: 0.5-8 Hz (section 3.4).
+GRID_THREE_MASS = np.linspace(0.5, 8.0, 151)
+
+
+@dataclass(frozen=True)
+class Sample:
+    """One bundled file: its relative path and how to make it."""
+
+    path: str
+    make: Callable[[], Sweep]
+
+
+def _crack_rig(fault: str | None, speed: float, grid: np.ndarray, seed: int) -> Callable[[], Sweep]:
+    def make() -> Sweep:
+        truth = load_config(configs_dir() / "crack_rig_truth.yaml")
+        return simulate_rig(truth, grid, speed, fault=fault, seed=seed, created_utc=CREATED_UTC)
+
+    return make
+
+
+def _three_mass(fault: str | None) -> Callable[[], Sweep]:
+    def make() -> Sweep:
+        truth = load_config(configs_dir() / "three_mass_truth.yaml")
+        return simulate_rig(truth, GRID_THREE_MASS, 0.0, fault=fault, seed=0, created_utc=CREATED_UTC)
+
+    return make
+
+
+SAMPLES: tuple[Sample, ...] = (
+    Sample("crack_rig/healthy_0rpm.h5", _crack_rig(None, 0.0, GRID_0RPM, seed=101)),
+    Sample("crack_rig/open_crack_0rpm.h5", _crack_rig("open_crack", 0.0, GRID_0RPM, seed=102)),
+    Sample("crack_rig/healthy_1000rpm.h5", _crack_rig(None, 1000.0, GRID_1000RPM, seed=103)),
+    Sample("crack_rig/breathing_crack_1000rpm.h5",
+           _crack_rig("breathing_crack", 1000.0, GRID_1000RPM, seed=104)),
+    Sample("crack_rig/healthy_1000rpm_repeat.h5", _crack_rig(None, 1000.0, GRID_1000RPM, seed=105)),
+    Sample("three_mass/healthy.h5", _three_mass(None)),
+    Sample("three_mass/damaged.h5", _three_mass("stiffness_loss")),
+)
+
+
+def write_samples(out_dir: str | Path, force: bool = True) -> list[Path]:
+    """Regenerate every sample into ``out_dir``; returns the paths written."""
+    out = Path(out_dir)
+    written = []
+    for s in SAMPLES:
+        path = out / s.path
+        path.parent.mkdir(parents=True, exist_ok=True)
+        write_sweep(s.make(), path, force=force)
+        written.append(path)
+    return written
+
+
+def check_samples(sample_dir: str | Path) -> dict[str, list[str]]:
+    """Differences between the bundled files and freshly made ones ({} when all equal)."""
+    problems: dict[str, list[str]] = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        for s in SAMPLES:
+            bundled = Path(sample_dir) / s.path
+            if not bundled.exists():
+                problems[s.path] = ["missing"]
+                continue
+            fresh = Path(tmp) / Path(s.path).name
+            write_sweep(s.make(), fresh, force=True)
+            diff = compare_sweeps(read_sweep(bundled), read_sweep(fresh))
+            if diff:
+                problems[s.path] = diff
+    return problems
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("dir", nargs="?", default="data_samples")
+    parser.add_argument("--check", action="store_true", help="compare instead of writing")
+    args = parser.parse_args(argv)
+    if args.check:
+        problems = check_samples(args.dir)
+        for name, diff in problems.items():
+            print(f"{name}: {'; '.join(diff[:5])}", file=sys.stderr)
+        return 1 if problems else 0
+    for p in write_samples(args.dir):
+        print(f"wrote {p} ({p.stat().st_size / 1024:.0f} KiB)", file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
