@@ -13,6 +13,7 @@ import sys
 from pathlib import Path
 from typing import Annotated, Any
 
+import numpy as np
 import typer
 from rich.console import Console
 from rich.markup import escape
@@ -120,6 +121,211 @@ def info(
     if as_json:
         _emit_json(doc)
     return EXIT_OK
+
+
+def _fail_at() -> tuple[int, ...]:
+    """Testing hook: ``ROTORCHECK_FAIL_AT=3,17`` makes the solver fail at those point indices."""
+    raw = os.environ.get("ROTORCHECK_FAIL_AT", "").strip()
+    return tuple(int(x) for x in raw.split(",") if x.strip()) if raw else ()
+
+
+RunOpt = Annotated[str | None, typer.Option("--run", help="Run id inside the sweep file (default: the only one).")]
+
+
+@app.command("fit-noise")
+def fit_noise(
+    sweep: Annotated[Path | None, typer.Argument(help="Healthy sweep (default: bundled healthy_1000rpm).")] = None,
+    rig: RigOpt = None,
+    out: OutOpt = DEFAULT_OUT,
+    method: Annotated[str, typer.Option(help="pooled | max | floor | manual")] = "pooled",
+    value: Annotated[float | None, typer.Option("--value", help="Manual bound, m (--method manual).")] = None,
+    confidence: Annotated[float, typer.Option(help="Family-wise confidence over the points.")] = 0.99,
+    run: RunOpt = None,
+    as_json: JsonOpt = False,
+    force: ForceOpt = False,
+) -> int:
+    """Step 2: fit the noise bound V (m) and write it into <out>/baseline.h5."""
+    from rotorcheck import workflow
+    from rotorcheck.baseline import Baseline, write_baseline
+    from rotorcheck.fileio import check_writable
+    from rotorcheck.resources import samples_dir
+
+    sweep_path = sweep if sweep is not None else samples_dir() / "crack_rig" / "healthy_1000rpm.h5"
+    if not 0.0 < confidence < 1.0:
+        raise InputError(None, "--confidence", f"must be in (0, 1), got {confidence}")
+    target = out / "baseline.h5"
+    check_writable([target], force)
+    cfg = workflow.load_rig(workflow.resolve_rig(rig, sweep_path))
+    mrun = workflow.load_run(sweep_path, cfg, run)
+    nb = workflow.fit_noise(mrun, method=method, confidence=confidence, manual_m=value)
+    write_baseline(Baseline(rig_id=cfg.rig_id, rig_sha256=cfg.sha256(), sweep_sha256=[mrun.sha256],
+                            run_id=mrun.run_id, speed_rpm=mrun.speed_rpm, noise_bound_m=nb.value_m,
+                            noise_method=nb.method, noise_confidence=float(nb.confidence or 0.0),
+                            uncertainty=cfg.uncertainty.structure, parameter=cfg.uncertainty.parameter or "",
+                            stage="noise"), target)
+    conf = f", {nb.confidence:.0%} family-wise over {mrun.frequency_hz.size} points" if nb.confidence else ""
+    err.print(f"noise bound V = {nb.value_m * 1e6:.4g} um ({nb.method}{conf}) from {sweep_path}")
+    excess = nb.details.get("excess_scatter_hz", [])
+    if excess:
+        err.print(f"{len(excess)} points scatter beyond the pooled noise (synchronous leaks?): "
+                  + ", ".join(f"{x:.1f}" for x in excess[:12]) + (" ..." if len(excess) > 12 else "") + " Hz")
+    err.print(f"wrote {target}")
+    if as_json:
+        _emit_json({"noise_bound_m": nb.value_m, "method": nb.method, "confidence": nb.confidence,
+                    "sweep": str(sweep_path), "baseline": str(target), "details": nb.details})
+    return EXIT_OK
+
+
+@app.command()
+def validate(
+    sweeps: Annotated[list[Path], typer.Argument(help="One or several healthy sweeps (gamma encloses them all).")],
+    rig: RigOpt = None,
+    out: OutOpt = DEFAULT_OUT,
+    enclose: Annotated[str, typer.Option(help="system (no false alarms on repeat healthy data) | data (FDMVOP)")]
+    = "system",
+    run: RunOpt = None,
+    at: Annotated[float | None, typer.Option("--at", help="Frequency (Hz) of the complex-plane plot.")] = None,
+    as_json: JsonOpt = False,
+    force: ForceOpt = False,
+) -> int:
+    """Step 3: bound the model error per frequency (gamma) so the uncertain model encloses the healthy data."""
+    from rotorcheck import workflow
+    from rotorcheck.baseline import read_baseline, write_baseline
+    from rotorcheck.fileio import check_writable
+    from rotorcheck.robust.noise import noise_bound_manual
+
+    cfg = workflow.load_rig(workflow.resolve_rig(rig, sweeps[0]))
+    runs = [workflow.load_run(p, cfg, run) for p in sweeps]
+    target = out / "baseline.h5"
+    noise = None
+    if target.exists():
+        prior = read_baseline(target)
+        if prior.validated and not force:
+            raise InputError(target, "", "a validated baseline exists; refusing to overwrite (use --force)")
+        if not prior.validated:
+            if prior.rig_sha256 != cfg.sha256():
+                raise InputError(target, "/@rig_sha256", "the noise fit was made for another rig description")
+            noise = noise_bound_manual(prior.noise_bound_m)
+            noise.method, noise.confidence = prior.noise_method, prior.noise_confidence
+            err.print(f"noise bound V = {prior.noise_bound_m * 1e6:.4g} um from {target} ({prior.noise_method})")
+    stems = [out / s for s in workflow.PLOT_STEMS_VALIDATE]
+    check_writable([st.with_suffix(e) for st in stems for e in (".png", ".pdf")], force)
+    if noise is None:
+        noise = workflow.fit_noise(runs[0])
+        err.print(f"no noise fit in {out}: fitted V = {noise.value_m * 1e6:.4g} um ({noise.method}, "
+                  f"{noise.confidence:.0%}) from {runs[0].path}")
+    outcome = workflow.validate(cfg, runs, noise, enclose=enclose, fail_at=_fail_at())
+    write_baseline(outcome.baseline, target)
+    files = workflow.validation_plots(outcome, out, at)
+    res = outcome.result
+    n_bad = outcome.n_not_enclosed
+    g = res.gamma[np.isfinite(res.gamma)]
+    unit = "m/N" if outcome.model.structure == "additive" else (
+        "(relative)" if outcome.model.structure == "multiplicative" else f"({outcome.model.parameter})")
+    err.print(f"gamma over {res.gamma.size} points ({enclose}): median {np.median(g):.3g}, max {np.max(g):.3g} {unit}")
+    if n_bad:
+        bad = np.flatnonzero(res.status != "ok")
+        err.print(f"[yellow]{n_bad} points not enclosed[/]: " + ", ".join(
+            f"{runs[0].frequency_hz[i]:.1f} Hz ({res.status[i]})" for i in bad[:10]))
+    for p_ in [str(target), *files]:
+        err.print(f"wrote {p_}")
+    if as_json:
+        _emit_json({"frequency_hz": runs[0].frequency_hz, "gamma": res.gamma, "gamma_lower": res.gamma_lower,
+                    "status": [str(x) for x in res.status], "noise_bound_m": noise.value_m,
+                    "noise_method": noise.method, "enclose": enclose, "uncertainty": outcome.model.structure,
+                    "n_points": int(res.gamma.size), "n_not_enclosed": n_bad, "baseline": str(target)})
+    return EXIT_INCONCLUSIVE if n_bad else EXIT_OK
+
+
+@app.command()
+def detect(
+    sweep: Annotated[Path, typer.Argument(help="New sweep to check against the healthy baseline.")],
+    rig: RigOpt = None,
+    out: OutOpt = DEFAULT_OUT,
+    baseline: Annotated[Path | None, typer.Option("--baseline", help="Baseline (default <out>/baseline.h5).")] = None,
+    run: RunOpt = None,
+    at: Annotated[float | None, typer.Option("--at", help="Frequency (Hz) of the complex-plane plot.")] = None,
+    as_json: JsonOpt = False,
+    force: ForceOpt = False,
+) -> int:
+    """Steps 4-5: certified fault points, verdict, and the damage dynamics with its exact bound."""
+    from rotorcheck import workflow
+    from rotorcheck.baseline import read_baseline
+    from rotorcheck.fileio import check_writable
+    from rotorcheck.report.reports import REPORT_FILES, write_reports
+
+    base_path = baseline if baseline is not None else out / "baseline.h5"
+    stems = [out / s for s in workflow.PLOT_STEMS_DETECT]
+    check_writable([out / f for f in REPORT_FILES] + [st.with_suffix(e) for st in stems for e in (".png", ".pdf")],
+                   force)
+    base = read_baseline(base_path)
+    cfg = workflow.load_rig(workflow.resolve_rig(rig, sweep))
+    mrun = workflow.load_run(sweep, cfg, run)
+    workflow.check_baseline(base, cfg, mrun, base_path)
+    outcome = workflow.detect(cfg, base, mrun, fail_at=_fail_at())
+    report = outcome.report()
+    plots = workflow.detection_plots(outcome, out, at)
+    files = write_reports(report, out, plots)
+    v = outcome.verdict
+    colour = {"damage": "bold red", "healthy": "bold green", "inconclusive": "bold yellow"}[v.verdict]
+    err.print(f"[{colour}]{v.verdict.upper()}[/]: {v.reason}")
+    err.print(f"{report['n_fault_points']} of {report['n_points']} points are fault points")
+    for p_ in [*map(str, files), *plots]:
+        err.print(f"wrote {p_}")
+    if as_json:
+        _emit_json(report)
+    return outcome.exit_code
+
+
+@app.command()
+def simulate(
+    output: Annotated[Path, typer.Argument(help="Sweep file to write (HDF5).")],
+    rig: Annotated[Path | None, typer.Option("--rig", help="Truth rig (default configs/crack_rig_truth.yaml).")] = None,
+    speed: Annotated[float, typer.Option("--speed", help="Spin speed, rpm.")] = 0.0,
+    fault: Annotated[str | None, typer.Option("--fault", help="A fault named in the rig's faults section.")] = None,
+    f_min: Annotated[float, typer.Option("--f-min", help="First frequency, Hz.")] = 30.0,
+    f_max: Annotated[float, typer.Option("--f-max", help="Last frequency, Hz.")] = 600.0,
+    points: Annotated[int, typer.Option("--points", help="Number of frequency points (linear grid).")] = 262,
+    periods: Annotated[int | None, typer.Option("--periods", help="Periods averaged per point.")] = None,
+    noise: Annotated[float | None, typer.Option("--noise", help="Output noise std per sample, m.")] = None,
+    seed: Annotated[int, typer.Option("--seed", help="Random seed.")] = 0,
+    harmonics: Annotated[int, typer.Option("--harmonics", help="Harmonic-balance order (breathing crack).")] = 8,
+    force: ForceOpt = False,
+    as_json: JsonOpt = False,
+) -> int:
+    """Simulate a stepped-sine sweep of a (truth) rig, healthy or with a named fault."""
+    import dataclasses
+
+    from rotorcheck import workflow
+    from rotorcheck.fileio import check_writable
+    from rotorcheck.resources import configs_dir
+    from rotorcheck.sweep.format import write_sweep
+    from rotorcheck.sweep.rig_sim import simulate_rig, step_settings
+
+    if points < 2 or not (0 < f_min < f_max):
+        raise InputError(None, "--points/--f-min/--f-max", "need 0 < f-min < f-max and at least 2 points")
+    check_writable([output], force)
+    cfg = workflow.load_rig(rig if rig is not None else configs_dir() / "crack_rig_truth.yaml")
+    st = step_settings(cfg)
+    if periods is not None:
+        st = dataclasses.replace(st, n_periods=periods)
+    if noise is not None:
+        st = dataclasses.replace(st, output_noise_std=noise)
+    grid = np.linspace(f_min, f_max, points)
+    sw = simulate_rig(cfg, grid, speed, fault=fault, seed=seed, n_harmonics=harmonics, settings=st,
+                      created_utc=_utc_now())
+    write_sweep(sw, output, force=force)
+    err.print(f"wrote {output}: {sw.generator}; {points} points {f_min:g}-{f_max:g} Hz at {speed:g} rpm")
+    if as_json:
+        _emit_json({"file": str(output), "rig_id": sw.rig_id, "generator": sw.generator, "speed_rpm": speed,
+                    "fault": fault, "points": points, "seed": seed})
+    return EXIT_OK
+
+
+def _utc_now() -> str:
+    import datetime as dt
+
+    return dt.datetime.now(dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
 
 
 @app.command()

@@ -1,11 +1,27 @@
-"""The five steps as functions a notebook can call; the CLI is a thin layer over these."""
+"""The five steps as functions a notebook can call; the CLI is a thin layer over these.
+
+1. :func:`rotorcheck.nominal.nominal_model` (the rig's augmented plant), 2. :func:`fit_noise`,
+3. :func:`validate`, 4.-5. :func:`detect` (fault points, then the damage dynamics D_u at the damage
+port with its exact bound). Frequencies in Hz, receptances in m/N, D_u in N/m.
+"""
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from rotorcheck.config import RigConfig, load_config
+from rotorcheck.errors import InputError
+from rotorcheck.resources import default_rig_path
+
+VERDICT_RULE = (
+    "damage if the number of fault points is at least max(3, 2 % of the points) or at least 2 "
+    "adjacent points are faults; otherwise inconclusive if any point could not be decided (solver "
+    "failure) or the healthy data could not be enclosed somewhere; otherwise healthy"
+)
 
 
 def load_rig(path: str | Path) -> RigConfig:
@@ -49,3 +65,400 @@ def _model_plots(config: RigConfig, system: Any, speed_rpm: float, out: Path, fo
     files = save_figure(campbell_figure(camp), stems[0])
     files += save_figure(mode_shape_figure(system, speed_rpm, config.analysis.n_modes), stems[1])
     return [str(f) for f in files]
+
+
+# --------------------------------------------------------------------------------------------
+# measured data
+
+
+@dataclass
+class MeasuredRun:
+    """One run of a sweep file restricted to the rig's analysis band (SISO: actuator -> sensor)."""
+
+    path: Path
+    sha256: str
+    rig_id: str
+    run_id: str
+    speed_rpm: float
+    frequency_hz: np.ndarray  # (f,) Hz, in band
+    W: np.ndarray  # (f,) input force phasor, N
+    Zt: np.ndarray  # (f,) output displacement phasor, m
+    output_var: np.ndarray  # (f,) variance of the mean output phasor, m^2
+    n_periods: np.ndarray  # (f,)
+    band_hz: tuple[float, float]
+    n_dropped: int = 0  # points of the run outside the band
+
+    @property
+    def frf(self) -> np.ndarray:
+        """Measured receptance Zt / W (f,), m/N."""
+        return self.Zt / self.W
+
+
+def resolve_rig(rig_path: str | Path | None, sweep_path: str | Path) -> Path:
+    """``--rig`` or, by default, the bundled rig named by the sweep's ``rig_id``."""
+    if rig_path is not None:
+        return Path(rig_path)
+    from rotorcheck.sweep.format import read_sweep
+
+    return default_rig_path(read_sweep(sweep_path).rig_id)
+
+
+def load_run(path: str | Path, config: RigConfig, run_id: str | None = None) -> MeasuredRun:
+    """Read a sweep file, check it belongs to ``config`` (rig id, channels) and cut the band."""
+    from rotorcheck.sweep.format import read_sweep, sweep_sha256
+
+    p = Path(path)
+    sweep = read_sweep(p)
+    if sweep.rig_id != config.rig_id:
+        raise InputError(p, "/@rig_id", f"sweep is of rig {sweep.rig_id!r}, the rig file is {config.rig_id!r}")
+    if run_id is None:
+        if len(sweep.runs) != 1:
+            raise InputError(p, "/runs", f"{len(sweep.runs)} runs ({', '.join(sweep.runs)}); choose one with --run")
+        run_id = next(iter(sweep.runs))
+    if run_id not in sweep.runs:
+        raise InputError(p, f"/runs/{run_id}", f"no such run (runs: {', '.join(sweep.runs)})")
+    run = sweep.runs[run_id]
+    if len(sweep.inputs) != 1 or len(sweep.outputs) != 1:
+        raise InputError(p, "/channels", "rotorcheck validates one actuator and one sensor channel per sweep")
+    for ch, port, name in ((sweep.inputs[0], config.ports.actuator, "actuator"),
+                           (sweep.outputs[0], config.ports.sensor, "sensor")):
+        expected = (port.station, port.direction) if config.kind == "rotor" else (
+            [m.name for m in config.masses].index(port.mass) + 1, ch.direction)
+        if (ch.node, ch.direction) != expected:
+            raise InputError(p, "/channels", f"channel {ch.name!r} is at node {ch.node} {ch.direction}, the rig's "
+                             f"{name} port is at {expected[0]} {expected[1]}")
+    lo, hi = config.analysis.band_hz
+    f = run.frequency
+    keep = (f >= lo - 1e-9) & (f <= hi + 1e-9)
+    if not np.any(keep):
+        raise InputError(p, f"/runs/{run_id}/frequency", f"no point inside the analysis band {lo:g}-{hi:g} Hz")
+    return MeasuredRun(
+        path=p, sha256=sweep_sha256(p), rig_id=sweep.rig_id, run_id=run_id, speed_rpm=float(run.speed_rpm),
+        frequency_hz=f[keep], W=run.input_phasor[keep, 0], Zt=run.output_phasor[keep, 0],
+        output_var=run.output_var[keep, 0], n_periods=run.n_periods[keep], band_hz=(lo, hi),
+        n_dropped=int(np.count_nonzero(~keep)),
+    )
+
+
+# --------------------------------------------------------------------------------------------
+# step 2: noise bound
+
+
+NOISE_METHODS = ("pooled", "max", "floor", "manual")
+
+
+def fit_noise(
+    run: MeasuredRun, method: str = "pooled", confidence: float = 0.99, manual_m: float | None = None
+) -> Any:
+    """Step 2: the noise bound V (m, uniform in frequency) from a healthy run.
+
+    ``pooled`` (default): the noise level pooled over the points (median of the per-point variance
+    of the mean, which synchronous-disturbance leaks near kX cannot inflate), then V at
+    ``confidence`` family-wise over the points (Sidak), complex circular Gaussian; points whose
+    scatter is far above the pool (F test at the same family-wise level) are listed in
+    ``details["excess_scatter_hz"]``. ``max``: the largest per-point bound (conservative).
+    ``floor``: the dissertation's noise floor (scatter of the data around a smooth local fit).
+    ``manual``: ``manual_m`` as given.
+    """
+    from rotorcheck.robust import noise
+
+    if method == "manual":
+        if manual_m is None or not np.isfinite(manual_m) or manual_m < 0:
+            raise InputError(None, "--value", "a manual noise bound needs a finite value >= 0 (m)")
+        return noise.noise_bound_manual(float(manual_m))
+    if method == "max":
+        nb = noise.noise_bound_from_variance(run.output_var, confidence, n_periods=int(np.min(run.n_periods)))
+    elif method == "pooled":
+        nb = noise.noise_bound_pooled(run.output_var, confidence, n_periods=int(np.min(run.n_periods)))
+        excess = np.asarray(nb.details.get("excess_scatter_index", []), dtype=int)
+        nb.details["excess_scatter_hz"] = [float(x) for x in run.frequency_hz[excess]]
+    elif method == "floor":
+        nb = noise.noise_bound_from_floor(run.Zt, run.frequency_hz, confidence=confidence)
+    else:
+        raise InputError(None, "--method", f"unknown noise method {method!r} (one of {', '.join(NOISE_METHODS)})")
+    return nb
+
+
+# --------------------------------------------------------------------------------------------
+# step 3: validation
+
+
+@dataclass
+class ValidationOutcome:
+    """What :func:`validate` returns: the baseline to store and the numbers behind it."""
+
+    baseline: Any  # rotorcheck.baseline.Baseline
+    result: Any  # rotorcheck.robust.validation.ValidationResult
+    model: Any  # rotorcheck.nominal.NominalModel
+    runs: list[MeasuredRun]
+    rig: RigConfig
+
+    @property
+    def n_not_enclosed(self) -> int:
+        return int(np.count_nonzero(self.result.status != "ok"))
+
+
+def _same_grid(a: np.ndarray, b: np.ndarray) -> bool:
+    return a.shape == b.shape and bool(np.all(np.abs(a - b) <= 1e-9 * np.maximum(1.0, np.abs(a))))
+
+
+def validate(
+    rig: RigConfig,
+    runs: list[MeasuredRun],
+    noise_bound: Any,
+    enclose: str = "system",
+    fail_at: tuple[int, ...] = (),
+) -> ValidationOutcome:
+    """Step 3: gamma_h(w) enclosing every healthy run (``enclose`` 'system' or 'data')."""
+    from rotorcheck.baseline import Baseline
+    from rotorcheck.nominal import nominal_model
+    from rotorcheck.robust import validation
+
+    if enclose not in ("system", "data"):
+        raise InputError(None, "--enclose", f"must be 'system' or 'data', got {enclose!r}")
+    first = runs[0]
+    for r in runs[1:]:
+        if not _same_grid(r.frequency_hz, first.frequency_hz):
+            raise InputError(r.path, f"/runs/{r.run_id}/frequency",
+                             f"grid differs from {first.path} (healthy sweeps must share the frequency grid)")
+        if r.speed_rpm != first.speed_rpm:
+            raise InputError(r.path, f"/runs/{r.run_id}/@speed_rpm",
+                             f"{r.speed_rpm:g} rpm differs from {first.path} ({first.speed_rpm:g} rpm)")
+    model = nominal_model(rig, first.frequency_hz, first.speed_rpm)
+    res = validation.validate(model.me, [r.W for r in runs], [r.Zt for r in runs], noise_bound,
+                              enclose=enclose, fail_at=fail_at)
+    base = Baseline(
+        rig_id=rig.rig_id, rig_sha256=rig.sha256(), sweep_sha256=[r.sha256 for r in runs],
+        run_id=first.run_id, speed_rpm=first.speed_rpm, noise_bound_m=float(noise_bound.value_m),
+        noise_method=noise_bound.method, noise_confidence=float(noise_bound.confidence or 0.0),
+        uncertainty=model.structure, parameter=model.parameter or "", enclose=enclose, stage="validated",
+        frequency_hz=first.frequency_hz, gamma=res.gamma, gamma_lower=res.gamma_lower,
+        gamma_status=np.asarray(res.status, dtype=str), model_frf=model.frf[:, None, None],
+        input_phasor=first.W[:, None], output_phasor=first.Zt[:, None],
+    )
+    return ValidationOutcome(base, res, model, runs, rig)
+
+
+# --------------------------------------------------------------------------------------------
+# steps 4-5: detection and identification
+
+
+@dataclass
+class DetectionOutcome:
+    """Per-point detection and identification (arrays (f,)) and the sweep-level verdict."""
+
+    rig: RigConfig
+    baseline: Any
+    run: MeasuredRun
+    model: Any
+    detection: Any  # robust.validation.DetectionResult
+    verdict: Any  # robust.validation.Verdict
+    damage: np.ndarray  # D_u nominal (N/m), eq. 3.11 with the nominal E22
+    damage_set: Any  # robust.identify.DamageSet over the uncertainty inherited from gamma_h and V (eq. 3.12)
+    anchored: np.ndarray | None = None  # D_u with E22 anchored at the healthy data (N/m)
+    anchored_set: Any = None  # its exact set (noise of both sweeps)
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def exit_code(self) -> int:
+        return {"healthy": 0, "damage": 1, "inconclusive": 3}[self.verdict.verdict]
+
+    def report(self) -> dict[str, Any]:
+        """The report.json document (cli.md keys plus context)."""
+        f = self.run.frequency_hz
+        fault = np.asarray(self.detection.fault, dtype=bool)
+        ds = self.damage_set
+        return {
+            "verdict": self.verdict.verdict,
+            "verdict_reason": self.verdict.reason,
+            "verdict_rule": VERDICT_RULE,
+            "n_points": int(f.size),
+            "n_fault_points": int(np.count_nonzero(fault)),
+            "fault_frequencies_hz": [float(x) for x in f[fault]],
+            "rig_id": self.rig.rig_id,
+            "rig_sha256": self.rig.sha256(),
+            "sweep": str(self.run.path),
+            "sweep_sha256": self.run.sha256,
+            "run_id": self.run.run_id,
+            "speed_rpm": self.run.speed_rpm,
+            "band_hz": list(self.run.band_hz),
+            "noise_bound_m": self.baseline.noise_bound_m,
+            "noise_method": self.baseline.noise_method,
+            "uncertainty": self.baseline.uncertainty,
+            "parameter": self.baseline.parameter,
+            "enclose": self.baseline.enclose,
+            "damage_port": _port_name(self.rig),
+            "notes": self.notes,
+            "frequency_hz": f,
+            "gamma_healthy": self.detection.gamma_healthy,
+            "gamma_required": self.detection.gamma_required,
+            "gamma_required_upper": self.detection.gamma_required_upper,
+            "fault": fault,
+            "status": [str(s) for s in self.detection.status],
+            "damage_dynamics_re": self.damage.real,
+            "damage_dynamics_im": self.damage.imag,
+            "damage_bound_kind": [str(k) for k in ds.kind],
+            "damage_bound_min_abs": ds.min_abs,
+            "damage_bound_max_abs": ds.max_abs,
+            "damage_bound_phase_min_deg": np.degrees(ds.phase_min),
+            "damage_bound_phase_max_deg": np.degrees(ds.phase_max),
+            **self._anchored_keys(),
+        }
+
+    def _anchored_keys(self) -> dict[str, Any]:
+        if self.anchored is None or self.anchored_set is None:
+            return {}
+        a = self.anchored_set
+        return {
+            "damage_dynamics_anchored_re": self.anchored.real,
+            "damage_dynamics_anchored_im": self.anchored.imag,
+            "damage_anchored_bound_min_abs": a.min_abs,
+            "damage_anchored_bound_max_abs": a.max_abs,
+        }
+
+
+def _port_name(rig: RigConfig) -> str:
+    if rig.damage is None:
+        return ""
+    p = rig.damage.port
+    return p.mass if rig.kind == "lumped" and p.mass else f"station {p.station} {p.direction}"
+
+
+def check_baseline(baseline: Any, rig: RigConfig, run: MeasuredRun, baseline_path: str | Path) -> None:
+    """Refuse a baseline made for another rig, speed or grid (InputError naming the field)."""
+    if not baseline.validated:
+        raise InputError(baseline_path, "/@stage", "baseline holds only a noise fit; run 'rotorcheck validate'")
+    if baseline.rig_sha256 != rig.sha256():
+        raise InputError(baseline_path, "/@rig_sha256",
+                         f"baseline was made for another rig description (rig_id {baseline.rig_id!r}, "
+                         f"sha256 {baseline.rig_sha256[:12]}; this rig {rig.sha256()[:12]})")
+    if abs(baseline.speed_rpm - run.speed_rpm) > 1e-9:
+        raise InputError(run.path, f"/runs/{run.run_id}/@speed_rpm",
+                         f"{run.speed_rpm:g} rpm, the baseline is at {baseline.speed_rpm:g} rpm")
+    if not _same_grid(run.frequency_hz, baseline.frequency_hz):
+        raise InputError(run.path, f"/runs/{run.run_id}/frequency",
+                         f"grid ({run.frequency_hz.size} points in band) differs from the baseline's "
+                         f"({baseline.frequency_hz.size} points); detection compares point by point")
+
+
+def detect(
+    rig: RigConfig, baseline: Any, run: MeasuredRun, fail_at: tuple[int, ...] = ()
+) -> DetectionOutcome:
+    """Steps 4-5: fault points of ``run`` against the healthy ``baseline``, then D_u with its bound."""
+    from rotorcheck.nominal import nominal_model
+    from rotorcheck.robust import identify, validation
+    from rotorcheck.robust.noise import noise_bound_manual
+
+    model = nominal_model(rig, run.frequency_hz, run.speed_rpm)
+    V = noise_bound_manual(baseline.noise_bound_m)
+    det = validation.detect(model.me, run.W, run.Zt, V, baseline.gamma, fail_at=fail_at)
+    ver = validation.verdict(det.fault, det.status, baseline.gamma_status)
+    E = model.E
+    T = run.frf
+    damage = identify.damage_dynamics(E[:, 0, 0], E[:, 0, 1], E[:, 1, 0], E[:, 1, 1], T)
+    if model.structure in ("additive", "multiplicative"):
+        dset = identify.damage_set_io(E[:, 0, 0], E[:, 0, 1], E[:, 1, 0], E[:, 1, 1], T, baseline.gamma,
+                                      baseline.noise_bound_m, run.W, kind=model.structure)
+    else:
+        dset = identify.damage_set(model.P, T, baseline.gamma)
+    notes = []
+    anchored = anchored_set = None
+    if model.structure == "additive" and baseline.input_phasor is not None and baseline.output_phasor is not None:
+        # the member of the inherited set that the healthy data selects: E22 := measured healthy FRF
+        Wh = baseline.input_phasor[:, 0]
+        Th = baseline.output_phasor[:, 0] / Wh
+        anchored = identify.damage_dynamics(E[:, 0, 0], E[:, 0, 1], E[:, 1, 0], Th, T)
+        anchored_set = identify.damage_set_io(E[:, 0, 0], E[:, 0, 1], E[:, 1, 0], Th, T,
+                                              baseline.noise_bound_m / np.abs(Wh), baseline.noise_bound_m, run.W)
+    if baseline.noise_bound_m > 0 and model.structure == "parametric":
+        notes.append("parametric structure: the damage bound covers the parameter uncertainty only, "
+                     "not the noise (a second uncertainty makes the set non-circular)")
+    return DetectionOutcome(rig, baseline, run, model, det, ver, damage, dset, anchored, anchored_set, notes)
+
+
+# --------------------------------------------------------------------------------------------
+# plots
+
+
+def uncertainty_disk(model: Any, gamma: np.ndarray, noise_bound_m: float, W: np.ndarray
+                     ) -> tuple[np.ndarray, np.ndarray]:
+    """Centre and radius (m/N) of the set of receptances the healthy uncertain model explains."""
+    G = model.frf
+    noise = noise_bound_m / np.abs(W)
+    if model.structure == "additive":
+        return G, gamma + noise
+    if model.structure == "multiplicative":
+        return G, gamma * np.abs(G) + noise
+    from rotorcheck.robust.identify import moebius_disk_image
+    from rotorcheck.robust.lft import lft_upper
+
+    me = model.me
+
+    def fun(delta: np.ndarray) -> np.ndarray:
+        return lft_upper(me, np.asarray(delta, complex)[:, None, None])[:, 0, 0]
+
+    ds = moebius_disk_image(fun, gamma, n_freq=me.shape[0])
+    radius = np.where(ds.kind == "disk", ds.radius, np.inf)
+    centre = np.where(ds.kind == "disk", ds.centre, G)
+    return centre, radius + noise
+
+
+def _plot_index(f: np.ndarray, at_hz: float | None, score: np.ndarray) -> int:
+    if at_hz is not None:
+        return int(np.argmin(np.abs(f - at_hz)))
+    finite = np.where(np.isfinite(score), score, -np.inf)
+    return int(np.argmax(finite))
+
+
+def validation_plots(outcome: ValidationOutcome, out_dir: str | Path, at_hz: float | None = None) -> list[str]:
+    """Bode with the uncertainty band and the complex plane at one frequency (PNG and PDF)."""
+    from rotorcheck.report.figures import save_figure
+    from rotorcheck.report.plots import bode_band_figure, complex_plane_figure
+
+    out = Path(out_dir)
+    b, run, model = outcome.baseline, outcome.runs[0], outcome.model
+    centre, radius = uncertainty_disk(model, b.gamma, b.noise_bound_m, run.W)
+    title = f"{outcome.rig.rig_id}: validation at {run.speed_rpm:g} rpm ({b.uncertainty}, enclose {b.enclose})"
+    files = save_figure(bode_band_figure(run.frequency_hz, model.frf, centre, radius, healthy_frf=run.frf,
+                                         title=title), out / "validation_bode")
+    i = _plot_index(run.frequency_hz, at_hz, np.abs(run.frf - model.frf) / np.abs(model.frf))
+    files += save_figure(complex_plane_figure(float(run.frequency_hz[i]), complex(model.frf[i]), complex(centre[i]),
+                                              float(radius[i]), healthy=complex(run.frf[i])),
+                         out / "validation_complex_plane")
+    return [str(p) for p in files]
+
+
+def detection_plots(outcome: DetectionOutcome, out_dir: str | Path, at_hz: float | None = None) -> list[str]:
+    """Bode with band, healthy and new data and fault points; complex plane; damage dynamics."""
+    from rotorcheck.report.figures import save_figure
+    from rotorcheck.report.plots import bode_band_figure, complex_plane_figure, damage_dynamics_figure
+
+    out = Path(out_dir)
+    b, run, model = outcome.baseline, outcome.run, outcome.model
+    fault = np.asarray(outcome.detection.fault, dtype=bool)
+    centre, radius = uncertainty_disk(model, b.gamma, b.noise_bound_m, run.W)
+    healthy = None
+    if b.input_phasor is not None and b.output_phasor is not None:
+        healthy = b.output_phasor[:, 0] / b.input_phasor[:, 0]
+    title = f"{outcome.rig.rig_id}: detection at {run.speed_rpm:g} rpm ({outcome.verdict.verdict})"
+    files = save_figure(bode_band_figure(run.frequency_hz, model.frf, centre, radius, healthy_frf=healthy,
+                                         damaged_frf=run.frf, fault=fault, title=title), out / "detection_bode")
+    with np.errstate(divide="ignore", invalid="ignore"):
+        score = np.where(fault, outcome.detection.gamma_required / np.maximum(b.gamma, 1e-300), -np.inf)
+    if not np.any(fault):
+        score = np.abs(run.frf - model.frf)
+    i = _plot_index(run.frequency_hz, at_hz, score)
+    h_i = None if healthy is None else complex(healthy[i])
+    fig = complex_plane_figure(float(run.frequency_hz[i]), complex(model.frf[i]), complex(centre[i]),
+                               float(radius[i]), healthy=h_i, damaged=complex(run.frf[i]))
+    files += save_figure(fig, out / "detection_complex_plane")
+    ds = outcome.damage_set
+    title = f"{outcome.rig.rig_id}: damage dynamics at {_port_name(outcome.rig)}"
+    fig = damage_dynamics_figure(run.frequency_hz, outcome.damage, ds.min_abs, ds.max_abs, np.degrees(ds.phase_min),
+                                 np.degrees(ds.phase_max), fault=fault, title=title, anchored=outcome.anchored)
+    files += save_figure(fig, out / "damage_dynamics")
+    return [str(p) for p in files]
+
+
+PLOT_STEMS_VALIDATE = ("validation_bode", "validation_complex_plane")
+PLOT_STEMS_DETECT = ("detection_bode", "detection_complex_plane", "damage_dynamics")

@@ -1,0 +1,143 @@
+"""Detection reports: ``report.json`` (contract keys of cli.md), ``report.md``, ``fault_points.csv``.
+
+All three are rendered in memory first and written atomically only when every one rendered, so a
+failure never leaves a partial report.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from rotorcheck.fileio import atomic_write_text
+
+REPORT_FILES = ("report.json", "report.md", "fault_points.csv")
+
+
+def _jsonable(obj: Any) -> Any:
+    if isinstance(obj, dict):
+        return {k: _jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_jsonable(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return _jsonable(obj.tolist())
+    if isinstance(obj, (np.floating, float)):
+        x = float(obj)
+        return x if math.isfinite(x) else ("inf" if x > 0 else "-inf" if x < 0 else "nan")
+    if isinstance(obj, (np.integer,)):
+        return int(obj)
+    if isinstance(obj, np.bool_):
+        return bool(obj)
+    return obj
+
+
+def render_json(report: dict[str, Any]) -> str:
+    """report.json text: non-finite numbers become the strings "inf"/"nan" (strict JSON)."""
+    return json.dumps(_jsonable(report), indent=1) + "\n"
+
+
+def render_csv(report: dict[str, Any]) -> str:
+    """fault_points.csv: one row per fault point."""
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(["frequency_hz", "gamma_healthy", "gamma_required", "damage_dynamics_re_n_per_m",
+                "damage_dynamics_im_n_per_m", "damage_bound_min_abs_n_per_m", "damage_bound_max_abs_n_per_m"])
+    for i, is_fault in enumerate(report["fault"]):
+        if is_fault:
+            w.writerow([f"{report['frequency_hz'][i]:.6g}", f"{report['gamma_healthy'][i]:.6e}",
+                        f"{report['gamma_required'][i]:.6e}", f"{report['damage_dynamics_re'][i]:.6e}",
+                        f"{report['damage_dynamics_im'][i]:.6e}", f"{report['damage_bound_min_abs'][i]:.6e}",
+                        f"{report['damage_bound_max_abs'][i]:.6e}"])
+    return buf.getvalue()
+
+
+def _ranges(freqs: list[float], step: float) -> str:
+    if not freqs:
+        return "none"
+    out, start, prev = [], freqs[0], freqs[0]
+    for f in freqs[1:]:
+        if f - prev > 1.5 * step:
+            out.append((start, prev))
+            start = f
+        prev = f
+    out.append((start, prev))
+    return ", ".join(f"{a:.1f}" if a == b else f"{a:.1f}-{b:.1f}" for a, b in out) + " Hz"
+
+
+def render_markdown(report: dict[str, Any], plots: list[str]) -> str:
+    """report.md: the verdict, where, and what changed."""
+    f = np.asarray(report["frequency_hz"], dtype=float)
+    step = float(np.median(np.diff(f))) if f.size > 1 else 1.0
+    fault = np.asarray(report["fault"], dtype=bool)
+    d = np.asarray(report["damage_dynamics_re"]) + 1j * np.asarray(report["damage_dynamics_im"])
+    lines = [
+        f"# rotorcheck detection: {report['verdict'].upper()}",
+        "",
+        f"- sweep: `{report['sweep']}` (run `{report['run_id']}`, {report['speed_rpm']:g} rpm), "
+        f"sha256 `{report['sweep_sha256'][:16]}`",
+        f"- rig: `{report['rig_id']}` (sha256 `{report['rig_sha256'][:16]}`); damage port {report['damage_port']}",
+        f"- baseline: uncertainty `{report['uncertainty']}`"
+        + (f" on `{report['parameter']}`" if report.get("parameter") else "")
+        + f", enclose `{report['enclose']}`, noise bound {report['noise_bound_m'] * 1e6:.4g} um "
+        f"({report['noise_method']})",
+        f"- band {report['band_hz'][0]:g}-{report['band_hz'][1]:g} Hz, {report['n_points']} points",
+        "",
+        "## Verdict",
+        "",
+        f"**{report['verdict']}**: {report['verdict_reason']}.",
+        "",
+        f"Rule: {report['verdict_rule']}.",
+        "",
+        "## Where",
+        "",
+        f"{report['n_fault_points']} of {report['n_points']} points are certified fault points "
+        f"(the healthy uncertain model cannot explain them): {_ranges(list(f[fault]), step)}.",
+        "",
+    ]
+    status = np.asarray(report["status"])
+    bad = [s for s in np.unique(status) if s not in ("ok", "fault")]
+    for s in bad:
+        lines.append(f"- {int(np.count_nonzero(status == s))} points with status `{s}`: "
+                     f"{_ranges(list(f[status == s]), step)}")
+    if bad:
+        lines.append("")
+    lines += ["## What changed (damage dynamics D_u at the damage port, N/m)", ""]
+    if np.any(fault):
+        idx = np.flatnonzero(fault)
+        low = idx[: min(len(idx), 5)]
+        lines.append("| f (Hz) | gamma healthy | gamma required | D_u (N/m) | min abs D_u | max abs D_u |")
+        lines.append("|---:|---:|---:|---:|---:|---:|")
+        for i in low:
+            lines.append(f"| {f[i]:.2f} | {report['gamma_healthy'][i]:.3e} | {report['gamma_required'][i]:.3e} | "
+                         f"{d[i].real:.4g}{d[i].imag:+.3g}j | {report['damage_bound_min_abs'][i]:.4g} | "
+                         f"{report['damage_bound_max_abs'][i]:.4g} |")
+        lines.append("")
+        lines.append(f"Median identified stiffness change over the fault points: Re D_u = "
+                     f"{np.median(d[fault].real):.4g} N/m (a positive value is a stiffness loss).")
+        lines.append("")
+    for n in report.get("notes", []):
+        lines.append(f"- note: {n}")
+    if plots:
+        lines += ["", "## Plots", ""] + [f"- `{p}`" for p in plots]
+    return "\n".join(lines) + "\n"
+
+
+def write_reports(report: dict[str, Any], out_dir: str | Path, plots: list[str]) -> list[Path]:
+    """Render all three files, then write each atomically. Returns the paths."""
+    out = Path(out_dir)
+    texts = {
+        "report.json": render_json(report),
+        "report.md": render_markdown(report, plots),
+        "fault_points.csv": render_csv(report),
+    }
+    paths = []
+    for name, text in texts.items():
+        atomic_write_text(out / name, text)
+        paths.append(out / name)
+    return paths
