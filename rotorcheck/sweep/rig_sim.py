@@ -112,14 +112,20 @@ def rig_plant(
     b[in_dof] = 1.0
     c_out = np.zeros((1, system.n_dof))
     c_out[0, out_dof] = 1.0
-    forces = synchronous_forces(config, system, speed_rpm)
-    if isinstance(spec, Crack) and spec.model != "open":
-        from rotorcheck.faults.harmonic_balance import breathing_plant
+    breathing = spec if isinstance(spec, Crack) and spec.model != "open" else None
+    if breathing is not None:
+        from rotorcheck.faults.analysis import simulator_plant
 
-        plant, disturbances = breathing_plant(system, spec, speed_rpm, b, c_out, forces, n_harmonics)
+        plant = simulator_plant(system, breathing, speed_rpm, in_dof, [out_dof], n_harmonics)
     else:
         plant = matrix_plant(M, Ceff, K, b, c_out)
-        disturbances = response_tones(M, Ceff, K, c_out, forces)
+    if config.kind == "rotor" and speed_rpm != 0.0:
+        from rotorcheck.faults.analysis import simulator_disturbances
+
+        disturbances = simulator_disturbances(system, breathing, speed_rpm, [out_dof], config.measurement.unbalance,
+                                              config.measurement.misalignment, n_harmonics)
+    else:
+        disturbances = response_tones(M, Ceff, K, c_out, synchronous_forces(config, system, speed_rpm))
     return RigPlant(plant, disturbances, system, in_dof, out_dof)
 
 
