@@ -1,0 +1,231 @@
+"""Derived results for the cracked rotor: critical speeds, unbalance harmonics and orbits, and the
+hooks the sweep simulator takes (its ``Plant``, disturbance ``Tone`` s, ``dK`` Fourier and ``dK(t)``).
+
+SI units; frequencies in Hz and speeds in rpm at the interface.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import replace
+from typing import Any
+
+import numpy as np
+from scipy.optimize import minimize_scalar
+
+from rotorcheck.config import Crack, Misalignment, UnbalanceMass
+from rotorcheck.faults.crack import CrackStiffness, crack_stiffness
+from rotorcheck.faults.harmonic_balance import (
+    cracked_disturbance_tones,
+    cracked_tones,
+    fold_tones,
+    solve_hb,
+)
+from rotorcheck.fe.system import RPM_TO_RAD_S, MechanicalSystem
+
+__all__ = [
+    "averaged_system",
+    "critical_speed_summary",
+    "dk_fourier",
+    "frozen_system",
+    "hb_resonance_hz",
+    "simulator_disturbances",
+    "simulator_plant",
+    "stiffness_perturbation",
+    "unbalance_harmonics",
+    "unbalance_orbit",
+]
+
+
+def _ck(system: MechanicalSystem, crack: Crack | CrackStiffness, **kw: Any) -> CrackStiffness:
+    return crack if isinstance(crack, CrackStiffness) else crack_stiffness(system, crack, **kw)
+
+
+def _with_stiffness_change(system: MechanicalSystem, dk: np.ndarray) -> MechanicalSystem:
+    """``system`` with ``K - dk`` at every speed (damping matrix unchanged)."""
+
+    def mats(speed_rpm: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        M, C, G, K = system.matrices(speed_rpm)
+        return M, C, G, K - dk
+
+    return replace(system, _matrices=mats)
+
+
+def averaged_system(system: MechanicalSystem, crack: Crack | CrackStiffness) -> MechanicalSystem:
+    """Time-invariant approximation ``K0 - <K_c>`` (revolution average of the breathing crack)."""
+    ck = _ck(system, crack)
+    return _with_stiffness_change(system, ck.scatter(ck.mean(), system.n_dof))
+
+
+def frozen_system(system: MechanicalSystem, crack: Crack | CrackStiffness, rotation: float = 0.0) -> MechanicalSystem:
+    """Non-rotating snapshot ``K0 - K_c(rotation)`` (e.g. the crack's opening angle at pi: open)."""
+    ck = _ck(system, crack)
+    return _with_stiffness_change(system, ck.scatter(ck.at_rotation(rotation)[0], system.n_dof))
+
+
+def hb_resonance_hz(
+    system: MechanicalSystem,
+    crack: Crack | CrackStiffness | None,
+    speed_rpm: float,
+    in_dof: int,
+    out_dof: int,
+    band_hz: tuple[float, float],
+    n_harmonics: int = 8,
+    n_grid: int = 201,
+) -> float:
+    """Frequency (Hz) of the largest k = 0 response |H(f)| in ``band_hz`` (grid, then refined)."""
+    ck = None if crack is None else _ck(system, crack)
+    grid = np.linspace(*band_hz, n_grid)
+
+    def mag(f: float | np.ndarray) -> np.ndarray:
+        res = solve_hb(system, ck, speed_rpm, f, in_dof, [out_dof], n_harmonics)
+        return np.abs(res.fundamental[:, 0, 0])
+
+    g = mag(grid)
+    i = int(np.argmax(g))
+    lo, hi = grid[max(i - 1, 0)], grid[min(i + 1, grid.size - 1)]
+    r = minimize_scalar(lambda f: -float(mag(f)[0]), bounds=(lo, hi), method="bounded", options={"xatol": 1e-6})
+    return float(r.x)
+
+
+def critical_speed_summary(
+    system: MechanicalSystem,
+    crack: Crack | CrackStiffness,
+    speed_rpm: float = 1000.0,
+    max_rpm: float = 10000.0,
+    in_dof: int | None = None,
+    out_dof: int | None = None,
+) -> dict[str, Any]:
+    """First modes and first forward critical speed, healthy vs cracked.
+
+    Cracked: the revolution-averaged stiffness (``averaged``) and the fully open crack frozen at
+    rest (``open_at_rest``); with ``in_dof``/``out_dof`` also the k = 0 HB resonance of the LTP
+    system near mode 1 at ``speed_rpm``. Frequencies in Hz, speeds in rpm.
+    """
+    from rotorcheck.fe.modal import critical_speeds, modes
+
+    ck = _ck(system, crack)
+    avg = averaged_system(system, ck)
+    opened = frozen_system(system, ck, np.pi - ck.theta0)
+    out: dict[str, Any] = {}
+    for name, sys_ in (("healthy", system), ("averaged", avg)):
+        md = modes(sys_, speed_rpm, 4)
+        rest = modes(sys_, 0.0, 2)
+        crit = critical_speeds(sys_, max_rpm)
+        out[name] = {
+            "modes_at_speed_hz": [float(x) for x in md.frequency_hz],
+            "whirl_at_speed": list(md.whirl),
+            "mode1_at_rest_hz": float(rest.frequency_hz[0]),
+            "first_critical_rpm": float(crit[0]) if crit else float("nan"),
+            "first_critical_hz": float(crit[0]) / 60.0 if crit else float("nan"),
+        }
+    out["open_at_rest"] = {"modes_hz": [float(x) for x in modes(opened, 0.0, 4).frequency_hz]}
+    if in_dof is not None and out_dof is not None:
+        f1 = out["healthy"]["modes_at_speed_hz"][0]
+        band = (0.85 * f1, 1.1 * f1)
+        out["hb_resonance_hz"] = {
+            "healthy": hb_resonance_hz(system, None, speed_rpm, in_dof, out_dof, band),
+            "cracked": hb_resonance_hz(system, ck, speed_rpm, in_dof, out_dof, band),
+        }
+    return out
+
+
+def unbalance_harmonics(
+    system: MechanicalSystem,
+    crack: Crack | CrackStiffness | None,
+    speed_rpm: float,
+    unbalance: Sequence[UnbalanceMass],
+    out_dofs: Sequence[int],
+    n_harmonics: int = 10,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Folded unbalance response: ``(orders n = 0, 1, 2, ... (q,), phasors (q, n_out))`` in m.
+
+    ``y(t) = sum_n Re{X_n exp(j n Omega t)}`` (X_0 real: the DC offset).
+    """
+    ck = None if crack is None else _ck(system, crack)
+    f, a = cracked_disturbance_tones(system, ck, speed_rpm, out_dofs, unbalance, None, n_harmonics)
+    ff, aa = fold_tones(f, a)
+    orders = np.rint(ff / (speed_rpm / 60.0)).astype(int)
+    return orders, aa
+
+
+def unbalance_orbit(
+    system: MechanicalSystem,
+    crack: Crack | CrackStiffness | None,
+    speed_rpm: float,
+    unbalance: Sequence[UnbalanceMass],
+    station: int,
+    n_points: int = 361,
+    n_harmonics: int = 10,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Steady-state orbit at ``station`` over one revolution from harmonic balance.
+
+    Returns ``(t (n_points,) s, xy (n_points, 2) m)``, t from 0 to one revolution.
+    """
+    outs = [system.dof(station, "x"), system.dof(station, "y")]
+    orders, ph = unbalance_harmonics(system, crack, speed_rpm, unbalance, outs, n_harmonics)
+    om = speed_rpm * RPM_TO_RAD_S
+    t = np.linspace(0.0, 2.0 * np.pi / om, n_points)
+    xy = np.real(np.exp(1j * om * np.outer(t, orders)) @ ph)
+    return t, xy
+
+
+# --------------------------------------------------------------------------------------------
+# sweep simulator hooks
+
+
+def dk_fourier(system: MechanicalSystem, crack: Crack | CrackStiffness) -> dict[int, np.ndarray]:
+    """``dK(t) = -K_c(t) = sum_l dK_l e^{j l Omega t}`` as global (n, n) complex matrices, for
+    :func:`rotorcheck.sweep.simulator.harmonic_balance_plant` (which adds ``dK`` to ``K``)."""
+    ck = _ck(system, crack)
+    orders, kp = ck.harmonics()
+    return {int(p): -ck.scatter(k, system.n_dof) for p, k in zip(orders, kp)}
+
+
+def stiffness_perturbation(
+    system: MechanicalSystem, crack: Crack | CrackStiffness, speed_rpm: float
+) -> Callable[[float], np.ndarray]:
+    """``t -> dK(t) = -K_c(Omega t)`` (n, n) N/m for the simulator's time-domain path."""
+    ck = _ck(system, crack)
+    om = speed_rpm * RPM_TO_RAD_S
+    n = system.n_dof
+
+    def dk(t: float) -> np.ndarray:
+        return -ck.scatter(ck.at_rotation(om * float(t))[0], n)
+
+    return dk
+
+
+def simulator_plant(
+    system: MechanicalSystem,
+    crack: Crack | CrackStiffness | None,
+    speed_rpm: float,
+    in_dof: int,
+    out_dofs: Sequence[int] | int,
+    n_harmonics: int = 8,
+    name: str = "cracked_rotor_hb",
+) -> Any:
+    """:class:`rotorcheck.sweep.simulator.Plant` wrapping :func:`cracked_tones`."""
+    from rotorcheck.sweep.simulator import Plant
+
+    plant = cracked_tones(system, crack, speed_rpm, in_dof, out_dofs, n_harmonics)
+    return Plant(tones=plant, n_out=int(plant.out_dofs.size), name=name)
+
+
+def simulator_disturbances(
+    system: MechanicalSystem,
+    crack: Crack | CrackStiffness | None,
+    speed_rpm: float,
+    out_dofs: Sequence[int] | int,
+    unbalance: Sequence[UnbalanceMass] = (),
+    misalignment: Misalignment | None = None,
+    n_harmonics: int = 8,
+    misalignment_whirl: str = "forward",
+) -> list[Any]:
+    """Synchronous output tones as simulator ``Tone`` s (signed frequencies, absolute time, m)."""
+    from rotorcheck.sweep.simulator import Tone
+
+    f, a = cracked_disturbance_tones(
+        system, crack, speed_rpm, out_dofs, unbalance, misalignment, n_harmonics, misalignment_whirl
+    )
+    return [Tone(float(fi), ai) for fi, ai in zip(f, a) if np.any(ai != 0)]

@@ -1,0 +1,1272 @@
+"""Generalized structured singular value bound as an LMI per frequency (cvxpy + Clarabel).
+
+Validation problem at one frequency (dissertation eq. 3.1-3.6, method.md): the uncertain model
+``z = F_u(Me, Delta_u) W + v`` explains the data ``Zt`` iff there are ``|Delta_u| <= gamma``,
+``|v_k| <= V`` with zero residual. As an implicit LFT in ``x = (u, e, t)`` (``u`` the outputs of
+the uncertainty blocks, ``e`` the normalized noise, ``t`` the homogeneous multiplier of the data)::
+
+    block i:  input A_i x = (Me11 u + Me12 W t)_i,  output B_i x = u_i,   |Delta_i| <= w_i gamma
+    noise k:  input t,                                output e_k,          |Delta_v,k| <= 1
+    kernel:   N x = (Zt - Me22 W) t - Me21 u - V e = 0            (V in the residual row)
+
+Certificate of invalidation (S-procedure on the kernel, P an orthonormal basis of Ker N)::
+
+    P^* ( sum_i D_i-scaled( r_i^2 A_i^* A_i - B_i^* B_i ) ) P  < 0
+
+with scalar ``d_i >= 0`` for complex scalar and full blocks and a Hermitian PSD ``D_i`` for
+repeated complex scalar blocks (``delta I_k``). With one uncertainty block (scalar or full) its
+scale is fixed to 1 and ``gamma^2 = s`` enters linearly: ONE SDP per frequency,
+``maximize s  s.t.  P^*(s F_u + F_0 + sum d_k F_k) P <= 0``. Several uncertainty blocks sharing one
+gamma, or a repeated-scalar uncertainty block, give a generalized eigenvalue problem; it is solved by
+bisection on ``s`` with an LMI feasibility problem (minimize lambda) at each step (documented
+exception to the one-SDP rule).
+
+Bounds, per frequency (what each number certifies):
+
+* ``gamma_lower``: every gamma below it is *proven* invalidated. It is recomputed from the solver's
+  D-scales by an eigenvalue computation (``max s`` with ``s F_u + G(d) < 0``), so it does not rely on
+  the solver's reported objective.
+* ``gamma_upper``: the size of an explicit structured ``Delta`` (built from the kernel vector of the
+  optimal LMI, then polished by Gauss-Newton) that reproduces the data within the noise bound,
+  checked by evaluating ``F_u(Me, Delta) W`` directly.
+
+So ``gamma_lower <= gamma_required <= gamma_upper``. (In mu language the LMI is the upper bound on
+mu and the explicit Delta the lower bound; in gamma = 1/mu the roles swap.) For SISO (two complex
+scalar blocks) the relaxation is exact and the gap is below 1e-7 relative (the explicit Delta is
+accepted as soon as it is within 1e-7 of the certificate). With several blocks the explicit Delta is
+additionally refined by a local SQP (gap ~1e-9 on the tests).
+
+Numerics (method.md's pitfalls and what the tests showed):
+
+* per-frequency scaling: residual rows by ``max(|c_k|, V)`` (``c = Zt - Me22 W``), u-columns by
+  ``max|c| / ||Me21||``, gamma by an estimate (the noise-free answer, an exact generalized
+  eigenvalue, shrunk by ``(|c| - V) / |c|``), noise D-scales by ``(V/|c|)((|c| - V)/|c|)`` (their
+  value at the optimum for additive SISO; without it a tiny V stalls Clarabel);
+* near gamma* = 0 (``|c|`` barely above V) the worst case is a near-cancellation; the SDP is then
+  posed in a kernel basis adapted to it (first the heuristic "noise aligned with the residual", after
+  a pass the LMI's own worst-case vector) and re-solved: a second pass, as method.md says;
+* pre-checks ``|Zt - Me22 W| <= V`` (gamma = 0, no solve) and ``Me12 W = 0`` or ``Me21 = 0``
+  (status 'unexplainable', gamma = inf, never a number);
+* explicit projection onto Ker N (no free multiplier); no chordal decomposition; one thread;
+* solver status point by point: Clarabel's 'InsufficientProgress' / 'AlmostSolved' iterates are
+  used only if the independently verified bounds agree within 1e-6 (else 'solver_failed', NaN);
+* accuracy floor: gamma* is a function of ``|c| - V``; the data determine it only to about
+  ``eps |Zt| / (|c| - V)`` relative (1e-6 at ``(|c| - V)/|c| ~ 1e-7`` with ``|Zt| ~ 1e3 |c|``).
+
+Backends: 'cvxpy' builds each LMI once per shape with cvxpy Parameters and re-solves it per
+frequency; 'clarabel' fills the identical conic data (real embedding, Clarabel's scaled
+upper-triangle PSD vectorization) and calls Clarabel directly, skipping cvxpy's per-solve
+canonicalization (about 3x faster per sweep).
+
+Units: gamma in the units of Delta_u (m/N for additive receptance uncertainty, kg for a mass
+parameter, dimensionless for multiplicative); V in m (output displacement).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import copy
+import time
+import warnings
+from collections.abc import Collection, Iterator, Sequence
+from dataclasses import dataclass, field
+
+import cvxpy as cp
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
+
+from rotorcheck.robust.lft import as_freq_matrix
+
+__all__ = [
+    "Block",
+    "GammaResult",
+    "ImplicitBound",
+    "Structure",
+    "implicit_lmi_bound",
+    "inject_solver_failure",
+    "required_gamma",
+    "required_gamma_bisection",
+]
+
+STATUS_OK = "ok"
+STATUS_FAILED = "solver_failed"
+STATUS_UNEXPLAINABLE = "unexplainable"
+STATUS_LOWER_ONLY = "lower_only"
+
+_INJECTED: set[int] = set()
+
+
+@contextlib.contextmanager
+def inject_solver_failure(indices: Collection[int]) -> Iterator[None]:
+    """Testing hook: inside the ``with`` block every gamma computation treats the frequency indices
+    ``indices`` as if the solver had failed there (status 'solver_failed', gamma NaN)."""
+    old = set(_INJECTED)
+    _INJECTED.update(int(i) for i in indices)
+    try:
+        yield
+    finally:
+        _INJECTED.clear()
+        _INJECTED.update(old)
+
+
+# --------------------------------------------------------------------------------------------------
+# structure
+
+
+@dataclass(frozen=True)
+class Block:
+    """One uncertainty block ``Delta_i`` mapping ``v_i`` (``shape[1]``) to ``u_i`` (``shape[0]``).
+
+    ``kind``: 'scalar' (complex scalar, 1x1), 'repeated' (``delta I_k``, ``shape=(k, k)``) or
+    'full' (complex matrix). Its bound is ``sigma_max(Delta_i) <= weight * gamma``.
+    """
+
+    kind: str = "full"
+    shape: tuple[int, int] = (1, 1)
+    weight: float = 1.0
+
+    def __post_init__(self) -> None:
+        if self.kind not in ("scalar", "repeated", "full"):
+            raise ValueError(f"unknown block kind {self.kind!r}")
+        if self.kind == "scalar" and tuple(self.shape) != (1, 1):
+            raise ValueError("a scalar block has shape (1, 1)")
+        if self.kind == "repeated" and self.shape[0] != self.shape[1]:
+            raise ValueError("a repeated scalar block is square")
+        if self.weight <= 0:
+            raise ValueError("block weight must be positive")
+
+    @property
+    def lmi_kind(self) -> str:
+        """'full' (scalar D-scale) or 'repeated' (Hermitian D-scale)."""
+        return "repeated" if self.kind == "repeated" and self.shape[0] > 1 else "full"
+
+
+@dataclass(frozen=True)
+class Structure:
+    """Uncertainty structure: the blocks of ``Delta_u`` (in the order of Me's Delta channel) and the
+    noise model. ``blocks=None`` means one full block spanning the whole channel (for SISO a complex
+    scalar). ``noise='per_output'``: ``|v_k| <= V`` for each output (independent scalars);
+    ``'euclidean'``: ``||v||_2 <= V``.
+    """
+
+    blocks: tuple[Block, ...] | None = None
+    noise: str = "per_output"
+
+    def __post_init__(self) -> None:
+        if self.noise not in ("per_output", "euclidean"):
+            raise ValueError(f"noise must be 'per_output' or 'euclidean', got {self.noise!r}")
+
+    @staticmethod
+    def full() -> Structure:
+        """One full complex block (a complex scalar for SISO additive / multiplicative)."""
+        return Structure()
+
+    @staticmethod
+    def repeated(k: int) -> Structure:
+        """One repeated complex scalar ``delta I_k`` (a parameter entering with rank k)."""
+        return Structure((Block("repeated" if k > 1 else "scalar", (k, k)),))
+
+    def resolve(self, nu: int, nv: int) -> tuple[Block, ...]:
+        """Blocks checked against the Delta channel size (``nu`` outputs, ``nv`` inputs)."""
+        if self.blocks is None:
+            kind = "scalar" if (nu, nv) == (1, 1) else "full"
+            return (Block(kind, (nu, nv)),)
+        su = sum(b.shape[0] for b in self.blocks)
+        sv = sum(b.shape[1] for b in self.blocks)
+        if (su, sv) != (nu, nv):
+            raise ValueError(f"blocks cover ({su}, {sv}) but Me's Delta channel is ({nu}, {nv})")
+        return self.blocks
+
+
+@dataclass
+class GammaResult:
+    """Per-frequency bounds on the required gamma (units of Delta_u), all arrays of shape (f,).
+
+    ``status``: 'ok' | 'unexplainable' (no finite gamma explains the data; bounds = inf) |
+    'solver_failed' (bounds NaN) | 'lower_only' (certified lower bound, no explicit Delta found;
+    upper NaN). ``method``: 'precheck' | 'eig' | 'sdp' | 'bisection' | '' per point.
+    """
+
+    gamma_lower: np.ndarray
+    gamma_upper: np.ndarray
+    status: np.ndarray
+    n_solver_calls: int
+    method: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype="<U12"))
+    delta: list[list[np.ndarray] | None] = field(default_factory=list)
+    timings: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def gamma(self) -> np.ndarray:
+        """The gamma that provably explains the data (``gamma_upper``)."""
+        return self.gamma_upper
+
+    @property
+    def rel_gap(self) -> np.ndarray:
+        """``(upper - lower) / upper`` (0 where both are 0)."""
+        with np.errstate(invalid="ignore", divide="ignore"):
+            g = (self.gamma_upper - self.gamma_lower) / self.gamma_upper
+        return np.where(self.gamma_upper == 0, 0.0, g)
+
+
+# --------------------------------------------------------------------------------------------------
+# small linear algebra helpers
+
+
+def _emb(H: np.ndarray) -> np.ndarray:
+    """Real symmetric embedding of a Hermitian matrix (same eigenvalues, each twice)."""
+    m = H.shape[0]
+    out = np.empty((2 * m, 2 * m))
+    out[:m, :m] = out[m:, m:] = H.real
+    out[m:, :m] = H.imag
+    out[:m, m:] = -H.imag
+    return out
+
+
+def _herm_basis(k: int) -> list[np.ndarray]:
+    """Real basis of the k x k Hermitian matrices (diagonal units first)."""
+    out = []
+    for i in range(k):
+        E = np.zeros((k, k), complex)
+        E[i, i] = 1
+        out.append(E)
+    for i in range(k):
+        for j in range(i + 1, k):
+            E = np.zeros((k, k), complex)
+            E[i, j] = E[j, i] = 1
+            out.append(E)
+            F = np.zeros((k, k), complex)
+            F[i, j], F[j, i] = 1j, -1j
+            out.append(F)
+    return out
+
+
+def _kernel(N: np.ndarray, rtol: float = 1e-11) -> np.ndarray:
+    """Orthonormal basis (n, m) of Ker N by SVD."""
+    n = N.shape[1]
+    if N.shape[0] == 0:
+        return np.eye(n, dtype=complex)
+    _, sv, Vh = np.linalg.svd(N)
+    rank = int(np.sum(sv > rtol * max(sv[0], 1e-300)))
+    return Vh[rank:].conj().T
+
+
+def _max_s(G: np.ndarray, Fu: np.ndarray) -> float:
+    """Largest s with ``s Fu + G < 0`` (Hermitian, ``Fu >= 0``): rigorous certificate check.
+
+    Returns -1 if ``G`` itself is not negative definite (no certificate at s = 0)."""
+    G = 0.5 * (G + G.conj().T)
+    try:
+        Lc = np.linalg.cholesky(-G)
+    except np.linalg.LinAlgError:
+        return -1.0
+    Li = np.linalg.inv(Lc)  # tiny matrices: plain inverse of the triangular factor
+    Y = Li @ Fu @ Li.conj().T
+    lam = np.linalg.eigvalsh(0.5 * (Y + Y.conj().T))
+    top = lam[-1]
+    return np.inf if top <= 0 else 1.0 / top
+
+
+def _top_eigvec(Q: np.ndarray) -> np.ndarray:
+    _, U = np.linalg.eigh(0.5 * (Q + Q.conj().T))
+    return U[:, -1]
+
+
+# --------------------------------------------------------------------------------------------------
+# LMI solvers: the cvxpy problems are built once per shape signature (cvxpy Parameters) and
+# re-solved with new values per frequency; the 'clarabel' backend fills the same conic data directly
+# (real embedding, Clarabel's scaled upper-triangle PSD vectorization) and calls Clarabel, skipping
+# cvxpy's per-solve canonicalization. Both solve exactly the same LMI.
+
+_SOLVER_OPTS: dict[str, object] = {"chordal_decomposition_enable": False, "max_threads": 1}
+# Clarabel's 'InsufficientProgress' still returns its last iterate; every bound is verified
+# independently, so such a point is accepted only if the verified gap stays below _INACCURATE_GAP
+_CVXPY_ONLY_OPTS: dict[str, object] = {"accept_unknown": True}
+_INACCURATE_GAP = 1e-6
+# second-pass triggers: s~ = (gamma / gamma estimate)^2 outside _S_RANGE, or a worst-case vector whose
+# u-part is below _ADAPT_RHO of its norm (near-cancellation); _NEAR_ZERO: excess/residual scale below
+# which the first pass already uses the adapted kernel basis
+_S_RANGE = (1e-2, 1e2)
+_ADAPT_RHO = 1e-2
+_NEAR_ZERO = 1e-1
+BACKENDS = ("cvxpy", "clarabel")
+
+
+@dataclass
+class _LmiOut:
+    status: str  # 'optimal' | 'inaccurate' | 'unbounded' | 'failed'
+    value: float = np.nan  # s (max problem) or lambda (feasibility problem)
+    theta: list[np.ndarray] = field(default_factory=list)  # D-scale coordinates per variable block
+    dual: np.ndarray | None = None  # complex m x m dual of the main LMI
+
+
+def _complexify(Xm: np.ndarray, m: int) -> np.ndarray:
+    """Hermitian m x m matrix closest to a real 2m x 2m embedding."""
+    return 0.5 * (Xm[:m, :m] + Xm[m:, m:]) + 0.5j * (Xm[m:, :m] - Xm[:m, m:])
+
+
+class _CvxpyLmi:
+    """``opt s.t. s Gs + G0 + sum_l theta_l G_l <= 0`` in the real embedding.
+
+    kind 'maxs': maximize s (s a variable). kind 'feas': s is folded into the data, minimize
+    lambda with ``G0 + sum theta G - lambda I <= 0``; ``fix_first`` is handled by the caller (the
+    fixed block is part of G0), then ``lambda >= -1``, else ``sum trace(D) = 1``.
+    """
+
+    def __init__(self, kind: str, m: int, blocks: tuple[tuple[str, int], ...], normalize: bool):
+        dim = 2 * m
+        self.kind = kind
+        self.G0 = cp.Parameter((dim, dim), symmetric=True)
+        self.var = cp.Variable()
+        if kind == "maxs":
+            self.Gs = cp.Parameter((dim, dim), symmetric=True)
+            expr = self.var * self.Gs + self.G0
+        else:
+            expr = self.G0 - self.var * np.eye(dim)
+        cons: list[cp.Constraint] = []
+        self.thetas: list[cp.Variable] = []
+        self.params: list[list[cp.Parameter]] = []
+        traces = []
+        for bkind, k in blocks:
+            nb = 1 if bkind == "full" else k * k
+            th = cp.Variable(nb)
+            ps = [cp.Parameter((dim, dim), symmetric=True) for _ in range(nb)]
+            for j in range(nb):
+                expr = expr + th[j] * ps[j]
+            if bkind == "full":
+                cons.append(th >= 0)
+                traces.append(th[0])
+            else:
+                embs = [_emb(H) for H in _herm_basis(k)]
+                cons.append(sum(th[j] * embs[j] for j in range(nb)) >> 0)
+                traces.append(cp.sum(th[:k]))
+            self.thetas.append(th)
+            self.params.append(ps)
+        if kind == "feas":
+            cons.append(sum(traces) == 1 if normalize else self.var >= -1)
+        self.lmi = expr << 0
+        obj = cp.Maximize(self.var) if kind == "maxs" else cp.Minimize(self.var)
+        self.problem = cp.Problem(obj, [*cons, self.lmi])
+
+    def solve(self, G0: np.ndarray, Gs: np.ndarray | None, terms: list[list[np.ndarray]],
+              timing: dict[str, float]) -> _LmiOut:
+        self.G0.value = _emb(G0)
+        if self.kind == "maxs" and Gs is not None:
+            self.Gs.value = _emb(Gs)
+        for ps, ts in zip(self.params, terms, strict=True):
+            for p, T in zip(ps, ts, strict=True):
+                p.value = _emb(T)
+        t0 = time.perf_counter()
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                self.problem.solve(solver=cp.CLARABEL, warm_start=False, **_SOLVER_OPTS,
+                                   **_CVXPY_ONLY_OPTS)
+            status = str(self.problem.status)
+        except (cp.SolverError, ValueError, ArithmeticError):
+            status = "error"
+        timing["solve_total"] = timing.get("solve_total", 0.0) + time.perf_counter() - t0
+        st = self.problem.solver_stats
+        if st is not None and st.solve_time is not None:
+            timing["clarabel"] = timing.get("clarabel", 0.0) + float(st.solve_time)
+        if status in ("unbounded", "unbounded_inaccurate"):
+            return _LmiOut("unbounded")
+        if status not in ("optimal", "optimal_inaccurate") or self.var.value is None:
+            return _LmiOut("failed")
+        if any(th.value is None for th in self.thetas):
+            return _LmiOut("failed")
+        theta = [np.asarray(th.value, dtype=float).reshape(-1) for th in self.thetas]
+        X = self.lmi.dual_value
+        m = G0.shape[0]
+        dual = _complexify(np.asarray(X), m) if X is not None else None
+        flag = "optimal" if status == "optimal" else "inaccurate"
+        return _LmiOut(flag, float(self.var.value), theta, dual)
+
+
+class _ClarabelLmi:
+    """The same LMI as :class:`_CvxpyLmi` (scalar D-scales only), conic data filled directly.
+
+    Variables ``z = (var, theta_1..K)``; cones: K nonnegative (theta), [feas: 1 zero (normalization)
+    or 1 nonnegative (lambda >= -1)], PSD triangle of size 2m for ``-(LMI expression)``.
+    """
+
+    def __init__(self, kind: str, m: int, n_theta: int, normalize: bool):
+        import clarabel  # imported lazily: a dependency of cvxpy's Clarabel interface anyway
+
+        self.clarabel = clarabel
+        self.kind, self.m, self.K, self.normalize = kind, m, n_theta, normalize
+        dim = 2 * m
+        iu, ju = np.triu_indices(dim)
+        order = np.lexsort((iu, ju))  # column-wise upper triangle
+        self.iu, self.ju = iu[order], ju[order]
+        self.wsv = np.where(self.iu == self.ju, 1.0, np.sqrt(2.0))
+        self.nsv = self.iu.size
+        nz = 1 + n_theta
+        self.q = np.zeros(nz)
+        self.q[0] = -1.0 if kind == "maxs" else 1.0
+        self.P = sp.csc_matrix((nz, nz))
+        cones = []
+        self.n_lin = n_theta
+        if n_theta:
+            cones.append(clarabel.NonnegativeConeT(n_theta))
+        self.extra = 0
+        if kind == "feas":
+            self.extra = 1
+            cones.append(clarabel.ZeroConeT(1) if normalize else clarabel.NonnegativeConeT(1))
+        cones.append(clarabel.PSDTriangleConeT(dim))
+        self.cones = cones
+        st = clarabel.DefaultSettings()
+        st.verbose = False
+        for key, val in _SOLVER_OPTS.items():
+            setattr(st, key, val)
+        self.settings = st
+        self.eye_sv = self._svec(np.eye(dim))
+        # svec(emb(H)) straight from the complex H: entry (i, j) of the embedding is
+        # +-Re/Im H[i mod m, j mod m]; precompute the gather index and the signs
+        bi, bj = self.iu // m, self.ju // m
+        ii, jj = self.iu % m, self.ju % m
+        use_imag = bi != bj
+        self.gidx = np.where(use_imag, m * m, 0) + ii * m + jj
+        self.gsgn = np.where(use_imag & (bi == 0), -1.0, 1.0) * self.wsv
+
+    def _svec_emb(self, H: np.ndarray) -> np.ndarray:
+        flat = np.concatenate([H.real.ravel(), H.imag.ravel()])
+        return flat[self.gidx] * self.gsgn
+
+    def _svec(self, S: np.ndarray) -> np.ndarray:
+        return S[self.iu, self.ju] * self.wsv
+
+    def _smat(self, v: np.ndarray) -> np.ndarray:
+        dim = 2 * self.m
+        S = np.zeros((dim, dim))
+        S[self.iu, self.ju] = v / self.wsv
+        S[self.ju, self.iu] = v / self.wsv
+        return S
+
+    def solve(self, G0: np.ndarray, Gs: np.ndarray | None, terms: list[list[np.ndarray]],
+              timing: dict[str, float]) -> _LmiOut:
+        K, nsv = self.K, self.nsv
+        rows = K + self.extra + nsv
+        A = np.zeros((rows, 1 + K))
+        b = np.zeros(rows)
+        if K:
+            A[:K, 1:] = -np.eye(K)
+        r0 = K + self.extra
+        if self.kind == "feas":
+            if self.normalize:
+                A[K, 1:] = 1.0
+                b[K] = 1.0
+            else:  # lambda >= -1: slack = 1 + lambda
+                A[K, 0] = -1.0
+                b[K] = 1.0
+            A[r0:, 0] = -self.eye_sv
+        else:
+            assert Gs is not None
+            A[r0:, 0] = self._svec_emb(Gs)
+        for j, ts in enumerate(terms):
+            A[r0:, 1 + j] = self._svec_emb(ts[0])
+        b[r0:] = -self._svec_emb(G0)
+        t0 = time.perf_counter()
+        try:
+            solver = self.clarabel.DefaultSolver(self.P, self.q, sp.csc_matrix(A), b, self.cones,
+                                                 self.settings)
+            sol = solver.solve()
+            status = str(sol.status)
+        except (ValueError, RuntimeError, ArithmeticError):
+            status = "error"
+            sol = None
+        dt = time.perf_counter() - t0
+        timing["solve_total"] = timing.get("solve_total", 0.0) + dt
+        if sol is not None:
+            timing["clarabel"] = timing.get("clarabel", 0.0) + float(sol.solve_time)
+        if status in ("DualInfeasible", "AlmostDualInfeasible"):
+            return _LmiOut("unbounded")
+        ok = ("Solved",)
+        usable = ("AlmostSolved", "InsufficientProgress", "MaxIterations")
+        if sol is None or status not in ok + usable:
+            return _LmiOut("failed")
+        x = np.asarray(sol.x)
+        z = np.asarray(sol.z)
+        if x.size != 1 + K or not np.all(np.isfinite(x)):
+            return _LmiOut("failed")
+        theta = [np.array([x[1 + j]]) for j in range(K)]
+        dual = _complexify(self._smat(z[r0:]), self.m) if np.all(np.isfinite(z)) else None
+        return _LmiOut("optimal" if status in ok else "inaccurate", float(x[0]), theta, dual)
+
+
+_CACHE: dict[tuple, _CvxpyLmi | _ClarabelLmi] = {}
+
+
+def _lmi(backend: str, kind: str, m: int, blocks: tuple[tuple[str, int], ...], normalize: bool
+         ) -> _CvxpyLmi | _ClarabelLmi:
+    use_direct = backend == "clarabel" and all(k == "full" for k, _ in blocks)
+    key = ("clarabel" if use_direct else "cvxpy", kind, m, blocks, normalize)
+    if key not in _CACHE:
+        if use_direct:
+            _CACHE[key] = _ClarabelLmi(kind, m, len(blocks), normalize)
+        else:
+            _CACHE[key] = _CvxpyLmi(kind, m, blocks, normalize)
+    return _CACHE[key]
+
+
+# --------------------------------------------------------------------------------------------------
+# one frequency point, scaled implicit LFT
+
+
+@dataclass
+class _Forms:
+    """Projected quadratic forms of one point on Ker N (kernel coordinates y, x = P y)."""
+
+    P: np.ndarray
+    gamma_blocks: list[tuple[str, int, np.ndarray, np.ndarray]]  # (lmi kind, k, Ap, Bp)
+    fixed_blocks: list[tuple[str, int, np.ndarray, np.ndarray]]  # radius 1 folded in
+
+
+def _block_terms(kind: str, k: int, Ap: np.ndarray, Bp: np.ndarray, s: float | None
+                 ) -> tuple[list[np.ndarray], list[np.ndarray]]:
+    """Hermitian m x m terms of one block: returns (A-parts, B-parts) per D-scale basis element;
+    the block's contribution is ``sum_l theta_l (r^2 A_l - B_l)``."""
+    if kind == "full":
+        return [Ap.conj().T @ Ap], [Bp.conj().T @ Bp]
+    As, Bs = [], []
+    for H in _herm_basis(k):
+        As.append(Ap.conj().T @ H @ Ap)
+        Bs.append(Bp.conj().T @ H @ Bp)
+    return As, Bs
+
+
+@dataclass
+class _EngineOut:
+    status: str  # 'ok' | 'unbounded' | 'failed'
+    s_lower: float = 0.0  # verified, scaled units
+    candidates: list[np.ndarray] = field(default_factory=list)  # kernel-space x (scaled coords)
+    calls: int = 0
+    method: str = ""
+    y: np.ndarray | None = None  # kernel coordinates of the worst-case vector (basis fm.P)
+    theta: list[float] = field(default_factory=list)  # scales of the fixed (noise) blocks
+    inaccurate: bool = False  # the solver did not report success; bounds verified independently
+
+
+def _engine_eig(fm: _Forms) -> _EngineOut:
+    """One full uncertainty block, no free scales: max s with s Ah - Bh <= 0 is a generalized
+    eigenvalue problem, solved exactly (no solver call)."""
+    _, _, Ap, Bp = fm.gamma_blocks[0]
+    Ah = Ap.conj().T @ Ap
+    Bh = Bp.conj().T @ Bp
+    m = Ah.shape[0]
+    if m == 1:
+        a, b = Ah[0, 0].real, Bh[0, 0].real
+        if a <= 0:
+            return _EngineOut("unbounded", method="eig")
+        return _EngineOut("ok", b / a, [fm.P[:, 0]], method="eig")
+    w, U = sla.eig(Bh, Ah)
+    finite = np.isfinite(w) & (np.abs(w.imag) <= 1e-9 * np.maximum(1.0, np.abs(w.real)))
+    if not np.any(finite):
+        return _EngineOut("unbounded", method="eig")
+    idx = np.flatnonzero(finite)[np.argmin(w.real[finite])]
+    s = max(float(w.real[idx]), 0.0)
+    return _EngineOut("ok", s, [fm.P @ U[:, idx]], method="eig")
+
+
+def _engine_sdp(fm: _Forms, timing: dict[str, float], backend: str) -> _EngineOut:
+    """One uncertainty block (scale fixed to 1) plus noise blocks: one SDP, maximize s."""
+    _, _, Ap, Bp = fm.gamma_blocks[0]
+    sig = tuple((kind, k) for kind, k, _, _ in fm.fixed_blocks)
+    Fu = Ap.conj().T @ Ap
+    F0 = -(Bp.conj().T @ Bp)
+    fixed_terms: list[list[np.ndarray]] = []
+    for kind, k, Ak, Bk in fm.fixed_blocks:
+        As, Bs = _block_terms(kind, k, Ak, Bk, None)
+        fixed_terms.append([a - b for a, b in zip(As, Bs, strict=True)])
+    res = _lmi(backend, "maxs", fm.P.shape[1], sig, False).solve(F0, Fu, fixed_terms, timing)
+    if res.status not in ("optimal", "inaccurate"):
+        return _EngineOut("unbounded" if res.status == "unbounded" else "failed", calls=1,
+                          method="sdp")
+    G = F0.copy()
+    theta: list[float] = []
+    for th, terms in zip(res.theta, fixed_terms, strict=True):
+        theta.append(float(th[0]) if len(terms) == 1 else np.nan)
+        for j, T in enumerate(terms):
+            G = G + float(th[j]) * T
+    s_cert = _max_s(G, Fu)
+    if s_cert < 0:
+        s_cert = 0.0  # no strict certificate: only the trivial bound
+    cands = []
+    y = None
+    if np.isfinite(s_cert):
+        y = _top_eigvec(s_cert * Fu + G)
+        cands.append(fm.P @ y)
+    if res.dual is not None:
+        cands.append(fm.P @ _top_eigvec(res.dual))
+    return _EngineOut("ok", s_cert, cands, calls=1, method="sdp", y=y, theta=theta,
+                      inaccurate=res.status == "inaccurate")
+
+
+def _feas_terms(fm: _Forms, s: float, fix_first: bool
+                ) -> tuple[np.ndarray, list[list[np.ndarray]], list[list[np.ndarray]]]:
+    """(G_fix, per-variable-block terms at s, per-variable-block A-parts) for the feasibility LMI."""
+    m = fm.P.shape[1]
+    Gfix = np.zeros((m, m), complex)
+    var_terms: list[list[np.ndarray]] = []
+    var_a: list[list[np.ndarray]] = []
+    for idx, (kind, k, Ap, Bp) in enumerate(fm.gamma_blocks):
+        As, Bs = _block_terms(kind, k, Ap, Bp, s)
+        terms = [s * a - b for a, b in zip(As, Bs, strict=True)]
+        if fix_first and idx == 0:
+            Gfix = terms[0]
+            continue
+        var_terms.append(terms)
+        var_a.append(As)
+    for kind, k, Ap, Bp in fm.fixed_blocks:
+        As, Bs = _block_terms(kind, k, Ap, Bp, None)
+        var_terms.append([a - b for a, b in zip(As, Bs, strict=True)])
+        var_a.append([np.zeros((m, m), complex)] * len(As))
+    return Gfix, var_terms, var_a
+
+
+def _feasible(fm: _Forms, s: float, fix_first: bool, timing: dict[str, float], backend: str
+              ) -> tuple[str, float, np.ndarray | None, np.ndarray | None]:
+    """Certificate at s? Returns (status, verified lambda_max, Q(theta) at s, Fa(theta))."""
+    m = fm.P.shape[1]
+    blocks = [(kind, k) for kind, k, _, _ in fm.gamma_blocks]
+    blocks = blocks[1:] if fix_first else blocks
+    sig = tuple(blocks) + tuple((kind, k) for kind, k, _, _ in fm.fixed_blocks)
+    Gfix, var_terms, var_a = _feas_terms(fm, s, fix_first)
+    res = _lmi(backend, "feas", m, sig, not fix_first).solve(Gfix, None, var_terms, timing)
+    if res.status not in ("optimal", "inaccurate"):
+        return "failed", np.inf, None, None
+    Q = Gfix.copy()
+    Fa = np.zeros((m, m), complex)
+    if fix_first:
+        Fa = fm.gamma_blocks[0][2].conj().T @ fm.gamma_blocks[0][2]
+    for th, terms, As in zip(res.theta, var_terms, var_a, strict=True):
+        for j, (T, A) in enumerate(zip(terms, As, strict=True)):
+            Q = Q + float(th[j]) * T
+            Fa = Fa + float(th[j]) * A
+    lam = float(np.linalg.eigvalsh(0.5 * (Q + Q.conj().T))[-1])
+    return "ok", lam, Q, Fa
+
+
+def _engine_bisection(fm: _Forms, timing: dict[str, float], rtol: float, fix_first: bool,
+                      backend: str) -> _EngineOut:
+    """Bisection on s with the feasibility LMI (GEVP for several blocks / repeated scalars)."""
+    calls = 0
+    # s = 0 must be certified (data outside the noise set); otherwise only the trivial bound
+    st, lam, Q, Fa = _feasible(fm, 0.0, fix_first, timing, backend)
+    calls += 1
+    if st != "ok":
+        return _EngineOut("failed", calls=calls, method="bisection")
+    if lam >= 0:
+        return _EngineOut("ok", 0.0, [fm.P @ _top_eigvec(Q)], calls, "bisection")
+    lo, best = 0.0, (Q, Fa)
+    hi = 1.0
+    while True:
+        st, lam, Q, Fa = _feasible(fm, hi, fix_first, timing, backend)
+        calls += 1
+        if st != "ok":
+            return _EngineOut("failed", calls=calls, method="bisection")
+        if lam >= 0:
+            break
+        lo, best = hi, (Q, Fa)
+        hi *= 4.0
+        if hi > 1e30:
+            return _EngineOut("unbounded", calls=calls, method="bisection")
+    # bisection on gamma = sqrt(s)
+    while np.sqrt(hi) - np.sqrt(lo) > rtol * np.sqrt(hi):
+        mid = (0.5 * (np.sqrt(lo) + np.sqrt(hi))) ** 2
+        st, lam, Q, Fa = _feasible(fm, mid, fix_first, timing, backend)
+        calls += 1
+        if st != "ok":
+            return _EngineOut("failed", calls=calls, method="bisection")
+        if lam < 0:
+            lo, best = mid, (Q, Fa)
+        else:
+            hi = mid
+    Qb, Fab = best
+    # the certificate at lo is affine in s for fixed scales: extend it exactly
+    s_cert = lo
+    if Qb is not None and Fab is not None:
+        ext = _max_s(Qb - lo * Fab, Fab)
+        if ext > lo:
+            s_cert = float(ext)
+    assert Qb is not None and Fab is not None
+    Qs = (Qb - lo * Fab + s_cert * Fab) if np.isfinite(s_cert) else Qb
+    return _EngineOut("ok", s_cert, [fm.P @ _top_eigvec(Qs)], calls, "bisection")
+
+
+# --------------------------------------------------------------------------------------------------
+# the Me-level pipeline
+
+
+@dataclass
+class _Layout:
+    blocks: tuple[Block, ...]
+    u_slices: list[slice]
+    v_slices: list[slice]
+    nu: int
+    nv: int
+    n_in: int
+    n_out: int
+
+
+def _layout(me: np.ndarray, n_in: int, n_out: int, structure: Structure) -> _Layout:
+    nv = me.shape[1] - n_out
+    nu = me.shape[2] - n_in
+    if nv < 0 or nu < 0:
+        raise ValueError(f"Me shape {me.shape[1:]} too small for {n_out} outputs, {n_in} inputs")
+    blocks = structure.resolve(nu, nv)
+    us, vs, ou, ov = [], [], 0, 0
+    for b in blocks:
+        us.append(slice(ou, ou + b.shape[0]))
+        vs.append(slice(ov, ov + b.shape[1]))
+        ou += b.shape[0]
+        ov += b.shape[1]
+    return _Layout(blocks, us, vs, nu, nv, n_in, n_out)
+
+
+def _noise_ok(r: np.ndarray, V: float, noise: str, scale: np.ndarray, rtol: float = 0.0,
+              atol: float = 8 * np.finfo(float).eps) -> bool:
+    """Residual inside the noise set, up to floating-point rounding of its evaluation."""
+    if noise == "per_output":
+        return bool(np.all(np.abs(r) <= V * (1 + rtol) + atol * scale))
+    return bool(np.linalg.norm(r) <= V * (1 + rtol) + atol * float(np.max(scale)))
+
+
+def _project_noise(r: np.ndarray, V: float, noise: str) -> np.ndarray:
+    shrink = 1 - 2 * np.finfo(float).eps
+    if noise == "per_output":
+        a = np.abs(r)
+        f = np.where(a > V * shrink, V * shrink / np.where(a > 0, a, 1), 1.0)
+        return r * f
+    nr = np.linalg.norm(r)
+    return r if nr <= V * shrink else r * (V * shrink / nr)
+
+
+class _PointModel:
+    """Me, W, Zt, V at one frequency and the Delta <-> output map."""
+
+    def __init__(self, me: np.ndarray, W: np.ndarray, Zt: np.ndarray, V: float, lay: _Layout,
+                 noise: str):
+        self.lay = lay
+        self.noise = noise
+        nv, nu = lay.nv, lay.nu
+        self.M11, self.M12 = me[:nv, :nu], me[:nv, nu:]
+        self.M21, self.M22 = me[nv:, :nu], me[nv:, nu:]
+        self.W, self.Zt, self.V = W, Zt, V
+        self.c = Zt - self.M22 @ W
+        self.M12W = self.M12 @ W
+        # residuals are evaluated as c - (z - Me22 W); c (the data) is rounded once, here
+        self.scale = np.maximum(np.abs(self.c), V)
+
+    def delta_matrix(self, deltas: list[np.ndarray]) -> np.ndarray:
+        if len(deltas) == 1:
+            return deltas[0]
+        return sla.block_diag(*deltas) if deltas else np.zeros((0, 0), complex)
+
+    def evaluate(self, D: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(r, v, L) for a full Delta matrix: r = Zt - F_u(Me, D) W evaluated as
+        ``c - Me21 D v``, v the Delta input, L = Me21 (I - D Me11)^-1."""
+        nv, nu = self.lay.nv, self.lay.nu
+        v = np.linalg.solve(np.eye(nv) - self.M11 @ D, self.M12W)
+        L = np.linalg.solve((np.eye(nu) - D @ self.M11).T, self.M21.T).T
+        return self.c - self.M21 @ (D @ v), v, L
+
+    def gamma_of(self, deltas: list[np.ndarray]) -> float:
+        g = 0.0
+        for b, d in zip(self.lay.blocks, deltas, strict=True):
+            nrm = abs(d[0, 0]) if b.kind in ("scalar", "repeated") else np.linalg.norm(d, 2)
+            g = max(g, float(nrm) / b.weight)
+        return g
+
+    def deltas_from_x(self, x: np.ndarray) -> list[np.ndarray] | None:
+        """Structured Delta from an (unscaled) kernel vector x = (u, e, t)."""
+        lay = self.lay
+        t = x[-1]
+        if not np.isfinite(t) or abs(t) <= 1e-13 * np.linalg.norm(x):
+            return None
+        u = x[: lay.nu] / t
+        v = self.M11 @ u + self.M12W
+        out = []
+        for b, us, vs in zip(lay.blocks, lay.u_slices, lay.v_slices, strict=True):
+            ui, vi = u[us], v[vs]
+            nv2 = float(np.vdot(vi, vi).real)
+            if nv2 == 0.0:
+                if np.linalg.norm(ui) > 0:
+                    return None
+                out.append(np.zeros(b.shape, complex))
+                continue
+            if b.kind in ("scalar", "repeated"):
+                delta = np.vdot(vi, ui) / nv2
+                out.append(delta * np.eye(b.shape[0], dtype=complex))
+            else:
+                out.append(np.outer(ui, vi.conj()) / nv2)
+        return out
+
+    def refine(self, deltas: list[np.ndarray]) -> list[np.ndarray] | None:
+        """Local SQP on the block values (scalar and repeated blocks only): minimize the largest
+        ``|delta_i| / w_i`` keeping the residual in the noise set, from a verified start. Used to
+        tighten gamma_upper where the kernel-vector construction left a gap (bisection, GEVP)."""
+        from scipy.optimize import minimize
+
+        lay = self.lay
+        if any(b.kind == "full" and b.shape != (1, 1) for b in lay.blocks):
+            return None
+        w = np.array([b.weight for b in lay.blocks])
+        th0 = np.array([d[0, 0] for d in deltas])
+        g0 = self.gamma_of(deltas)
+        if not np.isfinite(g0) or g0 == 0:
+            return None
+        nb = th0.size
+        sc = float(np.max(self.scale)) if self.V == 0 else self.V
+
+        def mats(x: np.ndarray) -> list[np.ndarray]:
+            th = g0 * (x[:nb] + 1j * x[nb: 2 * nb])
+            return [t * np.eye(b.shape[0], dtype=complex) for t, b in zip(th, lay.blocks,
+                                                                            strict=True)]
+
+        def resid(x: np.ndarray) -> np.ndarray:
+            try:
+                return self.evaluate(self.delta_matrix(mats(x)))[0] / sc
+            except np.linalg.LinAlgError:
+                return np.full(lay.n_out, 1e3 + 0j)
+
+        cons: list[dict[str, object]] = [
+            {"type": "ineq", "fun": lambda x: x[-1] * w**2 - (x[:nb] ** 2 + x[nb: 2 * nb] ** 2)}]
+        if self.V == 0:
+            cons.append({"type": "eq",
+                         "fun": lambda x: np.concatenate([resid(x).real, resid(x).imag])})
+        elif self.noise == "per_output":
+            cons.append({"type": "ineq", "fun": lambda x: 1.0 - np.abs(resid(x)) ** 2})
+        else:
+            cons.append({"type": "ineq", "fun": lambda x: 1.0 - float(np.sum(np.abs(resid(x)) ** 2))})
+        x0 = np.concatenate([th0.real / g0, th0.imag / g0, [1.0]])
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            res = minimize(lambda x: x[-1], x0, method="SLSQP", constraints=cons,
+                           options={"ftol": 1e-15, "maxiter": 200})
+        if not np.all(np.isfinite(res.x)):
+            return None
+        d1 = self.polish(mats(res.x))
+        if d1 is None or self.gamma_of(d1) >= g0:
+            return None
+        return d1
+
+    def polish(self, deltas: list[np.ndarray], iters: int = 8) -> list[np.ndarray] | None:
+        """Gauss-Newton on the Delta parameters until the residual lies in the noise set."""
+        lay = self.lay
+        deltas = [d.copy() for d in deltas]
+        for _ in range(iters + 1):
+            D = self.delta_matrix(deltas)
+            try:
+                r, v, L = self.evaluate(D)
+            except np.linalg.LinAlgError:
+                return None
+            if not np.all(np.isfinite(r)):
+                return None
+            if _noise_ok(r, self.V, self.noise, self.scale):
+                return deltas
+            dz = r - _project_noise(r, self.V, self.noise)
+            cols, where = [], []
+            for bi, (b, us, vs) in enumerate(zip(lay.blocks, lay.u_slices, lay.v_slices,
+                                                 strict=True)):
+                Lb, vb = L[:, us], v[vs]
+                if b.kind in ("scalar", "repeated"):
+                    cols.append(Lb @ vb)
+                    where.append((bi, -1, -1))
+                else:
+                    for a in range(b.shape[0]):
+                        for c in range(b.shape[1]):
+                            cols.append(Lb[:, a] * vb[c])
+                            where.append((bi, a, c))
+            J = np.stack(cols, axis=1)
+            if self.V == 0:
+                step = np.linalg.lstsq(J, dz, rcond=None)[0]  # r must vanish: complex equations
+            else:
+                # |r_k| <= V is one REAL constraint per output (per_output) or one in total
+                # (euclidean): linearize d|r| = -Re(conj(r^) J dtheta) on the active ones and take
+                # the minimum-norm real step
+                if self.noise == "per_output":
+                    act = np.abs(r) > self.V * (1 - 1e-9)
+                    a_rows = (np.conj(r[act]) / np.abs(r[act]))[:, None] * J[act]
+                    rhs = np.abs(r[act]) - np.abs(r[act] - dz[act])
+                else:
+                    nr = float(np.linalg.norm(r))
+                    a_rows = (r.conj() / nr)[None, :] @ J
+                    rhs = np.array([nr - float(np.linalg.norm(r - dz))])
+                Ar = np.concatenate([a_rows.real, -a_rows.imag], axis=1)
+                xr = np.linalg.lstsq(Ar, rhs, rcond=None)[0]
+                n_par = J.shape[1]
+                step = xr[:n_par] + 1j * xr[n_par:]
+            for val, (bi, a, c) in zip(step, where, strict=True):
+                if a < 0:
+                    deltas[bi] = deltas[bi] + val * np.eye(deltas[bi].shape[0])
+                else:
+                    deltas[bi][a, c] += val
+        return None
+
+
+def _adapted_basis(P0: np.ndarray, x: np.ndarray, nu: int) -> np.ndarray | None:
+    """Kernel basis ``[x / |u(x)|, complement]`` (x a kernel vector in scaled coordinates)."""
+    nu_out = float(np.linalg.norm(x[:nu]))
+    if not np.isfinite(nu_out) or nu_out == 0.0:
+        return None
+    y = P0.conj().T @ x
+    ny = float(np.linalg.norm(y))
+    if ny == 0.0:
+        return None
+    Uc = np.linalg.svd((y / ny).conj()[None, :])[2][1:].conj().T
+    return np.concatenate([x[:, None] / nu_out, P0 @ Uc], axis=1)
+
+
+def _heuristic_x(pm: _PointModel, S: np.ndarray) -> np.ndarray | None:
+    """Worst-case guess in scaled coordinates: noise aligned with the residual (as large as the bound
+    allows), u the least-squares rest. Exact for additive SISO."""
+    V, c = pm.V, pm.c
+    a = np.abs(c)
+    if pm.noise == "per_output":
+        e = np.where(a > 0, c / np.where(a > 0, a, 1) * np.minimum(1.0, a / V), 0)
+    else:
+        nc = float(np.linalg.norm(c))
+        e = c / nc * min(1.0, nc / V) if nc > 0 else np.zeros_like(c)
+    u = np.linalg.lstsq(pm.M21, c - V * e, rcond=None)[0]
+    x = np.concatenate([u, e, [1.0]])
+    return x / S
+
+
+def _scaled_forms(pm: _PointModel, ghat: float, basis: np.ndarray | None = None,
+                  kappa: Sequence[float] | None = None) -> tuple[_Forms, np.ndarray]:
+    """Scaled implicit LFT on its kernel; returns the forms and the column scaling S (x = S x~).
+
+    ``basis``: kernel basis to use instead of the orthonormal one (second pass); ``kappa``: scale
+    factors of the noise blocks' D-scales (so that the new scales are about 1)."""
+    lay = pm.lay
+    V, c = pm.V, pm.c
+    n_out = lay.n_out
+    sig = np.maximum(np.abs(c), V)
+    sig_max = float(np.max(sig)) if sig.size else 1.0
+    sig = np.where(sig > 0, sig, sig_max if sig_max > 0 else 1.0)
+    su = np.ones(lay.nu)
+    for us in lay.u_slices:
+        nrm = np.linalg.norm(pm.M21[:, us], 2)
+        su[us] = sig_max / nrm if nrm > 0 else 1.0
+    n_e = n_out if V > 0 else 0
+    n = lay.nu + n_e + 1
+    S = np.concatenate([su, np.ones(n_e), [1.0]])
+    # kernel rows, scaled by 1/sigma_k
+    N = np.zeros((n_out, n), complex)
+    N[:, : lay.nu] = -pm.M21 * su[None, :]
+    if n_e:
+        N[:, lay.nu: lay.nu + n_e] = -V * np.eye(n_out)
+    N[:, -1] = c
+    N = N / sig[:, None]
+    P = _kernel(N) if basis is None else basis
+    # v rows in scaled coordinates: v = M11 S_u u~ + M12 W t
+    Arow = np.zeros((lay.nv, n), complex)
+    Arow[:, : lay.nu] = pm.M11 * su[None, :]
+    Arow[:, -1] = pm.M12W
+    gamma_blocks = []
+    for b, us, vs in zip(lay.blocks, lay.u_slices, lay.v_slices, strict=True):
+        s_i = su[us][0]
+        A = (ghat * b.weight / s_i) * Arow[vs]
+        B = np.zeros((b.shape[0], n), complex)
+        B[:, us] = np.eye(b.shape[0])
+        k = b.shape[0]
+        gamma_blocks.append((b.lmi_kind, k, A @ P, B @ P))
+    fixed_blocks: list[tuple[str, int, np.ndarray, np.ndarray]] = []
+    if n_e:
+        et = np.zeros((1, n), complex)
+        et[0, -1] = 1.0
+        if pm.noise == "per_output":
+            for kk in range(n_out):
+                B = np.zeros((1, n), complex)
+                B[0, lay.nu + kk] = 1.0
+                fixed_blocks.append(("full", 1, et @ P, B @ P))
+        else:
+            B = np.zeros((n_out, n), complex)
+            B[:, lay.nu: lay.nu + n_out] = np.eye(n_out)
+            fixed_blocks.append(("full", 1, et @ P, B @ P))
+    if kappa is not None:
+        fixed_blocks = [(kd, k, np.sqrt(kp) * A, np.sqrt(kp) * B)
+                        for (kd, k, A, B), kp in zip(fixed_blocks, kappa, strict=True)]
+    return _Forms(P, gamma_blocks, fixed_blocks), S
+
+
+def _upper_from(pm: _PointModel, cands: list[np.ndarray], lower: float, upper: float,
+                best: list[np.ndarray] | None) -> tuple[float, list[np.ndarray] | None]:
+    """Smallest verified explicit Delta among kernel-vector candidates (in order of trust: the
+    eigenvector of the certificate first, then the dual); stops once within 1e-7 of ``lower``."""
+    for x in cands:
+        if upper <= lower * (1 + 1e-7):
+            break
+        d0 = pm.deltas_from_x(x)
+        if d0 is None:
+            continue
+        d1 = pm.polish(d0)
+        if d1 is None:
+            continue
+        g = pm.gamma_of(d1)
+        if g < upper:
+            upper, best = g, d1
+    return upper, best
+
+
+def _point(pm: _PointModel, mode: str, rtol: float, timing: dict[str, float], backend: str
+           ) -> tuple[float, float, str, int, str, list[np.ndarray] | None]:
+    """(lower, upper, status, solver calls, method, Delta blocks) at one frequency."""
+    lay = pm.lay
+    V, c = pm.V, pm.c
+    # pre-check 1: the nominal model explains the data within the noise
+    if _noise_ok(c, V, pm.noise, pm.scale, rtol=0.0, atol=0.0):
+        return 0.0, 0.0, STATUS_OK, 0, "precheck", [np.zeros(b.shape, complex) for b in lay.blocks]
+    # pre-check 2: the uncertainty cannot move the output
+    b_est = 0.0
+    for b, us, vs in zip(lay.blocks, lay.u_slices, lay.v_slices, strict=True):
+        b_est = max(b_est, b.weight * np.linalg.norm(pm.M21[:, us], 2)
+                    * np.linalg.norm(pm.M12W[vs]))
+    if not np.isfinite(b_est) or b_est == 0.0:
+        return np.inf, np.inf, STATUS_UNEXPLAINABLE, 0, "precheck", None
+    if pm.noise == "per_output":
+        excess = float(np.max(np.abs(c) - V))
+    else:
+        excess = float(np.linalg.norm(c) - V)
+    sig_max = float(np.max(np.maximum(np.abs(c), V)))
+    ghat = max(excess, 1e-14 * sig_max) / b_est
+    single = len(lay.blocks) == 1 and lay.blocks[0].lmi_kind == "full"
+    if single and V > 0:
+        # better gamma scale: the noise-free answer (an exact generalized eigenvalue, no solver)
+        # shrunk by the excess of the residual over the noise (exact for additive SISO)
+        pm0 = copy.copy(pm)
+        pm0.V = 0.0
+        out0 = _engine_eig(_scaled_forms(pm0, ghat)[0])
+        if out0.status == "ok" and np.isfinite(out0.s_lower) and out0.s_lower > 0:
+            ghat = ghat * np.sqrt(out0.s_lower) * max(excess, 1e-14 * sig_max) / sig_max
+
+    calls = 0
+    lower = 0.0
+    cands: list[np.ndarray] = []
+    method = ""
+    basis: np.ndarray | None = None
+    kappa: list[float] | None = None
+    upper: float = np.inf
+    best: list[np.ndarray] | None = None
+    use_sdp = mode != "bisection" and single and V > 0
+    inaccurate = False
+    if use_sdp:
+        # noise D-scales are about (V / sigma)(excess / sigma) at the optimum (exact for additive
+        # SISO): scale them to ~1 so a tiny noise block does not stall the interior point method
+        kap = max(V / sig_max * max(excess, 0.0) / sig_max, 1e-12)
+        kappa = [kap] * (lay.n_out if pm.noise == "per_output" else 1)
+    fm0, S = _scaled_forms(pm, ghat, None, kappa)
+    P0 = fm0.P  # orthonormal kernel basis (scaled coordinates); independent of ghat
+    if use_sdp and excess < _NEAR_ZERO * sig_max:
+        # gamma* far below the residual scale: start in a kernel basis adapted to the heuristic
+        # worst case (noise aligned with the residual), D-scales of the noise scaled to ~1
+        x0 = _heuristic_x(pm, S)
+        if x0 is not None:
+            basis = _adapted_basis(P0, P0 @ (P0.conj().T @ x0), lay.nu)
+            if basis is not None:
+                eps = max(excess / sig_max, 1e-12)
+                kappa = [eps] * len(fm0.fixed_blocks)
+    for _pass in range(3):
+        fm = fm0 if (_pass == 0 and basis is None) else _scaled_forms(pm, ghat, basis, kappa)[0]
+        if mode == "bisection" or not single:
+            out = _engine_bisection(fm, timing, rtol, single, backend)
+        elif not fm.fixed_blocks:
+            out = _engine_eig(fm)
+        else:
+            out = _engine_sdp(fm, timing, backend)
+        calls += out.calls
+        method = out.method
+        inaccurate = inaccurate or out.inaccurate
+        if out.status == "unbounded" and basis is None:
+            return np.inf, np.inf, STATUS_UNEXPLAINABLE, calls, method, None
+        if out.status != "ok":
+            if lower > 0 or cands:
+                break  # keep the verified results of an earlier pass
+            if basis is not None and _pass < 2:
+                basis, kappa, fm0 = None, None, _scaled_forms(pm, ghat)[0]  # retry, plain basis
+                continue
+            return np.nan, np.nan, STATUS_FAILED, calls, method, None
+        lower = max(lower, ghat * np.sqrt(out.s_lower)) if np.isfinite(out.s_lower) else np.inf
+        cands = [S * x for x in out.candidates] + cands  # latest pass first
+        s = out.s_lower
+        if out.method != "sdp" or not np.isfinite(s) or out.y is None or _pass == 2:
+            break
+        # next pass: rescale gamma by this answer and, when the worst-case vector is a
+        # near-cancellation (gamma* << the residual scale), use a kernel basis adapted to it
+        x1 = fm.P @ out.y
+        nu_out = float(np.linalg.norm(x1[: lay.nu]))
+        rho = nu_out / max(float(np.linalg.norm(x1)), 1e-300)
+        if out.inaccurate:
+            # the solver stalled but its iterate may still be good: the independent bounds decide
+            upper, best = _upper_from(pm, cands, lower, upper, best)
+            if upper <= lower * (1 + 1e-7):
+                break
+        adapt = (rho < _ADAPT_RHO or out.inaccurate) and basis is None
+        if _S_RANGE[0] <= s <= _S_RANGE[1] and not adapt and not out.inaccurate:
+            break
+        if kappa is not None:
+            kappa = [k * (th if (np.isfinite(th) and th > 1e-14) else 1.0)
+                     for k, th in zip(kappa, out.theta, strict=True)]
+        ghat = ghat * (np.sqrt(s) if s > 0 else 1e-3)
+        if adapt:
+            nb = _adapted_basis(P0, x1, lay.nu)
+            if nb is not None:
+                basis = nb
+                kappa = [th * k if (np.isfinite(th) and th > 1e-14) else k
+                         for th, k in zip(out.theta, kappa or [1.0] * len(out.theta), strict=True)]
+    if not np.isfinite(lower):
+        return np.inf, np.inf, STATUS_UNEXPLAINABLE, calls, method, None
+    upper, best = _upper_from(pm, cands, lower, upper, best)
+    if best is not None and upper > lower * (1 + 1e-7):
+        d2 = pm.refine(best)
+        if d2 is not None:
+            best, upper = d2, pm.gamma_of(d2)
+    if best is None:
+        return lower, np.nan, STATUS_LOWER_ONLY, calls, method, None
+    # a verified Delta below a verified certificate means the numerics broke, beyond the floor set
+    # by rounding of the data themselves (gamma* is a difference |c| - V of nearly equal numbers)
+    floor = 1e-7 + 1e3 * np.finfo(float).eps * sig_max / max(excess, 1e-300)
+    if upper < lower * (1 - floor):
+        return np.nan, np.nan, STATUS_FAILED, calls, method, None
+    if inaccurate and upper > lower * (1 + _INACCURATE_GAP) + 1e-300:
+        return np.nan, np.nan, STATUS_FAILED, calls, method, None
+    return lower, max(upper, lower), STATUS_OK, calls, method, best
+
+
+def _prepare(me: np.ndarray, W: np.ndarray, Zt: np.ndarray, noise_bound: float | np.ndarray
+             ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    Zt_a = np.asarray(Zt, dtype=complex)
+    W_a = np.asarray(W, dtype=complex)
+    Zt_a = Zt_a[:, None] if Zt_a.ndim == 1 else Zt_a
+    W_a = W_a[:, None] if W_a.ndim == 1 else W_a
+    f = Zt_a.shape[0]
+    if W_a.shape[0] != f:
+        raise ValueError(f"W has {W_a.shape[0]} frequencies, Zt has {f}")
+    M = as_freq_matrix(me, f)
+    V = np.broadcast_to(np.asarray(noise_bound, dtype=float), (f,)).copy()
+    if np.any(V < 0) or not np.all(np.isfinite(V)):
+        raise ValueError("noise_bound must be finite and >= 0")
+    return M, W_a, Zt_a, V
+
+
+def _run(me: np.ndarray, W: np.ndarray, Zt: np.ndarray, noise_bound: float | np.ndarray,
+         structure: Structure | None, mode: str, rtol: float, fail_at: Collection[int],
+         backend: str) -> GammaResult:
+    if backend not in BACKENDS:
+        raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
+    t0 = time.perf_counter()
+    structure = structure or Structure()
+    M, W_a, Zt_a, V = _prepare(me, W, Zt, noise_bound)
+    f, n_in, n_out = Zt_a.shape[0], W_a.shape[1], Zt_a.shape[1]
+    lay = _layout(M, n_in, n_out, structure)
+    lower = np.full(f, np.nan)
+    upper = np.full(f, np.nan)
+    status = np.empty(f, dtype="<U13")
+    method = np.empty(f, dtype="<U12")
+    deltas: list[list[np.ndarray] | None] = []
+    calls = 0
+    timing: dict[str, float] = {}
+    fails = set(int(i) for i in fail_at) | _INJECTED
+    for i in range(f):
+        if i in fails:
+            status[i], method[i] = STATUS_FAILED, "injected"
+            deltas.append(None)
+            continue
+        pm = _PointModel(M[i], W_a[i], Zt_a[i], float(V[i]), lay, structure.noise)
+        lo, up, st, nc, meth, d = _point(pm, mode, rtol, timing, backend)
+        lower[i], upper[i], status[i], method[i] = lo, up, st, meth
+        calls += nc
+        deltas.append(d)
+    timing["wall"] = time.perf_counter() - t0
+    return GammaResult(lower, upper, status, calls, method, deltas, timing)
+
+
+def required_gamma(me: np.ndarray, W: np.ndarray, Zt: np.ndarray,
+                   noise_bound: float | np.ndarray, structure: Structure | None = None, *,
+                   fail_at: Collection[int] = (), rtol: float = 1e-8, backend: str = "cvxpy"
+                   ) -> GammaResult:
+    """Smallest gamma(w) for which ``F_u(Me, gamma Delta) W + V Delta_v`` reproduces ``Zt``.
+
+    ``me``: ``(f, n_v + n_out, n_u + n_in)`` complex; ``W``: ``(f, n_in)`` or ``(f,)`` input
+    phasors (N); ``Zt``: ``(f, n_out)`` or ``(f,)`` output phasors (m); ``noise_bound``: V (m),
+    scalar or ``(f,)``; ``structure``: blocks of Delta_u and noise model (default: one full block).
+    One uncertainty block (scalar or full): one SDP per frequency (or an exact generalized
+    eigenvalue when there is no noise block). Repeated-scalar or several blocks: bisection on the
+    same LMI (GEVP), relative tolerance ``rtol`` on gamma. ``fail_at``: testing hook, indices
+    treated as solver failures. ``backend``: 'cvxpy' (the problem built once with cvxpy Parameters,
+    re-solved per frequency) or 'clarabel' (same LMI, conic data filled directly, Clarabel called
+    without cvxpy's per-solve canonicalization; falls back to cvxpy for Hermitian D-scales).
+    """
+    return _run(me, W, Zt, noise_bound, structure, "auto", rtol, fail_at, backend)
+
+
+def required_gamma_bisection(me: np.ndarray, W: np.ndarray, Zt: np.ndarray,
+                             noise_bound: float | np.ndarray, structure: Structure | None = None,
+                             *, fail_at: Collection[int] = (), rtol: float = 1e-9,
+                             backend: str = "cvxpy") -> GammaResult:
+    """Same bounds by bisection on gamma with an LMI feasibility problem per step (the classic
+    approach of the dissertation, section 3.1); for benchmarking the one-SDP formulation."""
+    return _run(me, W, Zt, noise_bound, structure, "bisection", rtol, fail_at, backend)
+
+
+@dataclass
+class ImplicitBound:
+    """Result of :func:`implicit_lmi_bound`: ``gamma_lower`` (every gamma below it is certified
+    to admit no nonzero kernel vector), the worst-case kernel vector ``x`` (None if not available)
+    and ``status`` ('ok' | 'unbounded' | 'solver_failed')."""
+
+    gamma_lower: float
+    x: np.ndarray | None
+    status: str
+    n_solver_calls: int
+
+
+def implicit_lmi_bound(N: np.ndarray, A: Sequence[np.ndarray], B: Sequence[np.ndarray],
+                       kinds: Sequence[str], gamma_block: Sequence[bool],
+                       radius: Sequence[float] | None = None, *, backend: str = "cvxpy",
+                       rtol: float = 1e-8) -> ImplicitBound:
+    """The LMI on a user-built implicit LFT at ONE frequency (no automatic scaling: pass a
+    well-scaled problem).
+
+    ``N`` (rows, n): kernel constraint ``N x = 0``; ``A[i]`` (q_i, n) / ``B[i]`` (p_i, n): input and
+    output rows of block i; ``kinds[i]``: 'scalar' | 'full' | 'repeated'; ``gamma_block[i]``: block
+    bounded by ``radius[i] * gamma`` (else by ``radius[i]``, default 1). One gamma block of scalar
+    or full kind: one SDP (or an exact eigenvalue without other blocks); otherwise bisection.
+    """
+    if backend not in BACKENDS:
+        raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
+    N = np.atleast_2d(np.asarray(N, dtype=complex))
+    rad = [1.0] * len(A) if radius is None else [float(r) for r in radius]
+    P = _kernel(N)
+    if P.shape[1] == 0:
+        return ImplicitBound(np.inf, None, "unbounded", 0)
+    gam, fix = [], []
+    for Ai, Bi, kd, gb, ri in zip(A, B, kinds, gamma_block, rad, strict=True):
+        Ai = np.atleast_2d(np.asarray(Ai, dtype=complex))
+        Bi = np.atleast_2d(np.asarray(Bi, dtype=complex))
+        lk = "repeated" if kd == "repeated" and Ai.shape[0] > 1 else "full"
+        (gam if gb else fix).append((lk, Bi.shape[0], ri * Ai @ P, Bi @ P))
+    if not gam:
+        raise ValueError("at least one block must be scaled by gamma")
+    fm = _Forms(P, gam, fix)
+    timing: dict[str, float] = {}
+    single = len(gam) == 1 and gam[0][0] == "full"
+    if single and not fix:
+        out = _engine_eig(fm)
+    elif single:
+        out = _engine_sdp(fm, timing, backend)
+    else:
+        out = _engine_bisection(fm, timing, rtol, False, backend)
+    if out.status == "unbounded":
+        return ImplicitBound(np.inf, None, "unbounded", out.calls)
+    if out.status != "ok":
+        return ImplicitBound(np.nan, None, STATUS_FAILED, out.calls)
+    x = out.candidates[0] if out.candidates else None
+    return ImplicitBound(float(np.sqrt(out.s_lower)), x, STATUS_OK, out.calls)
+
+
+def blocks_for(me_shape: Sequence[int], n_in: int, n_out: int, structure: Structure
+               ) -> tuple[Block, ...]:
+    """The resolved block list for an Me of shape ``(f, rows, cols)`` (helper for callers)."""
+    return structure.resolve(me_shape[-1] - n_in, me_shape[-2] - n_out)

@@ -1,0 +1,255 @@
+"""Steps 3-4: validation of the uncertain model on healthy data, detection on new data, verdict.
+
+Validation (FDMVOP): per frequency the healthy uncertainty bound ``gamma_h(w)``:
+
+* ``enclose='data'`` (the dissertation): the smallest gamma for which the uncertain model
+  ``F_u(Me, gamma Delta) W + V Delta_v`` reproduces the healthy data. We store the *upper* bound of
+  the LMI pair (the size of an explicit, verified Delta), so the healthy data is provably enclosed.
+  This puts the healthy data on the edge of the set: a repeat healthy sweep with fresh noise leaves
+  it wherever the model error exceeds the noise (false alarms).
+* ``enclose='system'``: the smallest gamma whose model set contains every system consistent with
+  the data and V, i.e. the whole data disk ``|Z - Zt| <= V`` (SISO, one complex scalar Delta;
+  exact closed form via the Moebius pre-image; additive: ``(|Zt - G W| + V)/|W|``).
+
+Several healthy sweeps: gamma_h is the maximum over the sweeps, point by point.
+
+Detection (FDIMVDP): a point of new data is a fault iff ``gamma_required_new > gamma_h``. We compare
+the *certified lower* bound of the new data's required gamma (every gamma below it is proven to be
+invalidated) with ``gamma_h (1 + rtol)``; ``rtol = 1e-6`` absorbs rounding and the LMI gap (about
+1e-9 relative for SISO) and is far below any physical resolution.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Collection, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from rotorcheck.robust.closed_form import gamma_enclose_system_siso
+from rotorcheck.robust.gmu import (
+    STATUS_FAILED,
+    STATUS_LOWER_ONLY,
+    STATUS_OK,
+    STATUS_UNEXPLAINABLE,
+    GammaResult,
+    Structure,
+    required_gamma,
+)
+from rotorcheck.robust.lft import as_freq_matrix
+from rotorcheck.robust.noise import NoiseBound
+
+__all__ = [
+    "DetectionResult",
+    "ValidationResult",
+    "Verdict",
+    "detect",
+    "validate",
+    "verdict",
+]
+
+STATUS_FAULT = "fault"
+STATUS_NO_BASELINE = "no_baseline"
+_SEVERITY = {STATUS_OK: 0, STATUS_LOWER_ONLY: 1, STATUS_UNEXPLAINABLE: 2, STATUS_FAILED: 3}
+
+
+def _v(noise_bound: float | np.ndarray | NoiseBound) -> float | np.ndarray:
+    return noise_bound.value_m if isinstance(noise_bound, NoiseBound) else noise_bound
+
+
+@dataclass
+class ValidationResult:
+    """Healthy uncertainty bound per frequency (f,), units of Delta_u.
+
+    ``gamma``: the baseline gamma_h (enclose='data': verified upper bound; 'system': closed form);
+    ``gamma_lower``/``gamma_upper``: the LMI pair (equal to ``gamma`` for 'system');
+    ``status``: 'ok' | 'unexplainable' (no finite gamma encloses the data) | 'solver_failed' |
+    'lower_only'; worst over the sweeps.
+    """
+
+    gamma: np.ndarray
+    gamma_lower: np.ndarray
+    gamma_upper: np.ndarray
+    status: np.ndarray
+    enclose: str
+    noise_bound_m: float | np.ndarray
+    n_solver_calls: int = 0
+    per_sweep: list[GammaResult] = field(default_factory=list)
+
+    @property
+    def enclosed(self) -> bool:
+        """True when every point has a finite, verified gamma_h."""
+        return bool(np.all(self.status == STATUS_OK))
+
+
+def _as_list(x: np.ndarray | Sequence[np.ndarray]) -> list[np.ndarray]:
+    if isinstance(x, (list, tuple)):
+        return [np.asarray(a) for a in x]
+    return [np.asarray(x)]
+
+
+def validate(me: np.ndarray, W: np.ndarray | Sequence[np.ndarray],
+             Zt: np.ndarray | Sequence[np.ndarray], noise_bound: float | np.ndarray | NoiseBound,
+             enclose: str = "data", structure: Structure | None = None, *,
+             fail_at: Collection[int] = (), backend: str = "cvxpy") -> ValidationResult:
+    """gamma_h per frequency from healthy data.
+
+    ``me``: ``(f, n_v + n_out, n_u + n_in)``; ``W``/``Zt``: input (N) and output (m) phasors,
+    ``(f, n_in)``/``(f, n_out)`` or ``(f,)``, or lists of them for several healthy sweeps (max over
+    sweeps); ``noise_bound``: V (m) or a :class:`NoiseBound`; ``enclose``: 'data' | 'system';
+    ``backend``: LMI backend of :func:`rotorcheck.robust.gmu.required_gamma`; ``fail_at``: testing
+    hook (indices treated as solver failures).
+    """
+    V = _v(noise_bound)
+    Ws, Zs = _as_list(W), _as_list(Zt)
+    if len(Ws) != len(Zs):
+        raise ValueError("W and Zt must have the same number of sweeps")
+    if enclose not in ("data", "system"):
+        raise ValueError(f"enclose must be 'data' or 'system', got {enclose!r}")
+    f = Zs[0].shape[0]
+    lo = np.full(f, -np.inf)
+    up = np.full(f, -np.inf)
+    sev = np.zeros(f, dtype=int)
+    calls = 0
+    per: list[GammaResult] = []
+    for Wk, Zk in zip(Ws, Zs, strict=True):
+        if enclose == "data":
+            res = required_gamma(me, Wk, Zk, V, structure, fail_at=fail_at, backend=backend)
+            per.append(res)
+            calls += res.n_solver_calls
+            g_lo, g_up, st = res.gamma_lower, res.gamma_upper, res.status
+        else:
+            M = as_freq_matrix(me, f)
+            if M.shape[1:] != (2, 2) or (structure is not None and structure.blocks is not None
+                                         and len(structure.blocks) != 1):
+                raise NotImplementedError(
+                    "enclose='system' is implemented for SISO data with one complex scalar "
+                    "uncertainty (Me of shape (f, 2, 2))")
+            g = gamma_enclose_system_siso(M, Wk, Zk, V)
+            st = np.where(np.isfinite(g), STATUS_OK, STATUS_UNEXPLAINABLE)
+            st = np.asarray(st, dtype="<U13")
+            for i in set(int(j) for j in fail_at):
+                st[i], g[i] = STATUS_FAILED, np.nan
+            g_lo = g_up = g
+        lo = np.fmax(lo, g_lo)
+        up = np.fmax(up, g_up)
+        sev = np.maximum(sev, np.array([_SEVERITY.get(s, 3) for s in st]))
+    inv = {v: k for k, v in _SEVERITY.items()}
+    status = np.array([inv[s] for s in sev], dtype="<U13")
+    gam = np.where(status == STATUS_OK, up, np.where(status == STATUS_UNEXPLAINABLE, np.inf, np.nan))
+    lo = np.where(status == STATUS_FAILED, np.nan, lo)
+    up = np.where(status == STATUS_FAILED, np.nan, up)
+    return ValidationResult(gam, lo, up, status, enclose, V, calls, per)
+
+
+@dataclass
+class DetectionResult:
+    """Per-point detection (f,).
+
+    ``gamma_required``: certified lower bound of the gamma the new data needs (inf when no gamma
+    explains it, NaN on failure); ``gamma_required_upper``: verified upper bound;
+    ``gamma_healthy``: gamma_h; ``fault``: bool; ``status``: 'ok' | 'fault' | 'unexplainable'
+    (no finite gamma explains the new data: counted as a fault) | 'solver_failed' (no decision) |
+    'no_baseline' (gamma_h not finite at this point: no decision).
+    """
+
+    gamma_required: np.ndarray
+    gamma_required_upper: np.ndarray
+    gamma_healthy: np.ndarray
+    fault: np.ndarray
+    status: np.ndarray
+    rtol: float
+    n_solver_calls: int = 0
+
+    @property
+    def n_fault(self) -> int:
+        """Number of fault points."""
+        return int(np.count_nonzero(self.fault))
+
+
+def detect(me: np.ndarray, W: np.ndarray, Zt_new: np.ndarray,
+           noise_bound: float | np.ndarray | NoiseBound, gamma_h: np.ndarray,
+           structure: Structure | None = None, *, rtol: float = 1e-6,
+           fail_at: Collection[int] = (), backend: str = "cvxpy") -> DetectionResult:
+    """Fault points of new data against the healthy bound ``gamma_h`` (f,).
+
+    fault iff ``gamma_required_lower > gamma_h (1 + rtol)`` (certified invalidation).
+    """
+    V = _v(noise_bound)
+    gh = np.asarray(gamma_h, dtype=float).reshape(-1)
+    res = required_gamma(me, W, Zt_new, V, structure, fail_at=fail_at, backend=backend)
+    f = gh.size
+    if res.gamma_lower.size != f:
+        raise ValueError(f"gamma_h has {f} points, the data {res.gamma_lower.size}")
+    fault = np.zeros(f, dtype=bool)
+    status = np.empty(f, dtype="<U13")
+    for i in range(f):
+        st = res.status[i]
+        if not np.isfinite(gh[i]):
+            status[i] = STATUS_NO_BASELINE
+        elif st == STATUS_FAILED:
+            status[i] = STATUS_FAILED
+        elif st == STATUS_UNEXPLAINABLE:
+            status[i], fault[i] = STATUS_UNEXPLAINABLE, True
+        elif res.gamma_lower[i] > gh[i] * (1 + rtol):
+            status[i], fault[i] = STATUS_FAULT, True
+        else:
+            status[i] = STATUS_OK
+    return DetectionResult(res.gamma_lower, res.gamma_upper, gh, fault, status, rtol,
+                           res.n_solver_calls)
+
+
+@dataclass
+class Verdict:
+    """Sweep-level decision: 'damage' | 'healthy' | 'inconclusive' and why."""
+
+    verdict: str
+    reason: str
+    n_points: int
+    n_fault: int
+    n_undecided: int
+    longest_run: int
+    threshold: int
+
+
+def _longest_run(mask: np.ndarray) -> int:
+    best = cur = 0
+    for m in mask:
+        cur = cur + 1 if m else 0
+        best = max(best, cur)
+    return best
+
+
+def verdict(fault: np.ndarray, status: np.ndarray, healthy_status: np.ndarray | None = None, *,
+            min_points: int = 3, min_fraction: float = 0.02, min_run: int = 2) -> Verdict:
+    """Sweep verdict from per-point detection.
+
+    Rule: 'damage' if ``n_fault >= max(min_points, ceil(min_fraction * n))`` or the longest run of
+    adjacent fault points is ``>= min_run`` (fault points are certified invalidations, so they count
+    even when other points could not be decided); otherwise 'inconclusive' if any point is
+    undecided (solver failure, no baseline) or the healthy data could not be enclosed somewhere
+    (``healthy_status`` not all 'ok'); otherwise 'healthy'.
+    """
+    fault = np.asarray(fault, dtype=bool)
+    status = np.asarray(status)
+    n = fault.size
+    thr = max(min_points, int(np.ceil(min_fraction * n)))
+    n_fault = int(np.count_nonzero(fault))
+    run = _longest_run(fault)
+    undecided = int(np.count_nonzero(np.isin(status, [STATUS_FAILED, STATUS_NO_BASELINE])))
+    if n_fault >= thr or run >= min_run:
+        why = (f"{n_fault} fault points (threshold {thr})" if n_fault >= thr
+               else f"{run} adjacent fault points (threshold {min_run})")
+        return Verdict("damage", why, n, n_fault, undecided, run, thr)
+    bad_healthy = 0
+    if healthy_status is not None:
+        bad_healthy = int(np.count_nonzero(np.asarray(healthy_status) != STATUS_OK))
+    if undecided or bad_healthy:
+        why = []
+        if undecided:
+            why.append(f"{undecided} points undecided (solver failure or no baseline)")
+        if bad_healthy:
+            why.append(f"healthy data not enclosed at {bad_healthy} points")
+        return Verdict("inconclusive", "; ".join(why), n, n_fault, undecided, run, thr)
+    return Verdict("healthy", f"{n_fault} fault points, below threshold {thr} and no run of "
+                   f"{min_run}", n, n_fault, undecided, run, thr)
