@@ -42,20 +42,11 @@ DEFAULT_OUT = Path("rotorcheck-out")
 
 
 def _emit_json(doc: dict[str, Any]) -> None:
-    sys.stdout.write(json.dumps(doc, indent=2, allow_nan=True, default=_json_default) + "\n")
+    """One strict JSON document on stdout (non-finite numbers as the strings "inf"/"nan")."""
+    from rotorcheck.report.reports import render_json
+
+    sys.stdout.write(render_json(doc))
     sys.stdout.flush()
-
-
-def _json_default(obj: Any) -> Any:
-    import numpy as np
-
-    if isinstance(obj, np.ndarray):
-        return obj.tolist()
-    if isinstance(obj, (np.floating, np.integer, np.bool_)):
-        return obj.item()
-    if isinstance(obj, Path):
-        return str(obj)
-    raise TypeError(f"not JSON serializable: {type(obj).__name__}")
 
 
 # --------------------------------------------------------------------------------------------
@@ -185,6 +176,7 @@ def validate(
     = "system",
     run: RunOpt = None,
     at: Annotated[float | None, typer.Option("--at", help="Frequency (Hz) of the complex-plane plot.")] = None,
+    plots: Annotated[bool, typer.Option(help="Write the validation plots.")] = True,
     as_json: JsonOpt = False,
     force: ForceOpt = False,
 ) -> int:
@@ -208,7 +200,7 @@ def validate(
             noise = noise_bound_manual(prior.noise_bound_m)
             noise.method, noise.confidence = prior.noise_method, prior.noise_confidence
             err.print(f"noise bound V = {prior.noise_bound_m * 1e6:.4g} um from {target} ({prior.noise_method})")
-    stems = [out / s for s in workflow.PLOT_STEMS_VALIDATE]
+    stems = [out / s for s in workflow.PLOT_STEMS_VALIDATE] if plots else []
     check_writable([st.with_suffix(e) for st in stems for e in (".png", ".pdf")], force)
     if noise is None:
         noise = workflow.fit_noise(runs[0])
@@ -216,7 +208,7 @@ def validate(
                   f"{noise.confidence:.0%}) from {runs[0].path}")
     outcome = workflow.validate(cfg, runs, noise, enclose=enclose, fail_at=_fail_at())
     write_baseline(outcome.baseline, target)
-    files = workflow.validation_plots(outcome, out, at)
+    files = workflow.validation_plots(outcome, out, at) if plots else []
     res = outcome.result
     n_bad = outcome.n_not_enclosed
     g = res.gamma[np.isfinite(res.gamma)]
@@ -245,6 +237,7 @@ def detect(
     baseline: Annotated[Path | None, typer.Option("--baseline", help="Baseline (default <out>/baseline.h5).")] = None,
     run: RunOpt = None,
     at: Annotated[float | None, typer.Option("--at", help="Frequency (Hz) of the complex-plane plot.")] = None,
+    plots: Annotated[bool, typer.Option(help="Write the detection plots.")] = True,
     as_json: JsonOpt = False,
     force: ForceOpt = False,
 ) -> int:
@@ -255,7 +248,7 @@ def detect(
     from rotorcheck.report.reports import REPORT_FILES, write_reports
 
     base_path = baseline if baseline is not None else out / "baseline.h5"
-    stems = [out / s for s in workflow.PLOT_STEMS_DETECT]
+    stems = [out / s for s in workflow.PLOT_STEMS_DETECT] if plots else []
     check_writable([out / f for f in REPORT_FILES] + [st.with_suffix(e) for st in stems for e in (".png", ".pdf")],
                    force)
     base = read_baseline(base_path)
@@ -264,13 +257,13 @@ def detect(
     workflow.check_baseline(base, cfg, mrun, base_path)
     outcome = workflow.detect(cfg, base, mrun, fail_at=_fail_at())
     report = outcome.report()
-    plots = workflow.detection_plots(outcome, out, at)
-    files = write_reports(report, out, plots)
+    plot_files = workflow.detection_plots(outcome, out, at) if plots else []
+    files = write_reports(report, out, plot_files)
     v = outcome.verdict
     colour = {"damage": "bold red", "healthy": "bold green", "inconclusive": "bold yellow"}[v.verdict]
     err.print(f"[{colour}]{v.verdict.upper()}[/]: {v.reason}")
     err.print(f"{report['n_fault_points']} of {report['n_points']} points are fault points")
-    for p_ in [*map(str, files), *plots]:
+    for p_ in [*map(str, files), *plot_files]:
         err.print(f"wrote {p_}")
     if as_json:
         _emit_json(report)

@@ -64,7 +64,8 @@ class DamageSet:
 
     ``kind``: 'point' (r = 0), 'disk' (``|D - centre| <= radius``), 'outside'
     (``|D - centre| >= radius``, unbounded) or 'halfplane' (``Re(conj(normal) D) >= offset``,
-    unbounded); ``nominal`` the image of Delta = 0 (N/m). ``min_abs``/``max_abs`` exact (``inf``
+    unbounded); 'plane' (r infinite: any D) or 'undecided' (r NaN: no healthy bound there, all
+    numbers NaN); ``nominal`` the image of Delta = 0 (N/m). ``min_abs``/``max_abs`` exact (``inf``
     when unbounded); ``phase_min``/``phase_max`` in rad, ``phase_max - phase_min = 2 pi`` when the
     set surrounds the origin (holds it, or is unbounded in every direction).
     """
@@ -104,6 +105,8 @@ class DamageSet:
             return np.abs(z - self.centre[i]) >= self.radius[i] - tol
         if k == "halfplane":
             return (np.conj(self.normal[i]) * z).real >= self.offset[i] - tol
+        if k == "plane":
+            return np.ones(z.shape, dtype=bool)
         return np.zeros(z.shape, dtype=bool)
 
 
@@ -132,6 +135,9 @@ def moebius_disk_image(fun: Callable[[np.ndarray], np.ndarray], radius: np.ndarr
     r = np.broadcast_to(np.asarray(radius, dtype=float), (f,)).copy()
     if np.any(r < 0):
         raise ValueError("radius must be >= 0")
+    unknown = np.isnan(r)  # no healthy bound at that point (solver failure): nothing to say
+    whole = np.isposinf(r)  # healthy data not enclosable: every D is possible
+    r = np.where(unknown | whole, 1.0, r)  # placeholder so the sampling below stays finite
     angles = np.array([0.1, 0.1 + 2 * np.pi / 3, 0.1 + 4 * np.pi / 3])
     samples = [np.zeros(f, complex)] + [r * np.exp(1j * a) for a in angles]
     images = [z0] + [np.asarray(fun(s), dtype=complex) for s in samples[1:]]
@@ -148,6 +154,13 @@ def moebius_disk_image(fun: Callable[[np.ndarray], np.ndarray], radius: np.ndarr
         min_abs=np.full(f, np.nan), max_abs=np.full(f, np.nan), phase_min=np.full(f, np.nan),
         phase_max=np.full(f, np.nan))
     for i in range(f):
+        if unknown[i]:
+            out.kind[i] = "undecided"
+            continue
+        if whole[i]:
+            out.kind[i], out.min_abs[i], out.max_abs[i] = "plane", 0.0, np.inf
+            out.phase_min[i], out.phase_max[i] = -np.pi, np.pi
+            continue
         if r[i] == 0:
             _set_point(out, i, z0[i])
             continue

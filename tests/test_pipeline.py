@@ -1,0 +1,284 @@
+"""End to end: fit-noise, validate, detect on the bundled samples; false alarms; bad input.
+
+Independent references: the golden file (explicit `make golden` only), the FE model of the nominal
+rig with the open crack (the damage a noise-free, model-error-free world would identify), the
+three-mass table of rigs.md section 2, and the dissertation's detection counts (section 5.6-5.7).
+"""
+
+from __future__ import annotations
+
+import copy
+import hashlib
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+from rotorcheck import golden, workflow
+from rotorcheck.cli import EXIT_DAMAGE, EXIT_INCONCLUSIVE, EXIT_INPUT, EXIT_OK, main
+from rotorcheck.config import load_config
+from rotorcheck.fe.assembly import build_system
+from rotorcheck.fe.frf import receptance
+from rotorcheck.nominal import nominal_model
+from rotorcheck.report.reports import REPORT_FILES
+from rotorcheck.robust.identify import damage_dynamics
+
+ROOT = Path(__file__).resolve().parents[1]
+CONFIGS, SAMPLES = ROOT / "configs", ROOT / "data_samples"
+CR = SAMPLES / "crack_rig"
+
+
+def _pipeline(healthy: Path, new: Path, enclose: str, rig: str = "crack_rig.yaml"):
+    cfg = load_config(CONFIGS / rig)
+    run_h = workflow.load_run(healthy, cfg)
+    noise = workflow.fit_noise(run_h)
+    val = workflow.validate(cfg, [run_h], noise, enclose=enclose)
+    run_n = workflow.load_run(new, cfg)
+    return val, workflow.detect(cfg, val.baseline, run_n)
+
+
+def _json(capsys: pytest.CaptureFixture) -> dict:
+    return json.loads(capsys.readouterr().out)
+
+
+def _digest(folder: Path) -> dict[str, str]:
+    return {p.name: hashlib.sha256(p.read_bytes()).hexdigest() for p in sorted(folder.iterdir()) if p.is_file()}
+
+
+# --------------------------------------------------------------------------------------------
+# the CI regression of the design card
+
+
+def test_golden_regression() -> None:
+    reference = json.loads(golden.GOLDEN.read_text())
+    problems = golden.compare(golden.compute(), reference)
+    assert not problems, "\n".join(problems[:20])
+
+
+def test_golden_compare_catches_a_change() -> None:
+    reference = json.loads(golden.GOLDEN.read_text())
+    changed = copy.deepcopy(reference)
+    changed["breathing_1000rpm_system"]["n_fault_points"] += 1
+    changed["open_crack_0rpm_system"]["probe_damage_re"][0] *= 1 + 1e-3
+    assert len(golden.compare(changed, reference)) == 2
+
+
+# --------------------------------------------------------------------------------------------
+# the crack rig
+
+
+@pytest.mark.parametrize("enclose", ["system", "data"])
+@pytest.mark.parametrize("sweep", ["healthy_0rpm.h5", "healthy_1000rpm.h5"])
+def test_healthy_data_never_invalidated_by_its_own_baseline(sweep: str, enclose: str) -> None:
+    val, det = _pipeline(CR / sweep, CR / sweep, enclose)
+    assert val.n_not_enclosed == 0
+    assert int(np.count_nonzero(det.detection.fault)) == 0
+    assert det.verdict.verdict == "healthy"
+
+
+def test_false_alarm_table() -> None:
+    """Fault points on the repeat healthy sweep and on the breathing crack, both enclose modes."""
+    table = {}
+    for enclose in ("system", "data"):
+        for new in ("healthy_1000rpm_repeat.h5", "breathing_crack_1000rpm.h5"):
+            _, det = _pipeline(CR / "healthy_1000rpm.h5", CR / new, enclose)
+            table[(enclose, new)] = (int(np.count_nonzero(det.detection.fault)), det.verdict.verdict)
+    # 'system' encloses every system consistent with the data: a repeat with fresh noise raises nothing
+    assert table[("system", "healthy_1000rpm_repeat.h5")] == (0, "healthy")
+    # 'data' (the dissertation's FDMVOP) leaves the healthy data on the edge of the set: false alarms
+    assert table[("data", "healthy_1000rpm_repeat.h5")][0] >= 20
+    # the crack is still found with 'system', and more points with 'data'
+    n_sys, v_sys = table[("system", "breathing_crack_1000rpm.h5")]
+    assert v_sys == "damage" and 10 <= n_sys <= 60
+    assert table[("data", "breathing_crack_1000rpm.h5")][0] > n_sys
+
+
+def test_breathing_crack_fault_points_where_the_dissertation_saw_them() -> None:
+    """Section 5.6: faults before the first resonance and near the second (21 of 262 in simulation)."""
+    _, det = _pipeline(CR / "healthy_1000rpm.h5", CR / "breathing_crack_1000rpm.h5", "system")
+    f = det.run.frequency_hz[np.asarray(det.detection.fault, bool)]
+    assert f.size >= 10
+    near_modes = (f >= 45) & (f <= 80) | (f >= 160) & (f <= 185)
+    assert np.count_nonzero(near_modes) >= 0.9 * f.size
+
+
+def test_open_crack_detected_below_the_second_resonance() -> None:
+    _, det_sys = _pipeline(CR / "healthy_0rpm.h5", CR / "open_crack_0rpm.h5", "system")
+    _, det_dat = _pipeline(CR / "healthy_0rpm.h5", CR / "open_crack_0rpm.h5", "data")
+    f = det_sys.run.frequency_hz
+    fault_sys = np.asarray(det_sys.detection.fault, bool)
+    fault_dat = np.asarray(det_dat.detection.fault, bool)
+    below_antiresonance = f < 100.0  # the crack moves mode 1 by 6 %; mode 2 barely (node in element 4)
+    assert np.all(fault_sys[below_antiresonance])
+    assert np.all(fault_dat[f < 171.0])  # every point below the second resonance with 'data'
+    assert det_sys.verdict.verdict == "damage"
+
+
+def test_identified_damage_below_first_resonance_is_a_flat_stiffness_loss() -> None:
+    """D_u (anchored at the healthy data) vs the FE reference: nominal rig with E of element 4 at 46 %."""
+    _, det = _pipeline(CR / "healthy_0rpm.h5", CR / "open_crack_0rpm.h5", "system")
+    f = det.run.frequency_hz
+    low = f <= 50.0
+    d = det.anchored[low]
+    assert np.all(d.real > 0)  # a stiffness loss
+    assert np.max(np.abs(d.real - np.median(d.real))) < 0.08 * np.median(d.real)  # flat within 8 %
+    assert np.max(np.abs(d.imag)) < 0.05 * np.median(d.real)
+    # reference: what eq. 3.11 gives for the FE model with the open crack against the healthy FE model
+    nom = load_config(CONFIGS / "crack_rig.yaml")
+    model = nominal_model(nom, f[low], 0.0)
+    cracked = build_system(nom, modulus_factors={4: 0.46})
+    s = build_system(nom)
+    T = receptance(cracked, f[low], 0.0, [s.dof(6, "x")], [s.dof(8, "x")])[:, 0, 0]
+    E = model.E
+    d_ref = damage_dynamics(E[:, 0, 0], E[:, 0, 1], E[:, 1, 0], E[:, 1, 1], T)
+    assert np.median(d.real) == pytest.approx(np.median(d_ref.real), rel=0.12)
+    # the anchored estimate is a member of the set inherited from validation (eq. 3.12)
+    assert np.all(det.damage_set.contains(det.anchored)[low])
+
+
+# --------------------------------------------------------------------------------------------
+# the three-mass example through the configs and the command line
+
+
+def _three_mass(tmp_path: Path, trial: int, capsys: pytest.CaptureFixture) -> dict:
+    rig = str(CONFIGS / f"three_mass_trial{trial}.yaml")
+    out = str(tmp_path / f"t{trial}")
+    assert main(["fit-noise", str(SAMPLES / "three_mass/healthy.h5"), "--rig", rig, "--out", out]) == EXIT_OK
+    assert main(["validate", str(SAMPLES / "three_mass/healthy.h5"), "--rig", rig, "--out", out,
+                 "--enclose", "data", "--no-plots"]) == EXIT_OK
+    capsys.readouterr()
+    rc = main(["detect", str(SAMPLES / "three_mass/damaged.h5"), "--rig", rig, "--out", out, "--json", "--no-plots"])
+    assert rc == EXIT_DAMAGE
+    return _json(capsys)
+
+
+def test_three_mass_end_to_end(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    r = {t: _three_mass(tmp_path, t, capsys) for t in (1, 2, 3)}
+    d3 = np.asarray(r[3]["damage_dynamics_re"]) + 1j * np.asarray(r[3]["damage_dynamics_im"])
+    kd = 386.0 - 350.0
+    assert np.max(np.abs(d3.real - kd)) < 1e-9 * kd  # D_0 = k3 - kd at every frequency
+    assert np.max(np.abs(d3.imag)) < 1e-9 * kd
+    n = r[1]["n_points"]
+    assert r[1]["n_fault_points"] > 0.75 * n and r[2]["n_fault_points"] >= r[1]["n_fault_points"]
+    for t in (1, 2):  # the trial-3 curve lies inside both bounds
+        lo = np.asarray(r[t]["damage_bound_min_abs"], float)
+        hi = np.asarray([float(x) for x in r[t]["damage_bound_max_abs"]])
+        assert np.all(lo <= kd * (1 + 1e-9)) and np.all(hi >= kd * (1 - 1e-9))
+    width = {t: np.asarray([float(x) for x in r[t]["damage_bound_max_abs"]]) - np.asarray(r[t]["damage_bound_min_abs"])
+             for t in (1, 2)}
+    bounded = np.isfinite(width[1])  # at high frequency the sets hold the pole: unbounded for both trials
+    assert np.count_nonzero(bounded) > 0.5 * n
+    assert np.count_nonzero(width[2][bounded] < width[1][bounded]) >= 0.95 * np.count_nonzero(bounded)
+
+
+# --------------------------------------------------------------------------------------------
+# bad input and failures: exit codes, messages, nothing partial
+
+
+def _baseline(tmp_path: Path, sweep: Path = CR / "healthy_1000rpm.h5") -> Path:
+    out = tmp_path / "out"
+    assert main(["validate", str(sweep), "--out", str(out), "--no-plots"]) == EXIT_OK
+    return out
+
+
+def _no_reports(folder: Path) -> bool:
+    return not any((folder / name).exists() for name in REPORT_FILES)
+
+
+def test_detect_refuses_another_grid(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    out = _baseline(tmp_path)
+    other = tmp_path / "other_grid.h5"
+    assert main(["simulate", str(other), "--speed", "1000", "--points", "200", "--periods", "8"]) == EXIT_OK
+    capsys.readouterr()
+    assert main(["detect", str(other), "--out", str(out)]) == EXIT_INPUT
+    err = capsys.readouterr().err
+    assert "other_grid.h5" in err and "frequency" in err and "grid" in err
+    assert _no_reports(out)
+
+
+def test_detect_refuses_a_baseline_of_another_rig(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    out = _baseline(tmp_path)
+    data = yaml.safe_load((CONFIGS / "crack_rig.yaml").read_text())
+    data["bearings"][0]["kxx"] = 1.6e7  # same rig_id, another description
+    other = tmp_path / "other_rig.yaml"
+    other.write_text(yaml.safe_dump(data))
+    capsys.readouterr()
+    rc = main(["detect", str(CR / "breathing_crack_1000rpm.h5"), "--rig", str(other), "--out", str(out)])
+    assert rc == EXIT_INPUT
+    err = capsys.readouterr().err
+    assert "baseline.h5" in err and "rig_sha256" in err
+    assert _no_reports(out)
+
+
+def test_detect_without_baseline(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    out = tmp_path / "empty"
+    assert main(["detect", str(CR / "breathing_crack_1000rpm.h5"), "--out", str(out)]) == EXIT_INPUT
+    err = capsys.readouterr().err
+    assert "baseline.h5" in err and "not found" in err
+    assert not out.exists() or _no_reports(out)
+
+
+def test_solver_failure_at_one_point_is_reported_not_a_number(
+    tmp_path: Path, capsys: pytest.CaptureFixture, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    out = tmp_path / "out"
+    monkeypatch.setenv("ROTORCHECK_FAIL_AT", "7")
+    assert main(["validate", str(CR / "healthy_1000rpm.h5"), "--out", str(out), "--json",
+                 "--no-plots"]) == EXIT_INCONCLUSIVE
+    cap = capsys.readouterr()
+    doc = json.loads(cap.out)
+    assert doc["status"][7] == "solver_failed" and doc["gamma"][7] == "nan"
+    assert doc["status"].count("solver_failed") == 1 and "not enclosed" in cap.err
+    # detection against that baseline: the point is undecided, never a silent number
+    monkeypatch.setenv("ROTORCHECK_FAIL_AT", "")
+    rc = main(["detect", str(CR / "healthy_1000rpm_repeat.h5"), "--out", str(out), "--json", "--no-plots"])
+    rep = _json(capsys)
+    assert rc == EXIT_INCONCLUSIVE and rep["verdict"] == "inconclusive"
+    assert rep["status"][7] != "ok" and rep["fault"][7] is False
+    # a failure during detection itself
+    monkeypatch.setenv("ROTORCHECK_FAIL_AT", "3")
+    out2 = tmp_path / "out2"
+    assert main(["validate", str(CR / "healthy_1000rpm.h5"), "--out", str(out2), "--no-plots"]) == EXIT_INCONCLUSIVE
+    monkeypatch.setenv("ROTORCHECK_FAIL_AT", "")
+    assert main(["validate", str(CR / "healthy_1000rpm.h5"), "--out", str(out2), "--no-plots", "--force"]) == EXIT_OK
+    monkeypatch.setenv("ROTORCHECK_FAIL_AT", "3")
+    capsys.readouterr()
+    rc = main(["detect", str(CR / "healthy_1000rpm_repeat.h5"), "--out", str(out2), "--json", "--no-plots"])
+    rep = _json(capsys)
+    assert rc == EXIT_INCONCLUSIVE
+    assert rep["status"][3] == "solver_failed" and rep["gamma_required"][3] == "nan"
+
+
+def test_outputs_are_never_overwritten_silently(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    out = _baseline(tmp_path)
+    args = ["detect", str(CR / "breathing_crack_1000rpm.h5"), "--out", str(out), "--no-plots"]
+    assert main(args) == EXIT_DAMAGE
+    before = _digest(out)
+    assert main(args) == EXIT_INPUT
+    assert "--force" in capsys.readouterr().err
+    assert _digest(out) == before
+    assert main(["validate", str(CR / "healthy_1000rpm.h5"), "--out", str(out), "--no-plots"]) == EXIT_INPUT
+    assert _digest(out) == before
+    assert main([*args, "--force"]) == EXIT_DAMAGE
+
+
+def test_detect_json_and_files(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    out = _baseline(tmp_path)
+    capsys.readouterr()
+    assert main(["detect", str(CR / "breathing_crack_1000rpm.h5"), "--out", str(out), "--json"]) == EXIT_DAMAGE
+    cap = capsys.readouterr()
+    rep = json.loads(cap.out)  # stdout holds exactly one JSON document
+    for key in ("verdict", "n_points", "n_fault_points", "fault_frequencies_hz", "frequency_hz", "gamma_healthy",
+                "gamma_required", "fault", "damage_dynamics_re", "damage_dynamics_im", "damage_bound_min_abs",
+                "damage_bound_max_abs"):
+        assert key in rep
+    assert rep["n_fault_points"] == sum(rep["fault"]) == len(rep["fault_frequencies_hz"])
+    on_disk = json.loads((out / "report.json").read_text())
+    assert on_disk["fault_frequencies_hz"] == rep["fault_frequencies_hz"]
+    rows = (out / "fault_points.csv").read_text().strip().splitlines()
+    assert len(rows) == 1 + rep["n_fault_points"]
+    assert "DAMAGE" in (out / "report.md").read_text()
+    for stem in workflow.PLOT_STEMS_DETECT:
+        assert (out / f"{stem}.png").stat().st_size > 10_000 and (out / f"{stem}.pdf").exists()
