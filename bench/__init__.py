@@ -1,0 +1,1 @@
+"""Speed measurements (``make bench``): ratios against a baseline measured in the same run."""
