@@ -358,7 +358,7 @@ def _validate_run(
     if np.any(freq <= 0):
         i = int(np.argmax(freq <= 0))
         raise SweepFormatError(
-            file, f"{base}/frequency", f"frequency must be > 0 Hz, got {freq[i]!r} at index {i}"
+            file, f"{base}/frequency", f"frequency must be > 0 Hz, got {float(freq[i]):.9g} at index {i}"
         )
     d = np.diff(freq)
     if np.any(d <= 0):
@@ -366,7 +366,8 @@ def _validate_run(
         raise SweepFormatError(
             file,
             f"{base}/frequency",
-            f"frequency not strictly increasing at index {i + 1} ({freq[i]!r} Hz then {freq[i + 1]!r} Hz)",
+            f"frequency not strictly increasing at index {i + 1} "
+            f"({float(freq[i]):.9g} Hz then {float(freq[i + 1]):.9g} Hz)",
         )
     inp = arrays["input_phasor"]
     zero = inp == 0
@@ -375,13 +376,13 @@ def _validate_run(
         raise SweepFormatError(
             file,
             f"{base}/input_phasor",
-            f"zero input phasor at index ({k}, {i}), frequency {freq[k]!r} Hz",
+            f"zero input phasor at index ({k}, {i}), frequency {float(freq[k]):.9g} Hz",
         )
     var = arrays["output_var"]
     if np.any(var < 0):
         k, o = (int(v) for v in np.argwhere(var < 0)[0])
         raise SweepFormatError(
-            file, f"{base}/output_var", f"negative variance {var[k, o]!r} at index ({k}, {o})"
+            file, f"{base}/output_var", f"negative variance {float(var[k, o]):.9g} at index ({k}, {o})"
         )
     nper = arrays["n_periods"]
     if np.any(nper < 1):
@@ -402,7 +403,7 @@ def _validate_run(
             file,
             f"{base}/frf",
             f"frf inconsistent with output_phasor/input_phasor at index ({k}, {o}, {i}), "
-            f"frequency {freq[k]!r} Hz: relative difference {rel:.3g} > {frf_rtol:g}",
+            f"frequency {float(freq[k]):.9g} Hz: relative difference {rel:.3g} > {frf_rtol:g}",
         )
 
     if run.period_phasor is not None:
@@ -482,7 +483,7 @@ def _validate_periods(
         raise SweepFormatError(
             file,
             where,
-            f"period-to-period variance of the mean at index ({k}, {o}) = {var[k, o]!r} differs "
+            f"period-to-period variance of the mean at index ({k}, {o}) = {float(var[k, o]):.9g} differs "
             f"from output_var = {stored_var[k, o]!r}",
         )
 
@@ -775,6 +776,7 @@ def atomic_target(path: str | os.PathLike[str], force: bool = False, suffix: str
         raise FileExistsError(f"{target}: exists; refusing to overwrite (pass force=True / --force)")
     folder = os.path.dirname(os.path.abspath(target))
     fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=suffix, dir=folder)
+    _umask_mode(tmp)
     os.close(fd)
     try:
         yield tmp
@@ -959,3 +961,10 @@ __all__ = [
     "validate_sweep",
     "write_sweep",
 ]
+
+
+def _umask_mode(path: str) -> None:
+    """Give a mkstemp file (0600) the mode a plain open() would: 0666 less the umask."""
+    mask = os.umask(0)
+    os.umask(mask)
+    os.chmod(path, 0o666 & ~mask)
