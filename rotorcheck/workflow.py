@@ -462,3 +462,60 @@ def detection_plots(outcome: DetectionOutcome, out_dir: str | Path, at_hz: float
 
 PLOT_STEMS_VALIDATE = ("validation_bode", "validation_complex_plane")
 PLOT_STEMS_DETECT = ("detection_bode", "detection_complex_plane", "damage_dynamics")
+
+
+# --------------------------------------------------------------------------------------------
+# cracked rotor illustration (dissertation section 5.3)
+
+
+def crack_report(
+    rig_path: str | Path, fault: str = "breathing_crack", unbalance_g_m: float = 0.2, station: int | None = None,
+    speeds_rpm: tuple[float, float] = (1000.0, 750.0), out_dir: str | Path | None = None, force: bool = False,
+) -> dict[str, Any]:
+    """Stiffness over a revolution, orbits and spectra of the cracked rotor (Fig. 56-58).
+
+    Unbalance ``unbalance_g_m`` (g m) at the first disc, facing down (-y) while the crack faces up
+    and is closed at t = 0 (section 5.3); responses at ``station`` (default: the sensor). Returns
+    the harmonic amplitudes (m) healthy and cracked at each speed, the critical speeds and, with
+    ``out_dir``, the three figures (PNG and PDF).
+    """
+    from rotorcheck.config import Crack, UnbalanceMass
+
+    config = load_config(rig_path)
+    crack = config.faults.get(fault)
+    if not isinstance(crack, Crack) or crack.model == "open":
+        known = ", ".join(k for k, v in config.faults.items() if isinstance(v, Crack) and v.model != "open")
+        raise InputError(rig_path, f"faults.{fault}", f"not a breathing crack (breathing cracks: {known or 'none'})")
+    if not config.discs:
+        raise InputError(rig_path, "discs", "the section 5.3 illustration puts the unbalance on the first disc")
+    st = station if station is not None else config.ports.sensor.station
+    stems = []
+    if out_dir is not None:
+        from rotorcheck.fileio import check_writable
+
+        stems = [Path(out_dir) / n for n in ("crack_stiffness", "crack_orbit", "crack_spectrum")]
+        check_writable([s.with_suffix(e) for s in stems for e in (".png", ".pdf")], force)
+
+    from rotorcheck.faults.analysis import critical_speed_summary, unbalance_harmonics
+    from rotorcheck.fe.assembly import build_system
+
+    system = build_system(config)
+    unb = [UnbalanceMass(station=config.discs[0].station, amount=unbalance_g_m * 1e-3, phase=-np.pi / 2)]
+    dofs = [system.dof(st, "x"), system.dof(st, "y")]
+    harmonics = {}
+    for speed in speeds_rpm:
+        for name, c in (("healthy", None), ("cracked", crack)):
+            orders, X = unbalance_harmonics(system, c, speed, unb, dofs)
+            harmonics[f"{name}_{speed:g}rpm"] = {"order": orders.tolist(), "x_m": np.abs(X[:, 0]).tolist(),
+                                                 "y_m": np.abs(X[:, 1]).tolist()}
+    crit = critical_speed_summary(system, crack, speeds_rpm[0], config.analysis.campbell_max_rpm)
+    files: list[str] = []
+    if out_dir is not None:
+        from rotorcheck.report.crack_plots import crack_figures
+        from rotorcheck.report.figures import save_figure
+
+        figs = crack_figures(system, crack, unb, station=st, speeds_rpm=speeds_rpm)
+        for key, stem in zip(("stiffness", "orbit", "spectrum"), stems):
+            files += [str(p) for p in save_figure(figs[key], stem)]
+    return {"rig_id": config.rig_id, "fault": fault, "station": st, "unbalance_g_m": unbalance_g_m,
+            "harmonics": harmonics, "critical_speeds": crit, "files": files}

@@ -282,3 +282,43 @@ def test_detect_json_and_files(tmp_path: Path, capsys: pytest.CaptureFixture) ->
     assert "DAMAGE" in (out / "report.md").read_text()
     for stem in workflow.PLOT_STEMS_DETECT:
         assert (out / f"{stem}.png").stat().st_size > 10_000 and (out / f"{stem}.pdf").exists()
+
+
+# --------------------------------------------------------------------------------------------
+# the LMI on the samples' own points, against the closed form
+
+
+@pytest.mark.parametrize("sweep", ["healthy_1000rpm.h5", "breathing_crack_1000rpm.h5", "open_crack_0rpm.h5"])
+def test_lmi_equals_closed_form_on_sample_points(sweep: str) -> None:
+    from rotorcheck.robust.closed_form import gamma_required_siso
+    from rotorcheck.robust.gmu import required_gamma
+
+    cfg = load_config(CONFIGS / "crack_rig.yaml")
+    run = workflow.load_run(CR / sweep, cfg)
+    V = workflow.fit_noise(run).value_m
+    me = nominal_model(cfg, run.frequency_hz, run.speed_rpm).me
+    res = required_gamma(me, run.W, run.Zt, V)
+    ref = gamma_required_siso(me, run.W, run.Zt, V)
+    assert np.all(res.status == "ok")
+    zero = ref == 0
+    assert np.all(res.gamma_upper[zero] <= 1e-12) and np.all(res.gamma_lower[zero] <= 1e-12)
+    rel_up = np.abs(res.gamma_upper[~zero] - ref[~zero]) / ref[~zero]
+    rel_lo = np.abs(res.gamma_lower[~zero] - ref[~zero]) / ref[~zero]
+    assert rel_up.max() < 1e-6 and rel_lo.max() < 1e-6
+    assert np.all(res.gamma_upper - res.gamma_lower <= 1e-6 * np.maximum(res.gamma_upper, 1e-300) + 1e-12)
+
+
+def test_crack_command_reproduces_section_5_3(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    assert main(["crack", "--out", str(tmp_path), "--json"]) == EXIT_OK
+    doc = _json(capsys)
+    h = doc["harmonics"]
+    x1000 = np.asarray(h["cracked_1000rpm"]["x_m"])
+    x750 = np.asarray(h["cracked_750rpm"]["x_m"])
+    assert x1000[1] > 10 * max(x1000[2], x1000[3])  # 1X dominant
+    assert x1000[2] > 1e-2 * x1000[1] and x1000[3] > 1e-2 * x1000[1]  # 2X and 3X present
+    assert np.max(np.asarray(h["healthy_1000rpm"]["x_m"])[2:]) < 1e-9 * x1000[1]  # healthy: 1X only
+    assert np.all(np.diff(x750[1:5]) < 0)  # at 750 rpm the harmonics decrease
+    crit = doc["critical_speeds"]
+    assert crit["averaged"]["first_critical_rpm"] < crit["healthy"]["first_critical_rpm"]
+    for stem in ("crack_stiffness", "crack_orbit", "crack_spectrum"):
+        assert (tmp_path / f"{stem}.png").exists() and (tmp_path / f"{stem}.pdf").exists()
