@@ -64,23 +64,16 @@ def rig_channels(config: RigConfig) -> list[Channel]:
 
 def synchronous_forces(config: RigConfig, system: MechanicalSystem, speed_rpm: float) -> list[Tone]:
     """Unbalance (1X) and misalignment (2X) force tones, vectors of length n_dof (N)."""
+    from rotorcheck.faults.harmonic_balance import misalignment_force, unbalance_force
+
     if config.kind != "rotor" or speed_rpm == 0.0:
         return []
-    omega = speed_rpm * RPM_TO_RAD_S
-    tones = []
-    for u in config.measurement.unbalance:
-        f = np.zeros(system.n_dof, dtype=complex)
-        amp = u.amount * omega**2 * np.exp(1j * u.phase)
-        f[system.dof(u.station, "x")] = amp
-        f[system.dof(u.station, "y")] = -1j * amp  # forward: y lags x by 90 deg
-        tones.append(Tone(speed_rpm / 60.0, f))
+    f1 = speed_rpm / 60.0
+    tones = [Tone(f1, unbalance_force(system, u.station, u.amount, u.phase, speed_rpm))
+             for u in config.measurement.unbalance]
     mis = config.measurement.misalignment
     if mis is not None and mis.force_2x > 0:
-        f = np.zeros(system.n_dof, dtype=complex)
-        amp = mis.force_2x * (speed_rpm / 1000.0) ** 2 * np.exp(1j * mis.phase)
-        f[system.dof(mis.station, "x")] = amp
-        f[system.dof(mis.station, "y")] = -1j * amp
-        tones.append(Tone(2.0 * speed_rpm / 60.0, f))
+        tones.append(Tone(2.0 * f1, misalignment_force(system, mis, speed_rpm)))
     return tones
 
 
