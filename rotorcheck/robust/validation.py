@@ -28,6 +28,7 @@ import numpy as np
 
 from rotorcheck.robust.closed_form import gamma_enclose_system_siso
 from rotorcheck.robust.gmu import (
+    DEFAULT_BACKEND,
     STATUS_FAILED,
     STATUS_LOWER_ONLY,
     STATUS_OK,
@@ -91,7 +92,7 @@ def _as_list(x: np.ndarray | Sequence[np.ndarray]) -> list[np.ndarray]:
 def validate(me: np.ndarray, W: np.ndarray | Sequence[np.ndarray],
              Zt: np.ndarray | Sequence[np.ndarray], noise_bound: float | np.ndarray | NoiseBound,
              enclose: str = "data", structure: Structure | None = None, *,
-             fail_at: Collection[int] = (), backend: str = "cvxpy") -> ValidationResult:
+             fail_at: Collection[int] = (), backend: str = DEFAULT_BACKEND) -> ValidationResult:
     """gamma_h per frequency from healthy data.
 
     ``me``: ``(f, n_v + n_out, n_u + n_in)``; ``W``/``Zt``: input (N) and output (m) phasors,
@@ -170,7 +171,7 @@ class DetectionResult:
 def detect(me: np.ndarray, W: np.ndarray, Zt_new: np.ndarray,
            noise_bound: float | np.ndarray | NoiseBound, gamma_h: np.ndarray,
            structure: Structure | None = None, *, rtol: float = 1e-6,
-           fail_at: Collection[int] = (), backend: str = "cvxpy") -> DetectionResult:
+           fail_at: Collection[int] = (), backend: str = DEFAULT_BACKEND) -> DetectionResult:
     """Fault points of new data against the healthy bound ``gamma_h`` (f,).
 
     fault iff ``gamma_required_lower > gamma_h (1 + rtol)`` (certified invalidation).

@@ -346,3 +346,61 @@ def test_implicit_lmi_bound_on_a_hand_built_lft() -> None:
         u, e, _ = res.x / res.x[2]
         # the raw worst-case direction (not polished): accurate to about sqrt(solver tolerance)
         assert abs(abs(u) / abs(W) - ref) / ref < 1e-4 and abs(abs(e) - 1) < 1e-4
+
+
+@pytest.mark.parametrize("backend", ["cvxpy", "clarabel"])
+def test_batched_siso_path_matches_closed_form_and_per_point_path(
+        cases: dict[str, np.ndarray], backend: str, monkeypatch: pytest.MonkeyPatch) -> None:
+    """All 500 SISO cases in ONE call (the per-point numpy batched over the frequencies; every
+    point needing a second pass, a near-cancellation basis or the SQP goes through the per-point
+    path): same tolerances against the closed form as the per-point test, same statuses, methods
+    and solver calls as the per-point path, bounds equal to rounding of the solver's iterates."""
+    args = (cases["me"], cases["W"], cases["Zt"], cases["V"])
+    r = gmu.required_gamma(*args, backend=backend)
+    monkeypatch.setattr(gmu, "_SISO_BATCH", False)
+    p = gmu.required_gamma(*args, backend=backend)
+    ref = cases["ref"]
+    unexpl = ~np.isfinite(ref)
+    assert np.all(r.status[unexpl] == "unexplainable") and np.all(np.isinf(r.gamma_lower[unexpl]))
+    assert np.all(r.status[~unexpl] == "ok")
+    np.testing.assert_array_equal(r.status, p.status)
+    np.testing.assert_array_equal(r.method, p.method)
+    assert r.n_solver_calls == p.n_solver_calls
+    zero = ref == 0
+    assert np.all(r.gamma_lower[zero] == 0) and np.all(r.gamma_upper[zero] == 0)
+    pos = np.isfinite(ref) & ~zero
+    for g in (r.gamma_lower, r.gamma_upper):
+        assert np.max(np.abs(g[pos] - ref[pos]) / ref[pos]) < 1e-6
+    gap = (r.gamma_upper[pos] - r.gamma_lower[pos]) / r.gamma_upper[pos]
+    assert np.all(gap >= -1e-12) and gap.max() < 1e-6
+    # certified lower bound never above the truth, verified Delta never below (away from the
+    # near-cancellation cases, whose accuracy floor is set by the rounding of the data)
+    far = pos & ~np.char.startswith(cases["kind"], "near")
+    assert np.all(r.gamma_lower[far] <= ref[far] * (1 + 1e-9))
+    assert np.all(r.gamma_upper[far] >= ref[far] * (1 - 1e-9))
+    for a, b in ((r.gamma_lower, p.gamma_lower), (r.gamma_upper, p.gamma_upper)):
+        assert np.max(np.abs(a[pos] - b[pos]) / ref[pos]) < 1e-7
+    # the explicit Deltas reproduce the data within the noise bound
+    for i in np.flatnonzero(pos):
+        d = complex(r.delta[i][0][0, 0])
+        me = cases["me"][i]
+        z = me[1, 1] * cases["W"][i] + me[1, 0] * d / (1 - me[0, 0] * d) * me[0, 1] * cases["W"][i]
+        assert abs(cases["Zt"][i] - z) <= cases["V"][i] * (1 + 1e-9) + 1e-12 * abs(cases["Zt"][i])
+        assert abs(d) <= r.gamma_upper[i] * (1 + 1e-12)  # upper = max(|Delta|, lower)
+
+
+def test_default_backend_is_clarabel_and_matches_cvxpy() -> None:
+    rng = np.random.default_rng(8)
+    f = 15
+    G = cplx(rng, f) * 1e-6
+    W = cplx(rng, f) * 5
+    Zt = G * W * (1 + 0.3 * cplx(rng, f))
+    V = 0.3 * np.abs(Zt - G * W)
+    me = lft.additive_me(G)
+    assert gmu.DEFAULT_BACKEND == "clarabel"
+    a = gmu.required_gamma(me, W, Zt, V)
+    b = gmu.required_gamma(me, W, Zt, V, backend="cvxpy")
+    np.testing.assert_array_equal(a.status, b.status)
+    assert a.n_solver_calls == b.n_solver_calls
+    np.testing.assert_allclose(a.gamma_lower, b.gamma_lower, rtol=1e-8)
+    np.testing.assert_allclose(a.gamma_upper, b.gamma_upper, rtol=1e-8)
