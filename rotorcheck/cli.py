@@ -216,7 +216,7 @@ def validate(
     from rotorcheck import workflow
     from rotorcheck.baseline import read_baseline, write_baseline
     from rotorcheck.fileio import check_writable
-    from rotorcheck.robust.noise import noise_bound_manual
+    from rotorcheck.robust.noise import NoiseBound
 
     cfg = workflow.load_rig(workflow.resolve_rig(rig, sweeps[0]))
     runs = [workflow.load_run(p, cfg, run) for p in sweeps]
@@ -229,8 +229,7 @@ def validate(
         if not prior.validated:
             if prior.rig_sha256 != cfg.sha256():
                 raise InputError(target, "/@rig_sha256", "the noise fit was made for another rig description")
-            noise = noise_bound_manual(prior.noise_bound_m)
-            noise.method, noise.confidence = prior.noise_method, prior.noise_confidence
+            noise = NoiseBound(prior.noise_bound_m, prior.noise_method, prior.noise_confidence)
             err.print(f"noise bound V = {prior.noise_bound_m * 1e6:.4g} um from {target} ({prior.noise_method})")
     stems = [out / s for s in workflow.PLOT_STEMS_VALIDATE] if plots else []
     check_writable([st.with_suffix(e) for st in stems for e in (".png", ".pdf")], force)

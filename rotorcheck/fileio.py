@@ -11,6 +11,13 @@ from pathlib import Path
 from rotorcheck.errors import OutputExistsError
 
 
+def umask_mode(path: str | Path) -> None:
+    """Give a mkstemp file (0600) the mode a plain open() would: 0666 less the umask."""
+    mask = os.umask(0)
+    os.umask(mask)
+    os.chmod(path, 0o666 & ~mask)
+
+
 def check_writable(paths: Iterable[str | Path], force: bool) -> None:
     """Refuse (before any work is done) when an output exists and ``force`` is false."""
     existing = [str(p) for p in paths if Path(p).exists()]
@@ -28,9 +35,7 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
     target.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
     os.close(fd)
-    mask = os.umask(0)
-    os.umask(mask)
-    os.chmod(tmp, 0o666 & ~mask)  # the mode a plain open() would give, not mkstemp's 0600
+    umask_mode(tmp)
     tmp_path = Path(tmp)
     try:
         yield tmp_path

@@ -347,11 +347,9 @@ def detect(
     """Steps 4-5: fault points of ``run`` against the healthy ``baseline``, then D_u with its bound."""
     from rotorcheck.nominal import nominal_model
     from rotorcheck.robust import identify, validation
-    from rotorcheck.robust.noise import noise_bound_manual
 
     model = nominal_model(rig, run.frequency_hz, run.speed_rpm)
-    V = noise_bound_manual(baseline.noise_bound_m)
-    det = validation.detect(model.me, run.W, run.Zt, V, baseline.gamma, fail_at=fail_at)
+    det = validation.detect(model.me, run.W, run.Zt, baseline.noise_bound_m, baseline.gamma, fail_at=fail_at)
     ver = validation.verdict(det.fault, det.status, baseline.gamma_status)
     E = model.E
     T = run.frf

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rotorcheck.fe.system import BeamElementInfo
+from rotorcheck.fe.system import BeamElementInfo, section_area, section_second_moment
 
 # local DOF indices of the two bending planes inside an 8x8 element matrix
 X_PLANE = np.array([0, 3, 4, 7])  # u1, psi1, u2, psi2   (psi = du/dz)
@@ -157,12 +157,12 @@ class TimoshenkoBeam:
     @property
     def area(self) -> float:
         """Cross-section area A (m^2)."""
-        return np.pi / 4.0 * (self.outer_diameter**2 - self.inner_diameter**2)
+        return section_area(self.outer_diameter, self.inner_diameter)
 
     @property
     def second_moment(self) -> float:
         """Second moment of area I (m^4); the polar moment is 2 I."""
-        return np.pi / 64.0 * (self.outer_diameter**4 - self.inner_diameter**4)
+        return section_second_moment(self.outer_diameter, self.inner_diameter)
 
     @property
     def shear_coefficient(self) -> float:

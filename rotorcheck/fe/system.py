@@ -19,6 +19,16 @@ RPM_TO_RAD_S = 2.0 * np.pi / 60.0
 DIRECTION_OFFSET = {"x": 0, "y": 1, "theta": 2, "psi": 3}
 
 
+def section_area(outer_diameter: float, inner_diameter: float = 0.0) -> float:
+    """Area of a (hollow) circular section (m^2)."""
+    return np.pi / 4.0 * (outer_diameter**2 - inner_diameter**2)
+
+
+def section_second_moment(outer_diameter: float, inner_diameter: float = 0.0) -> float:
+    """Second moment of area I of a (hollow) circular section (m^4); the polar moment is 2 I."""
+    return np.pi / 64.0 * (outer_diameter**4 - inner_diameter**4)
+
+
 @dataclass(frozen=True)
 class BeamElementInfo:
     """Geometry and material of one finite beam element (after refinement).
@@ -42,12 +52,12 @@ class BeamElementInfo:
     @property
     def area(self) -> float:
         """Cross-section area (m^2)."""
-        return np.pi / 4.0 * (self.outer_diameter**2 - self.inner_diameter**2)
+        return section_area(self.outer_diameter, self.inner_diameter)
 
     @property
     def second_moment(self) -> float:
         """Second moment of area I (m^4)."""
-        return np.pi / 64.0 * (self.outer_diameter**4 - self.inner_diameter**4)
+        return section_second_moment(self.outer_diameter, self.inner_diameter)
 
     @property
     def dofs(self) -> np.ndarray:

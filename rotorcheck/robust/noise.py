@@ -65,10 +65,32 @@ def point_level(confidence: float, n_points: int, family: str = "sidak") -> floa
     raise ValueError(f"family must be 'sidak', 'bonferroni' or 'none', got {family!r}")
 
 
-def _quantile_factor(p: float, n_periods: int | None) -> float:
+def point_miss(confidence: float, n_points: int, family: str = "sidak") -> float:
+    """``1 - point_level``, computed without cancellation (Sidak: ``-expm1(ln(confidence)/n)``)."""
+    if family == "sidak":
+        point_level(confidence, n_points, family)  # argument checks
+        return float(-np.expm1(np.log(confidence) / n_points))
+    return 1.0 - point_level(confidence, n_points, family)
+
+
+def _exp_quantile(miss: float) -> float:
+    """``q`` with ``P(|v| <= sqrt(var) q) = 1 - miss`` for a complex circular Gaussian v."""
+    return float(np.sqrt(-np.log(miss)))
+
+
+def _checked_variance(output_var: np.ndarray) -> tuple[np.ndarray, np.ndarray, int]:
+    """``(var, finite mask, number of finite points)``; negative variances are errors."""
+    var = np.asarray(output_var, dtype=float)
+    finite = np.isfinite(var)
+    if np.any(var[finite] < 0):
+        raise ValueError("variances must be >= 0")
+    return var, finite, int(np.count_nonzero(finite))
+
+
+def _quantile_factor(p: float, n_periods: int | None, miss: float | None = None) -> float:
     """``q`` with ``P(|v| <= sqrt(var) q) = p``: exponential, or F(2, 2(K-1)) for estimated var."""
     if n_periods is None:
-        return float(np.sqrt(-np.log1p(-p)))
+        return _exp_quantile(1.0 - p if miss is None else miss)
     if n_periods < 2:
         raise ValueError("n_periods must be >= 2 to estimate a variance")
     return float(np.sqrt(f_dist.ppf(p, 2, 2 * (n_periods - 1))))
@@ -83,13 +105,9 @@ def noise_bound_from_variance(output_var: np.ndarray, confidence: float = 0.99,
     NaN entries are ignored. ``n_periods``: number of periods the variance was estimated from (uses
     the F quantile), or None to treat the variance as known.
     """
-    var = np.asarray(output_var, dtype=float)
-    finite = np.isfinite(var)
-    if np.any(var[finite] < 0):
-        raise ValueError("variances must be >= 0")
-    n = int(np.count_nonzero(finite))
+    var, finite, n = _checked_variance(output_var)
     p = point_level(confidence, n, family)
-    q = _quantile_factor(p, n_periods)
+    q = _quantile_factor(p, n_periods, point_miss(confidence, n, family))
     sd = np.sqrt(var[finite])
     value = float(sd.max() * q)
     return NoiseBound(value, "variance", confidence, {
@@ -188,11 +206,7 @@ def noise_bound_pooled(output_var: np.ndarray, confidence: float = 0.99, family:
     """
     from scipy.stats import chi2
 
-    var = np.asarray(output_var, dtype=float)
-    finite = np.isfinite(var)
-    if np.any(var[finite] < 0):
-        raise ValueError("variances must be >= 0")
-    n = int(np.count_nonzero(finite))
+    var, finite, n = _checked_variance(output_var)
     p = point_level(confidence, n, family)
     flat = var.ravel()
     idx = np.flatnonzero(finite.ravel())
@@ -210,7 +224,7 @@ def noise_bound_pooled(output_var: np.ndarray, confidence: float = 0.99, family:
             break
         clean = keep
         s2 = float(np.median(flat[clean])) / med_ratio
-    value = float(np.sqrt(s2) * np.sqrt(-np.log1p(-p)))
+    value = float(np.sqrt(s2) * _exp_quantile(point_miss(confidence, n, family)))
     excess = np.setdiff1d(idx, clean) if clean.size < idx.size else np.zeros(0, dtype=int)
     return NoiseBound(value, "pooled", confidence, {
         "family": family, "n_points": n, "point_level": p, "pooled_sd_m": float(np.sqrt(s2)),

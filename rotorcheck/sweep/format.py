@@ -36,6 +36,8 @@ from typing import Any
 import h5py
 import numpy as np
 
+from rotorcheck.fileio import umask_mode
+
 SCHEMA = "rotorcheck.sweep"
 SCHEMA_VERSION = 1
 EXCITATION = "stepped_sine"
@@ -776,7 +778,7 @@ def atomic_target(path: str | os.PathLike[str], force: bool = False, suffix: str
         raise FileExistsError(f"{target}: exists; refusing to overwrite (pass force=True / --force)")
     folder = os.path.dirname(os.path.abspath(target))
     fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=suffix, dir=folder)
-    _umask_mode(tmp)
+    umask_mode(tmp)
     os.close(fd)
     try:
         yield tmp
@@ -962,9 +964,3 @@ __all__ = [
     "write_sweep",
 ]
 
-
-def _umask_mode(path: str) -> None:
-    """Give a mkstemp file (0600) the mode a plain open() would: 0666 less the umask."""
-    mask = os.umask(0)
-    os.umask(mask)
-    os.chmod(path, 0o666 & ~mask)

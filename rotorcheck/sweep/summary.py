@@ -10,11 +10,11 @@ points) the per-point level ``p = P^(1/n)`` gives a family-wise confidence ``P``
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import numpy as np
 
+from rotorcheck.robust.noise import noise_bound_from_variance
 from rotorcheck.sweep.format import SCHEMA_VERSION, Sweep
 
 __all__ = ["sidak_noise_bound", "summarize"]
@@ -23,14 +23,9 @@ __all__ = ["sidak_noise_bound", "summarize"]
 def sidak_noise_bound(output_var: np.ndarray, confidence: float = 0.99) -> float:
     """``V = max sqrt(var) sqrt(-ln(1 - p))`` with ``p = confidence^(1/n)``, n = var.size (m)."""
     var = np.asarray(output_var, dtype=np.float64).reshape(-1)
-    n = var.size
-    if n == 0:
+    if var.size == 0:
         raise ValueError("no points")
-    if not 0.0 < confidence < 1.0:
-        raise ValueError("confidence must be in (0, 1)")
-    # -ln(1 - p) with p = c^(1/n): 1 - p = -expm1(ln(c)/n), accurate for large n
-    one_minus_p = -math.expm1(math.log(confidence) / n)
-    return float(np.sqrt(var.max()) * math.sqrt(-math.log(one_minus_p)))
+    return noise_bound_from_variance(var, confidence, family="sidak").value_m
 
 
 def _noise(var: np.ndarray, confidence: float) -> dict[str, Any]:
