@@ -6,7 +6,11 @@ after fit-noise, ``"validated"`` after validate), ``rig_id``, ``rig_sha256``, ``
 ``noise_method``, ``noise_confidence``, ``uncertainty``, ``parameter``, ``enclose``, ``created_utc``.
 Datasets (validated stage): ``frequency_hz`` (f), ``gamma`` (f), ``gamma_lower`` (f),
 ``gamma_status`` (f, text), ``model_frf`` (f, 1, 1) complex (the nominal Me22),
-``input_phasor`` (f, n_in) and ``output_phasor`` (f, n_out) copied from the (first) healthy sweep.
+``input_phasor`` (f, n_in) and ``output_phasor`` (f, n_out) copied from the (first) healthy sweep
+(after removing shaft-speed harmonics where the sweep stored per-period phasors: root attribute
+``shaft_orders_removed``); for measured detection ``healthy_frf`` (f, n_out) complex m/N (mean over
+the healthy sweeps), ``healthy_frf_var`` (f, n_out) m^2/N^2 (variance of that mean) and
+``healthy_frf_dof`` (f, n_out) (its real degrees of freedom; inf = known).
 """
 
 from __future__ import annotations
@@ -49,6 +53,10 @@ class Baseline:
     model_frf: np.ndarray | None = None
     input_phasor: np.ndarray | None = None
     output_phasor: np.ndarray | None = None
+    healthy_frf: np.ndarray | None = None
+    healthy_frf_var: np.ndarray | None = None
+    healthy_frf_dof: np.ndarray | None = None
+    shaft_orders_removed: int = 0
     extra: dict[str, str] = field(default_factory=dict)
 
     @property
@@ -58,7 +66,8 @@ class Baseline:
 
 _ATTRS = ("rig_id", "rig_sha256", "run_id", "speed_rpm", "noise_bound_m", "noise_method",
           "noise_confidence", "uncertainty", "parameter", "enclose", "stage", "created_utc")
-_DATASETS = ("frequency_hz", "gamma", "gamma_lower", "model_frf", "input_phasor", "output_phasor")
+_DATASETS = ("frequency_hz", "gamma", "gamma_lower", "model_frf", "input_phasor", "output_phasor",
+             "healthy_frf", "healthy_frf_var", "healthy_frf_dof")
 
 
 def write_baseline(baseline: Baseline, path: str | Path) -> None:
@@ -71,6 +80,7 @@ def write_baseline(baseline: Baseline, path: str | Path) -> None:
         for name in _ATTRS:
             h5.attrs[name] = getattr(baseline, name)
         h5.attrs["sweep_sha256"] = ",".join(baseline.sweep_sha256)
+        h5.attrs["shaft_orders_removed"] = int(baseline.shaft_orders_removed)
         for k, v in baseline.extra.items():
             h5.attrs[f"x_{k}"] = v
         for name in _DATASETS:
@@ -105,6 +115,7 @@ def read_baseline(path: str | Path) -> Baseline:
         sweeps = str(h5.attrs.get("sweep_sha256", ""))
         b = Baseline(sweep_sha256=[s for s in sweeps.split(",") if s], **values)  # type: ignore[arg-type]
         b.extra = {k[2:]: str(v) for k, v in h5.attrs.items() if k.startswith("x_")}
+        b.shaft_orders_removed = int(h5.attrs.get("shaft_orders_removed", 0))
         for name in _DATASETS:
             if name in h5:
                 setattr(b, name, h5[name][()])
@@ -117,6 +128,16 @@ def read_baseline(path: str | Path) -> Baseline:
         n = len(b.frequency_hz)  # type: ignore[arg-type]
         if b.gamma.shape != (n,):  # type: ignore[union-attr]
             raise InputError(p, "/gamma", f"shape {b.gamma.shape} does not match frequency_hz ({n},)")  # type: ignore[union-attr]
+        if b.enclose == "measured":
+            for name in ("healthy_frf", "healthy_frf_var", "healthy_frf_dof"):
+                arr = getattr(b, name)
+                if arr is None:
+                    raise InputError(p, f"/{name}", "missing dataset in a baseline for measured detection")
+                if arr.shape[0] != n:
+                    raise InputError(p, f"/{name}", f"shape {arr.shape} does not match frequency_hz ({n},)")
+            var = b.healthy_frf_var
+            if var is not None and np.any((var < 0) | np.isinf(var)):
+                raise InputError(p, "/healthy_frf_var", "variances must be >= 0 and finite (NaN: no estimate)")
     if not np.isfinite(b.noise_bound_m) or b.noise_bound_m < 0:
         raise InputError(p, "/@noise_bound_m", f"must be finite and >= 0, got {b.noise_bound_m}")
     return b

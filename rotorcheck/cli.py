@@ -204,8 +204,10 @@ def validate(
     sweeps: Annotated[list[Path], typer.Argument(help="One or several healthy sweeps (gamma encloses them all).")],
     rig: RigOpt = None,
     out: OutOpt = DEFAULT_OUT,
-    enclose: Annotated[str, typer.Option(help="system (no false alarms on repeat healthy data) | data (FDMVOP)")]
-    = "system",
+    enclose: Annotated[str, typer.Option(
+        help="measured (default: detect against the measured healthy FRF within both sweeps' noise) | "
+             "system (against the nominal model, set enclosing every system consistent with the data) | "
+             "data (the dissertation's FDMVOP)")] = "measured",
     run: RunOpt = None,
     at: Annotated[float | None, typer.Option("--at", help="Frequency (Hz) of the complex-plane plot.")] = None,
     plots: Annotated[bool, typer.Option(help="Write the validation plots.")] = True,
@@ -269,6 +271,8 @@ def detect(
     run: RunOpt = None,
     at: Annotated[float | None, typer.Option("--at", help="Frequency (Hz) of the complex-plane plot.")] = None,
     plots: Annotated[bool, typer.Option(help="Write the detection plots.")] = True,
+    confidence: Annotated[float, typer.Option(
+        help="Family-wise confidence of measured detection (1 - false-alarm probability per sweep).")] = 0.99,
     as_json: JsonOpt = False,
     force: ForceOpt = False,
 ) -> int:
@@ -286,14 +290,19 @@ def detect(
     cfg = workflow.load_rig(workflow.resolve_rig(rig, sweep))
     mrun = workflow.load_run(sweep, cfg, run)
     workflow.check_baseline(base, cfg, mrun, base_path)
-    outcome = workflow.detect(cfg, base, mrun, fail_at=_fail_at())
+    outcome = workflow.detect(cfg, base, mrun, fail_at=_fail_at(), confidence=confidence)
     report = outcome.report()
     plot_files = workflow.detection_plots(outcome, out, at) if plots else []
     files = write_reports(report, out, plot_files)
     v = outcome.verdict
     colour = {"damage": "bold red", "healthy": "bold green", "inconclusive": "bold yellow"}[v.verdict]
     err.print(f"[{colour}]{v.verdict.upper()}[/]: {v.reason}")
-    err.print(f"{report['n_fault_points']} of {report['n_points']} points are fault points")
+    err.print(f"{report['n_fault_points']} of {report['n_points']} points are fault points"
+              + (f" (sweep p-value {report['p_value']:.3g}, {report['confidence']:.0%} family-wise)"
+                 if "p_value" in report else ""))
+    line = workflow.anchored_summary(outcome)
+    if line:
+        err.print(line)
     for p_ in [*map(str, files), *plot_files]:
         err.print(f"wrote {p_}")
     if as_json:
@@ -314,6 +323,12 @@ def simulate(
     noise: Annotated[float | None, typer.Option("--noise", help="Output noise std per sample, m.")] = None,
     seed: Annotated[int, typer.Option("--seed", help="Random seed.")] = 0,
     harmonics: Annotated[int, typer.Option("--harmonics", help="Harmonic-balance order (breathing crack).")] = 8,
+    shaft_angle: Annotated[str, typer.Option(
+        "--shaft-angle", help="Shaft angle at the sweep start, degrees, or 'random' (free-running; drawn from "
+                              "--seed).")] = "0",
+    crack_depth: Annotated[float | None, typer.Option(
+        "--crack-depth", help="Depth of the --fault crack as a fraction of the shaft diameter (e.g. 0.1).")] = None,
+    keep_periods: Annotated[bool, typer.Option(help="Store the per-period phasors.")] = True,
     force: ForceOpt = False,
     as_json: JsonOpt = False,
 ) -> int:
@@ -324,25 +339,32 @@ def simulate(
     from rotorcheck.fileio import check_writable
     from rotorcheck.resources import configs_dir
     from rotorcheck.sweep.format import write_sweep
-    from rotorcheck.sweep.rig_sim import simulate_rig, step_settings
+    from rotorcheck.sweep.rig_sim import shaft_angle_from, simulate_rig, step_settings
 
     if points < 2 or not (0 < f_min < f_max):
         raise InputError(None, "--points/--f-min/--f-max", "need 0 < f-min < f-max and at least 2 points")
     check_writable([output], force)
-    cfg = workflow.load_rig(rig if rig is not None else configs_dir() / "crack_rig_truth.yaml")
-    st = step_settings(cfg)
+    rig_path = rig if rig is not None else configs_dir() / "crack_rig_truth.yaml"
+    cfg = workflow.load_rig(rig_path)
+    angle = shaft_angle_from(shaft_angle, seed)
+    if crack_depth is not None:
+        if fault is None:
+            raise InputError(None, "--crack-depth", "needs --fault naming a crack of the rig")
+        cfg = workflow.rig_with_crack_depth(cfg, rig_path, fault, crack_depth)
+    st = step_settings(cfg, keep_periods=keep_periods)
     if periods is not None:
         st = dataclasses.replace(st, n_periods=periods)
     if noise is not None:
         st = dataclasses.replace(st, output_noise_std=noise)
     grid = np.linspace(f_min, f_max, points)
     sw = simulate_rig(cfg, grid, speed, fault=fault, seed=seed, n_harmonics=harmonics, settings=st,
-                      created_utc=_utc_now())
+                      created_utc=_utc_now(), shaft_angle_rad=angle)
     write_sweep(sw, output, force=force)
     err.print(f"wrote {output}: {sw.generator}; {points} points {f_min:g}-{f_max:g} Hz at {speed:g} rpm")
     if as_json:
         _emit_json({"file": str(output), "rig_id": sw.rig_id, "generator": sw.generator, "speed_rpm": speed,
-                    "fault": fault, "points": points, "seed": seed})
+                    "fault": fault, "points": points, "seed": seed, "shaft_angle_deg": float(np.degrees(angle)),
+                    "crack_depth": crack_depth})
     return EXIT_OK
 
 

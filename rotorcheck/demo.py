@@ -9,8 +9,9 @@ names (``--rig`` defaults to the bundled rig named by the sweep, ``--out`` to ``
     rotorcheck validate   <healthy sweep>
     rotorcheck detect     <new sweep>
 
-Cases: the open crack at 0 rpm, the breathing crack at 1000 rpm, and the repeat healthy sweep at
-1000 rpm (a false-alarm check). Previous demo output is replaced (it is the demo's own folder).
+Cases: the open crack at 0 rpm, the breathing crack at 1000 rpm, the repeat healthy sweep at
+1000 rpm and a free-running (random start angle) healthy pair at 2000 rpm (false-alarm checks).
+Previous demo output is replaced (it is the demo's own folder).
 """
 
 from __future__ import annotations
@@ -27,6 +28,7 @@ CASES = (
     ("open_crack_0rpm", "crack_rig/healthy_0rpm.h5", "crack_rig/open_crack_0rpm.h5"),
     ("breathing_crack_1000rpm", "crack_rig/healthy_1000rpm.h5", "crack_rig/breathing_crack_1000rpm.h5"),
     ("repeat_healthy_1000rpm", "crack_rig/healthy_1000rpm.h5", "crack_rig/healthy_1000rpm_repeat.h5"),
+    ("free_running_healthy_2000rpm", "crack_rig/healthy_2000rpm.h5", "crack_rig/healthy_2000rpm_repeat.h5"),
 )
 VERDICTS = {0: "healthy", 1: "DAMAGE", 2: "error", 3: "inconclusive"}
 

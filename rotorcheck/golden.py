@@ -29,6 +29,16 @@ RTOL = 1e-5
 
 # (name, rig, healthy sweep, new sweep, enclose)
 CASES: tuple[tuple[str, str, str, str, str], ...] = (
+    ("open_crack_0rpm_measured", "crack_rig.yaml", "crack_rig/healthy_0rpm.h5", "crack_rig/open_crack_0rpm.h5",
+     "measured"),
+    ("breathing_1000rpm_measured", "crack_rig.yaml", "crack_rig/healthy_1000rpm.h5",
+     "crack_rig/breathing_crack_1000rpm.h5", "measured"),
+    ("repeat_1000rpm_measured", "crack_rig.yaml", "crack_rig/healthy_1000rpm.h5",
+     "crack_rig/healthy_1000rpm_repeat.h5", "measured"),
+    ("free_running_2000rpm_measured", "crack_rig.yaml", "crack_rig/healthy_2000rpm.h5",
+     "crack_rig/healthy_2000rpm_repeat.h5", "measured"),
+    ("three_mass_trial3_measured", "three_mass_trial3.yaml", "three_mass/healthy.h5", "three_mass/damaged.h5",
+     "measured"),
     ("open_crack_0rpm_system", "crack_rig.yaml", "crack_rig/healthy_0rpm.h5", "crack_rig/open_crack_0rpm.h5", "system"),
     ("open_crack_0rpm_data", "crack_rig.yaml", "crack_rig/healthy_0rpm.h5", "crack_rig/open_crack_0rpm.h5", "data"),
     ("breathing_1000rpm_system", "crack_rig.yaml", "crack_rig/healthy_1000rpm.h5",
@@ -89,7 +99,16 @@ def run_case(name: str, rig: str, healthy: str, new: str, enclose: str, work: Pa
         "probe_gamma_required": [_num(rep["gamma_required"][i]) for i in probe],
         "probe_damage_re": d.real[probe].tolist(),
         "probe_damage_im": d.imag[probe].tolist(),
+        **_anchored(rep, probe),
     }
+
+
+def _anchored(rep: dict[str, Any], probe: np.ndarray) -> dict[str, Any]:
+    if "damage_dynamics_anchored_re" not in rep:
+        return {}
+    a = np.asarray(rep["damage_dynamics_anchored_re"], float)
+    return {"probe_anchored_re": a[probe].tolist(),
+            "probe_anchored_max_abs": [_num(rep["damage_anchored_bound_max_abs"][i]) for i in probe]}
 
 
 def compute() -> dict[str, Any]:

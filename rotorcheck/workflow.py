@@ -24,6 +24,10 @@ VERDICT_RULE = (
 )
 
 
+#: Shaft-speed orders removed from the per-period phasors of a rotating run (1X .. 4X).
+SHAFT_ORDERS = 4
+
+
 def load_rig(path: str | Path) -> RigConfig:
     """Load and validate a rig YAML file (raises ConfigError naming file and field)."""
     return load_config(path)
@@ -67,6 +71,19 @@ def _model_plots(config: RigConfig, system: Any, speed_rpm: float, out: Path, fo
     return [str(f) for f in files]
 
 
+def rig_with_crack_depth(config: RigConfig, rig_path: str | Path | None, fault: str, depth: float) -> RigConfig:
+    """A copy of ``config`` whose crack ``fault`` has ``depth`` (fraction of the shaft diameter);
+    bad values raise InputError naming ``--crack-depth``."""
+    from rotorcheck.faults.compliance import with_crack_depth
+
+    if fault not in config.faults:
+        raise InputError(rig_path, f"faults.{fault}", f"no such fault (known: {', '.join(config.faults) or 'none'})")
+    try:
+        return with_crack_depth(config, fault, depth)
+    except ValueError as exc:
+        raise InputError(None, "--crack-depth", str(exc)) from None
+
+
 # --------------------------------------------------------------------------------------------
 # measured data
 
@@ -87,6 +104,8 @@ class MeasuredRun:
     n_periods: np.ndarray  # (f,)
     band_hz: tuple[float, float]
     n_dropped: int = 0  # points of the run outside the band
+    dof: np.ndarray | None = None  # (f,) real degrees of freedom of output_var (2 (N - q))
+    harmonics_removed: int = 0  # shaft-speed orders removed from the per-period phasors (0: none)
 
     @property
     def frf(self) -> np.ndarray:
@@ -103,12 +122,24 @@ def resolve_rig(rig_path: str | Path | None, sweep_path: str | Path) -> Path:
     return default_rig_path(read_sweep(sweep_path).rig_id)
 
 
-def load_run(path: str | Path, config: RigConfig, run_id: str | None = None) -> MeasuredRun:
-    """Read a sweep file, check it belongs to ``config`` (rig id, channels) and cut the band."""
+def load_run(path: str | Path, config: RigConfig, run_id: str | None = None,
+             shaft_orders: int = SHAFT_ORDERS) -> MeasuredRun:
+    """Read a sweep file, check it belongs to ``config`` (rig id, channels) and cut the band.
+
+    A rotating run that stores per-period phasors gets its shaft-speed harmonics (1X ..
+    ``shaft_orders`` X) fitted out before the phasor and its variance are formed (0: keep the
+    file's averaged phasors).
+    """
     from rotorcheck.sweep.format import read_sweep, sweep_sha256
 
     p = Path(path)
-    sweep = read_sweep(p)
+    return measured_run(read_sweep(p), config, run_id, p, sweep_sha256(p), shaft_orders)
+
+
+def measured_run(sweep: Any, config: RigConfig, run_id: str | None = None, path: str | Path = "<memory>",
+                 sha256: str = "", shaft_orders: int = SHAFT_ORDERS) -> MeasuredRun:
+    """:func:`load_run` on a :class:`rotorcheck.sweep.format.Sweep` already in memory."""
+    p = Path(path)
     if sweep.rig_id != config.rig_id:
         raise InputError(p, "/@rig_id", f"sweep is of rig {sweep.rig_id!r}, the rig file is {config.rig_id!r}")
     if run_id is None:
@@ -132,12 +163,42 @@ def load_run(path: str | Path, config: RigConfig, run_id: str | None = None) -> 
     keep = (f >= lo - 1e-9) & (f <= hi + 1e-9)
     if not np.any(keep):
         raise InputError(p, f"/runs/{run_id}/frequency", f"no point inside the analysis band {lo:g}-{hi:g} Hz")
+    W, Z, var = run.input_phasor[:, 0], run.output_phasor[:, 0], run.output_var[:, 0]
+    dof = 2.0 * (run.n_periods.astype(float) - 1.0)
+    removed = 0
+    if run.period_phasor is not None and run.speed_rpm != 0.0 and shaft_orders > 0:
+        in_col = next(i for i, c in enumerate(sweep.channels) if c.role == "input")
+        out_col = next(i for i, c in enumerate(sweep.channels) if c.role == "output")
+        W, Z, var, dof = remove_shaft_harmonics(run.period_phasor, run.n_periods, f, abs(run.speed_rpm) / 60.0,
+                                                in_col, out_col, shaft_orders)
+        removed = shaft_orders
     return MeasuredRun(
-        path=p, sha256=sweep_sha256(p), rig_id=sweep.rig_id, run_id=run_id, speed_rpm=float(run.speed_rpm),
-        frequency_hz=f[keep], W=run.input_phasor[keep, 0], Zt=run.output_phasor[keep, 0],
-        output_var=run.output_var[keep, 0], n_periods=run.n_periods[keep], band_hz=(lo, hi),
-        n_dropped=int(np.count_nonzero(~keep)),
+        path=p, sha256=sha256, rig_id=sweep.rig_id, run_id=run_id, speed_rpm=float(run.speed_rpm),
+        frequency_hz=f[keep], W=W[keep], Zt=Z[keep],
+        output_var=var[keep], n_periods=run.n_periods[keep], band_hz=(lo, hi),
+        n_dropped=int(np.count_nonzero(~keep)), dof=dof[keep], harmonics_removed=removed,
     )
+
+
+def remove_shaft_harmonics(
+    period_phasor: np.ndarray, n_periods: np.ndarray, frequency_hz: np.ndarray, shaft_hz: float,
+    in_col: int, out_col: int, orders: int = SHAFT_ORDERS,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Input and output phasors (N, m), output variance of the mean (m^2) and its real dof per
+    point, with the shaft-speed harmonics 1X..``orders``X fitted out of the per-period phasors
+    (:func:`rotorcheck.sweep.lockin.shaft_harmonic_fit`; a free-running start angle leaves no leak)."""
+    from rotorcheck.sweep.lockin import shaft_harmonic_fit
+
+    nf = frequency_hz.size
+    W = np.empty(nf, complex)
+    Z = np.empty(nf, complex)
+    var = np.empty(nf)
+    dof = np.empty(nf)
+    for j in range(nf):
+        per = period_phasor[j, : int(n_periods[j]), :]
+        W[j], _, _ = shaft_harmonic_fit(per[:, in_col], float(frequency_hz[j]), shaft_hz, orders)
+        Z[j], var[j], dof[j] = shaft_harmonic_fit(per[:, out_col], float(frequency_hz[j]), shaft_hz, orders)
+    return W, Z, var, dof
 
 
 # --------------------------------------------------------------------------------------------
@@ -202,20 +263,30 @@ def _same_grid(a: np.ndarray, b: np.ndarray) -> bool:
     return a.shape == b.shape and bool(np.all(np.abs(a - b) <= 1e-9 * np.maximum(1.0, np.abs(a))))
 
 
+#: Detection modes (``--enclose``): ``measured`` (default: the healthy set centred on the measured
+#: healthy FRF, uncertainty = the noise of both sweeps), ``system`` and ``data`` (centred on the
+#: nominal model with the model-error bound gamma_h; ``data`` is the dissertation's FDMVOP).
+ENCLOSE_MODES = ("measured", "system", "data")
+
+
 def validate(
     rig: RigConfig,
     runs: list[MeasuredRun],
     noise_bound: Any,
-    enclose: str = "system",
+    enclose: str = "measured",
     fail_at: tuple[int, ...] = (),
 ) -> ValidationOutcome:
-    """Step 3: gamma_h(w) enclosing every healthy run (``enclose`` 'system' or 'data')."""
+    """Step 3: gamma_h(w) enclosing every healthy run, and the measured healthy FRF with its noise.
+
+    ``enclose``: 'measured' (default; gamma_h as for 'system', detection centred on the healthy
+    data), 'system' or 'data' (see :data:`ENCLOSE_MODES`).
+    """
     from rotorcheck.baseline import Baseline
     from rotorcheck.nominal import nominal_model
     from rotorcheck.robust import validation
 
-    if enclose not in ("system", "data"):
-        raise InputError(None, "--enclose", f"must be 'system' or 'data', got {enclose!r}")
+    if enclose not in ENCLOSE_MODES:
+        raise InputError(None, "--enclose", f"must be one of {', '.join(ENCLOSE_MODES)}, got {enclose!r}")
     first = runs[0]
     for r in runs[1:]:
         if not _same_grid(r.frequency_hz, first.frequency_hz):
@@ -225,8 +296,11 @@ def validate(
             raise InputError(r.path, f"/runs/{r.run_id}/@speed_rpm",
                              f"{r.speed_rpm:g} rpm differs from {first.path} ({first.speed_rpm:g} rpm)")
     model = nominal_model(rig, first.frequency_hz, first.speed_rpm)
+    # 'measured' detects against the measured healthy FRF; its gamma is still the model-error bound
+    # of 'system' (what validation is for: how far the nominal model is from the healthy rig)
     res = validation.validate(model.me, [r.W for r in runs], [r.Zt for r in runs], noise_bound,
-                              enclose=enclose, fail_at=fail_at)
+                              enclose="system" if enclose == "measured" else enclose, fail_at=fail_at)
+    healthy = healthy_estimate(runs)
     base = Baseline(
         rig_id=rig.rig_id, rig_sha256=rig.sha256(), sweep_sha256=[r.sha256 for r in runs],
         run_id=first.run_id, speed_rpm=first.speed_rpm, noise_bound_m=float(noise_bound.value_m),
@@ -235,8 +309,25 @@ def validate(
         frequency_hz=first.frequency_hz, gamma=res.gamma, gamma_lower=res.gamma_lower,
         gamma_status=np.asarray(res.status, dtype=str), model_frf=model.frf[:, None, None],
         input_phasor=first.W[:, None], output_phasor=first.Zt[:, None],
+        healthy_frf=healthy.frf, healthy_frf_var=healthy.var, healthy_frf_dof=healthy.dof,
+        shaft_orders_removed=first.harmonics_removed,
     )
     return ValidationOutcome(base, res, model, runs, rig)
+
+
+def frf_estimate(run: MeasuredRun) -> Any:
+    """The run's FRF with its noise (variance of the mean FRF and its dof) for measured detection."""
+    from rotorcheck.robust.measured import frf_estimate as _est
+
+    dof = run.dof if run.dof is not None else 2.0 * (run.n_periods.astype(float) - 1.0)
+    return _est(run.W, run.Zt, run.output_var, dof)
+
+
+def healthy_estimate(runs: list[MeasuredRun]) -> Any:
+    """The measured healthy FRF: the mean of the healthy runs with its variance and Welch dof."""
+    from rotorcheck.robust.measured import combine_sweeps
+
+    return combine_sweeps([frf_estimate(r) for r in runs])
 
 
 # --------------------------------------------------------------------------------------------
@@ -258,6 +349,8 @@ class DetectionOutcome:
     anchored: np.ndarray | None = None  # D_u with E22 anchored at the healthy data (N/m)
     anchored_set: Any = None  # its exact set (noise of both sweeps)
     notes: list[str] = field(default_factory=list)
+    measured: Any = None  # robust.measured.MeasuredDetection (enclose 'measured')
+    anchored_noise_only: Any = None  # the anchored bound over the noise alone (measured)
 
     @property
     def exit_code(self) -> int:
@@ -268,10 +361,11 @@ class DetectionOutcome:
         f = self.run.frequency_hz
         fault = np.asarray(self.detection.fault, dtype=bool)
         ds = self.damage_set
+        m = self.measured
         return {
             "verdict": self.verdict.verdict,
             "verdict_reason": self.verdict.reason,
-            "verdict_rule": VERDICT_RULE,
+            "verdict_rule": MEASURED_RULE if m is not None else VERDICT_RULE,
             "n_points": int(f.size),
             "n_fault_points": int(np.count_nonzero(fault)),
             "fault_frequencies_hz": [float(x) for x in f[fault]],
@@ -288,6 +382,8 @@ class DetectionOutcome:
             "parameter": self.baseline.parameter,
             "enclose": self.baseline.enclose,
             "damage_port": _port_name(self.rig),
+            "shaft_orders_removed": self.run.harmonics_removed,
+            **self._measured_keys(),
             "notes": self.notes,
             "frequency_hz": f,
             "gamma_healthy": self.detection.gamma_healthy,
@@ -305,6 +401,28 @@ class DetectionOutcome:
             **self._anchored_keys(),
         }
 
+    def _measured_keys(self) -> dict[str, Any]:
+        m = self.measured
+        if m is None:
+            return {}
+        return {
+            "confidence": m.confidence,
+            "n_tests": m.n_tests,
+            "point_miss_probability": m.point_miss,
+            "p_value": m.family_p_value,
+            "gamma_meaning": "measured detection: gamma_required = |T_new - T_healthy| (m/N), gamma_healthy = "
+                             "the noise allowance of that difference at the per-point level (m/N)",
+            "point_p_value": m.p_value,
+            "variance_dof": m.dof[:, 0],
+        }
+
+    def _noise_only_keys(self) -> dict[str, Any]:
+        a, b = self.anchored_noise_only, self.anchored_set
+        if a is None:
+            return {}
+        return {"damage_anchored_channel_error": getattr(b, "channel_error", None),
+                "damage_anchored_noise_min_abs": a.min_abs, "damage_anchored_noise_max_abs": a.max_abs}
+
     def _anchored_keys(self) -> dict[str, Any]:
         if self.anchored is None or self.anchored_set is None:
             return {}
@@ -312,8 +430,13 @@ class DetectionOutcome:
         return {
             "damage_dynamics_anchored_re": self.anchored.real,
             "damage_dynamics_anchored_im": self.anchored.imag,
+            "damage_anchored_bound_kind": [str(k) for k in a.kind],
             "damage_anchored_bound_min_abs": a.min_abs,
             "damage_anchored_bound_max_abs": a.max_abs,
+            "damage_anchored_bound_phase_min_deg": np.degrees(a.phase_min),
+            "damage_anchored_bound_phase_max_deg": np.degrees(a.phase_max),
+            "damage_anchored_bound_confidence": self.measured.confidence if self.measured is not None else None,
+            **self._noise_only_keys(),
         }
 
 
@@ -342,36 +465,135 @@ def check_baseline(baseline: Any, rig: RigConfig, run: MeasuredRun, baseline_pat
 
 
 def detect(
-    rig: RigConfig, baseline: Any, run: MeasuredRun, fail_at: tuple[int, ...] = ()
+    rig: RigConfig, baseline: Any, run: MeasuredRun, fail_at: tuple[int, ...] = (), confidence: float = 0.99,
 ) -> DetectionOutcome:
-    """Steps 4-5: fault points of ``run`` against the healthy ``baseline``, then D_u with its bound."""
+    """Steps 4-5: fault points of ``run`` against the healthy ``baseline``, then D_u with its bound.
+
+    The baseline's ``enclose`` picks the detection: 'measured' (the new sweep against the measured
+    healthy FRF, noise of both sweeps, ``confidence`` family-wise; see
+    :mod:`rotorcheck.robust.measured`) or 'system'/'data' (against the nominal model with gamma_h).
+    """
     from rotorcheck.nominal import nominal_model
     from rotorcheck.robust import identify, validation
 
     model = nominal_model(rig, run.frequency_hz, run.speed_rpm)
-    det = validation.detect(model.me, run.W, run.Zt, baseline.noise_bound_m, baseline.gamma, fail_at=fail_at)
-    ver = validation.verdict(det.fault, det.status, baseline.gamma_status)
     E = model.E
     T = run.frf
+    notes: list[str] = []
+    measured = None
+    if baseline.enclose == "measured":
+        from rotorcheck.robust.measured import FrfEstimate, measured_detect
+
+        if not 0.0 < confidence < 1.0:
+            raise InputError(None, "--confidence", f"must be in (0, 1), got {confidence}")
+        healthy = FrfEstimate(baseline.healthy_frf, baseline.healthy_frf_var, baseline.healthy_frf_dof)
+        measured = measured_detect(frf_estimate(run), healthy, confidence, e21=E[:, 1:, 0])
+        fault = measured.fault.copy()
+        status = measured.status.astype("<U13")
+        dist = measured.distance[:, 0].copy()
+        for i in fail_at:  # testing hook: the point could not be decided
+            fault[i], status[i], dist[i] = False, "solver_failed", np.nan
+        det = validation.DetectionResult(dist, dist, measured.radius[:, 0], fault, status, 0.0)
+        ver = measured_verdict(fault, status, confidence, measured.n_tests)
+        if run.harmonics_removed == 0 and run.speed_rpm != 0.0:
+            notes.append("the sweep stores no per-period phasors: shaft-speed harmonics (1X, 2X, ...) could not "
+                         "be removed; with a free-running start angle they may show as differences near kX")
+    else:
+        det = validation.detect(model.me, run.W, run.Zt, baseline.noise_bound_m, baseline.gamma, fail_at=fail_at)
+        ver = validation.verdict(det.fault, det.status, baseline.gamma_status)
     damage = identify.damage_dynamics(E[:, 0, 0], E[:, 0, 1], E[:, 1, 0], E[:, 1, 1], T)
     if model.structure in ("additive", "multiplicative"):
         dset = identify.damage_set_io(E[:, 0, 0], E[:, 0, 1], E[:, 1, 0], E[:, 1, 1], T, baseline.gamma,
                                       baseline.noise_bound_m, run.W, kind=model.structure)
     else:
         dset = identify.damage_set(model.P, T, baseline.gamma)
-    notes = []
+    notes.append("damage_dynamics_* (eq. 3.11 with the nominal E22) carries the nominal model's error of E22 "
+                 "(its size on a healthy shaft is the model error, not damage); damage_dynamics_anchored_* "
+                 "anchors E22 at the measured healthy FRF and is the estimate to read")
     anchored = anchored_set = None
-    if model.structure == "additive" and baseline.input_phasor is not None and baseline.output_phasor is not None:
-        # the member of the inherited set that the healthy data selects: E22 := measured healthy FRF
-        Wh = baseline.input_phasor[:, 0]
-        Th = baseline.output_phasor[:, 0] / Wh
+    noise_only: Any = None
+    Th = _healthy_frf(baseline)
+    if Th is not None:
+        # the member of the inherited set that the healthy data selects: E22 := measured healthy FRF;
+        # its bound: the difference allowance of both sweeps' noise (measured) or the uniform V
         anchored = identify.damage_dynamics(E[:, 0, 0], E[:, 0, 1], E[:, 1, 0], Th, T)
-        anchored_set = identify.damage_set_io(E[:, 0, 0], E[:, 0, 1], E[:, 1, 0], Th, T,
-                                              baseline.noise_bound_m / np.abs(Wh), baseline.noise_bound_m, run.W)
+        if measured is not None:
+            from rotorcheck.robust.measured import anchored_damage_bound, io_model_error
+
+            radius = measured.radius[:, 0]
+            rho = io_model_error(model.frf, Th)
+            anchored_set = anchored_damage_bound(E[:, 0, 0], E[:, 0, 1], E[:, 1, 0], Th, T, radius, rho)
+            noise_only = anchored_damage_bound(E[:, 0, 0], E[:, 0, 1], E[:, 1, 0], Th, T, radius, 0.0)
+            notes.append("damage_anchored_bound_*: every D consistent with both sweeps' noise (at the stated "
+                         "family-wise confidence) and with the model's damage-port channels E11, E12 E21 in error "
+                         "relatively by up to damage_anchored_channel_error (assumed: no more than the model's "
+                         "io channel errs on the healthy data there); damage_anchored_noise_*: noise only")
+        else:
+            Wh = baseline.input_phasor[:, 0]
+            anchored_set = identify.damage_set_io(E[:, 0, 0], E[:, 0, 1], E[:, 1, 0], Th, T,
+                                                  baseline.noise_bound_m / np.abs(Wh), baseline.noise_bound_m,
+                                                  run.W)
     if baseline.noise_bound_m > 0 and model.structure == "parametric":
-        notes.append("parametric structure: the damage bound covers the parameter uncertainty only, "
+        notes.append("parametric structure: the nominal damage bound covers the parameter uncertainty only, "
                      "not the noise (a second uncertainty makes the set non-circular)")
-    return DetectionOutcome(rig, baseline, run, model, det, ver, damage, dset, anchored, anchored_set, notes)
+    return DetectionOutcome(rig, baseline, run, model, det, ver, damage, dset, anchored, anchored_set, notes,
+                            measured, noise_only)
+
+
+def anchored_summary(outcome: DetectionOutcome) -> str:
+    """One line: the anchored damage dynamics (median over the fault points, else the band) and its bound."""
+    if outcome.anchored is None or outcome.anchored_set is None:
+        return ""
+    fault = np.asarray(outcome.detection.fault, dtype=bool)
+    sel = fault if np.any(fault) else np.ones_like(fault)
+    a = outcome.anchored[sel]
+    lo = outcome.anchored_set.min_abs[sel]
+    hi = outcome.anchored_set.max_abs[sel]
+    where = "the fault points" if np.any(fault) else "all points"
+    return (f"damage dynamics at {_port_name(outcome.rig)} (anchored at the healthy data, median over {where}): "
+            f"Re D_u = {np.median(a.real) / 1e3:.4g} kN/m, |D_u| within [{np.median(lo) / 1e3:.4g}, "
+            f"{np.median(hi) / 1e3:.4g}] kN/m (positive: stiffness loss)")
+
+
+def _healthy_frf(baseline: Any) -> np.ndarray | None:
+    if baseline.healthy_frf is not None:
+        return np.asarray(baseline.healthy_frf)[:, 0]
+    if baseline.input_phasor is not None and baseline.output_phasor is not None:
+        return np.asarray(baseline.output_phasor[:, 0] / baseline.input_phasor[:, 0])
+    return None
+
+
+MEASURED_RULE = (
+    "damage if at least one point is a certified fault point: the new FRF differs from the measured healthy "
+    "FRF by more than the noise of both sweeps allows (per point F(2, Welch dof) test on the stored variances, "
+    "Sidak over all points and channels at the stated family-wise confidence: a healthy repeat is called damage "
+    "with probability at most 1 - confidence); otherwise inconclusive if some point could not be tested; "
+    "otherwise healthy"
+)
+
+
+def measured_verdict(fault: np.ndarray, status: np.ndarray, confidence: float, n_tests: int) -> Any:
+    """Sweep verdict of measured detection (:data:`MEASURED_RULE`)."""
+    from rotorcheck.robust.validation import Verdict
+
+    fault = np.asarray(fault, dtype=bool)
+    n = fault.size
+    n_fault = int(np.count_nonzero(fault))
+    undecided = int(np.count_nonzero(~np.isin(np.asarray(status), ["ok", "fault"])))
+    run = 0
+    best = 0
+    for m in fault:
+        run = run + 1 if m else 0
+        best = max(best, run)
+    if n_fault:
+        why = (f"{n_fault} certified fault points at {confidence:.0%} family-wise confidence "
+               f"(Sidak over {n_tests} tests)")
+        return Verdict("damage", why, n, n_fault, undecided, best, 1)
+    if undecided:
+        return Verdict("inconclusive", f"no fault point, {undecided} points could not be tested", n, 0,
+                       undecided, 0, 1)
+    return Verdict("healthy", f"no point differs beyond the noise of both sweeps at {confidence:.0%} "
+                   f"family-wise confidence ({n_tests} tests)", n, 0, 0, 0, 1)
 
 
 # --------------------------------------------------------------------------------------------

@@ -17,6 +17,9 @@ sign pattern of eq. 5.22), the rotating-frame reduction is ``K~_c = sum_ab R_ab(
 exactly like ``(u, v)`` under eq. 5.26, so the fixed-frame matrix is the same construction with
 ``S(t) = T2(phi) R(theta) T2(phi)^T`` (2x2) in place of ``R``.
 
+``F_xi, F_eta`` of eq. 5.25 are the crack's ``compliance_xi/compliance_eta`` or, when it gives
+``depth_ratio``, the strip-method values of :mod:`rotorcheck.faults.compliance`.
+
 ``form`` of the reduction matrix:
 
 - ``"euler_bernoulli"`` (default, the dissertation's eq. 5.24): ``B = E/l^3 [...]`` of eq. 5.22 with
@@ -48,6 +51,7 @@ from rotorcheck.faults.breathing import (
     mayes_davies_fourier,
     mayes_davies_steering,
 )
+from rotorcheck.faults.compliance import crack_compliances
 from rotorcheck.fe.system import BeamElementInfo, MechanicalSystem
 
 __all__ = [
@@ -309,10 +313,12 @@ def crack_stiffness(
         e0 = els[0]
         nu = crack.poisson if crack.poisson is not None else e0.poisson
         radius = 0.5 * e0.outer_diameter
-        assert crack.compliance_xi is not None and crack.compliance_eta is not None
+        if crack.compliance_xi is None and e0.inner_diameter > 0:
+            raise ValueError(f"element {crack.element} is hollow: depth_ratio needs a solid shaft (strip method)")
+        f_xi, f_eta = crack_compliances(crack)
         assert crack.section_length is not None
-        d_xi = delta_i_ratio(crack.compliance_xi, radius, crack.section_length, nu)
-        d_eta = delta_i_ratio(crack.compliance_eta, radius, crack.section_length, nu)
+        d_xi = delta_i_ratio(f_xi, radius, crack.section_length, nu)
+        d_eta = delta_i_ratio(f_eta, radius, crack.section_length, nu)
         if steering is not None:
             steer: Callable[[np.ndarray], np.ndarray] = steering
             coef = _fft_coefficients(steering, n_terms)
@@ -380,12 +386,12 @@ def rotating_reduction(crack: Crack, theta: np.ndarray, poisson: float, radius: 
         assert crack.modulus_factor is not None
         return np.broadcast_to((1.0 - crack.modulus_factor) * np.eye(2), (th.size, 2, 2)).copy()
     nu = crack.poisson if crack.poisson is not None else poisson
-    assert crack.compliance_xi is not None and crack.compliance_eta is not None
+    f_xi, f_eta = crack_compliances(crack)
     assert crack.section_length is not None
     d = np.diag(
         [
-            delta_i_ratio(crack.compliance_xi, radius, crack.section_length, nu),
-            delta_i_ratio(crack.compliance_eta, radius, crack.section_length, nu),
+            delta_i_ratio(f_xi, radius, crack.section_length, nu),
+            delta_i_ratio(f_eta, radius, crack.section_length, nu),
         ]
     )
     f = mayes_davies_steering(th) if crack.model == "mayes_davies" else gasch_steering(th)

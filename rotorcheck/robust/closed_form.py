@@ -17,7 +17,10 @@ The model output is ``Me22 W + b Delta / (1 - a Delta)``, a Moebius map of Delta
   unexplainable case is ``b = 0``), and to ``(|beta| - |b| V) / alpha`` when ``alpha != 0``;
 * enclosing gamma (enclose='system'): the smallest g with the whole data disk inside the image of
   ``|Delta| <= g``: ``(|beta| + |b| V) / alpha``, infinite if ``alpha <= 0`` (the image of
-  ``Delta = oo`` lies in the data disk). Additive: ``(|Zt - G W| + V) / |W|``.
+  ``Delta = oo`` lies in the data disk) or ``b = 0`` (the image is the single point ``Me22 W``
+  whatever g: only ``V = 0`` with ``Zt = Me22 W`` is enclosed, by g = 0). Additive:
+  ``(|Zt - G W| + V) / |W|``. (At ``b = 0`` the formula would give ``1/|a|``, the limit
+  ``b -> 0`` of the outside-of-a-disk images; at ``b = 0`` that image has collapsed to a point.)
 """
 
 from __future__ import annotations
@@ -122,12 +125,13 @@ def gamma_enclose_system_siso(me: np.ndarray, W: np.ndarray, Zt: np.ndarray,
     """Smallest g such that ``{Z : |Z - Zt| <= V}`` lies inside ``{W F_u(Me, Delta) : |Delta| <= g}``.
 
     Exact via the Moebius pre-image of the data disk: ``(|beta| + |b| V) / alpha`` when
-    ``alpha > 0``, else ``inf`` (not enclosable by any finite g). Shape (f,).
+    ``alpha > 0`` and ``b != 0``, else ``inf`` (not enclosable by any finite g; ``b = Me12 Me21 W
+    = 0``: the uncertainty does not reach the output). Shape (f,).
     """
     k = siso_coefficients(me, W, Zt, noise_bound)
     alpha, beta, b, V = k["alpha"], k["beta"], k["b"], k["V"]
     out = np.full(alpha.shape, np.inf)
-    ok = alpha > 0
+    ok = (alpha > 0) & (np.abs(b) > 0)
     out[ok] = (np.abs(beta[ok]) + np.abs(b[ok]) * V[ok]) / alpha[ok]
     # V = 0 and the data equal to the nominal output: nothing to enclose but a point at Delta = 0.
     out[(V == 0) & (np.abs(k["e"]) == 0)] = 0.0

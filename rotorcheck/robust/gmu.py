@@ -74,11 +74,13 @@ parameter, dimensionless for multiplicative); V in m (output displacement).
 from __future__ import annotations
 
 import contextlib
+import contextvars
 import copy
 import time
 import warnings
-from collections.abc import Collection, Iterator, Sequence
+from collections.abc import Callable, Collection, Iterator, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import cvxpy as cp
 import numpy as np
@@ -92,6 +94,7 @@ __all__ = [
     "GammaResult",
     "ImplicitBound",
     "Structure",
+    "check_noise_bound",
     "implicit_lmi_bound",
     "inject_solver_failure",
     "required_gamma",
@@ -102,6 +105,10 @@ STATUS_OK = "ok"
 STATUS_FAILED = "solver_failed"
 STATUS_UNEXPLAINABLE = "unexplainable"
 STATUS_LOWER_ONLY = "lower_only"
+STATUS_BAD_DATA = "bad_data"
+# seconds of solver time per frequency point (every Clarabel call gets the point's remaining budget
+# as its ``time_limit``); a point that exhausts it is 'solver_failed' with the reason
+DEFAULT_TIME_LIMIT = 10.0
 
 _INJECTED: set[int] = set()
 
@@ -193,8 +200,12 @@ class GammaResult:
     """Per-frequency bounds on the required gamma (units of Delta_u), all arrays of shape (f,).
 
     ``status``: 'ok' | 'unexplainable' (no finite gamma explains the data; bounds = inf) |
-    'solver_failed' (bounds NaN) | 'lower_only' (certified lower bound, no explicit Delta found;
-    upper NaN). ``method``: 'precheck' | 'eig' | 'sdp' | 'bisection' | '' per point.
+    'solver_failed' (bounds NaN; ``reason`` says why when known: the solver raised, e.g. Clarabel's
+    PanicException, or the point's time limit ran out) | 'bad_data' (Me, W or Zt not finite at that
+    point: nothing to solve, bounds NaN) | 'lower_only' (certified lower bound, no explicit Delta
+    found; upper NaN). ``method``: 'precheck' | 'eig' | 'sdp' | 'bisection' | 'sdp+bisect' (a
+    stalled SDP re-solved by bisection on the same LMI) | '' per point. ``reason``: '' or a
+    one-line explanation per point.
     """
 
     gamma_lower: np.ndarray
@@ -204,6 +215,7 @@ class GammaResult:
     method: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype="<U12"))
     delta: list[list[np.ndarray] | None] = field(default_factory=list)
     timings: dict[str, float] = field(default_factory=dict)
+    reason: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=object))
 
     @property
     def gamma(self) -> np.ndarray:
@@ -307,10 +319,107 @@ _SISO_BATCH = True
 
 @dataclass
 class _LmiOut:
-    status: str  # 'optimal' | 'inaccurate' | 'unbounded' | 'failed'
+    status: str  # 'optimal' | 'inaccurate' | 'unbounded' | 'failed' | 'aborted'
     value: float = np.nan  # s (max problem) or lambda (feasibility problem)
     theta: list[np.ndarray] = field(default_factory=list)  # D-scale coordinates per variable block
     dual: np.ndarray | None = None  # complex m x m dual of the main LMI
+    reason: str = ""  # why the point was aborted
+    seconds: float = 0.0  # wall time of the point's call (batched first pass)
+
+
+# --------------------------------------------------------------------------------------------------
+# per-point guard: every solver call runs under the budget of the point it belongs to
+
+
+class _SolverAbort(Exception):
+    """A solver call raised something that is not an ordinary error (Clarabel's
+    ``pyo3_runtime.PanicException`` derives from ``BaseException``), or the point's time budget ran
+    out: the point is reported 'solver_failed' with this reason and not retried."""
+
+
+@dataclass
+class _Budget:
+    deadline: float  # time.perf_counter() value
+    seconds: float  # the point's whole budget (for the message)
+
+
+_BUDGET: contextvars.ContextVar[_Budget | None] = contextvars.ContextVar("gmu_point_budget",
+                                                                         default=None)
+
+
+@contextlib.contextmanager
+def _point_budget(seconds: float) -> Iterator[None]:
+    """Solver calls inside the block share ``seconds`` of wall time (one frequency point)."""
+    token = _BUDGET.set(_Budget(time.perf_counter() + seconds, seconds))
+    try:
+        yield
+    finally:
+        _BUDGET.reset(token)
+
+
+def _guarded_call(call: Callable[[float], object]) -> object:
+    """``call(time_limit)`` under the current point's budget.
+
+    ``time_limit`` is the point's remaining time (Clarabel's ``time_limit`` setting). Ordinary
+    exceptions pass through (the callers treat them as a failed solve). A ``BaseException`` that is
+    not ``KeyboardInterrupt``/``SystemExit``/``GeneratorExit`` (a Rust panic surfacing through pyo3),
+    an exhausted budget, or a call that returns after the deadline raises :class:`_SolverAbort`."""
+    budget = _BUDGET.get()
+    if budget is None:
+        remaining = DEFAULT_TIME_LIMIT
+    else:
+        remaining = budget.deadline - time.perf_counter()
+        if remaining <= 0:
+            raise _SolverAbort(f"time limit of {budget.seconds:g} s per point exhausted")
+    try:
+        out = call(remaining)
+    except (KeyboardInterrupt, SystemExit, GeneratorExit):
+        raise
+    except Exception:
+        raise
+    except BaseException as exc:  # pyo3 panics derive from BaseException
+        raise _SolverAbort(f"solver raised {type(exc).__name__}: {exc}") from exc
+    if budget is not None and time.perf_counter() > budget.deadline:
+        raise _SolverAbort(f"time limit of {budget.seconds:g} s per point exceeded")
+    return out
+
+
+def _guarded_point(solve: Callable[[], _LmiOut], seconds: float) -> _LmiOut:
+    """One point's call of the batched first pass: its own budget; an abort becomes an
+    'aborted' result with the reason instead of ending the batch."""
+    t0 = time.perf_counter()
+    try:
+        with _point_budget(seconds):
+            out = solve()
+    except _SolverAbort as exc:
+        out = _LmiOut("aborted", reason=str(exc))
+    out.seconds = time.perf_counter() - t0
+    return out
+
+
+def _project_scales(theta: list[np.ndarray], blocks: Sequence[tuple[str, int]]
+                    ) -> list[np.ndarray]:
+    """D-scale coordinates projected onto their cones (``d >= 0``; Hermitian ``D >= 0`` for a
+    repeated block, coordinates in the :func:`_herm_basis` order).
+
+    An interior point iterate that stopped early ('InsufficientProgress', 'AlmostSolved') can sit
+    slightly outside the cone (``d ~ -1e-7`` for a noise block that is inactive at the optimum).
+    The S-procedure certifies nothing with a negative scale, so every certificate is verified with
+    the projected scales; both backends return them through here."""
+    out = []
+    for th, (kind, k) in zip(theta, blocks, strict=True):
+        th = np.asarray(th, dtype=float).reshape(-1)
+        if kind == "full" or k == 1:
+            out.append(np.maximum(th, 0.0))
+            continue
+        D = sum((t * H for t, H in zip(th, _herm_basis(k), strict=True)),
+                np.zeros((k, k), complex))
+        lam, U = np.linalg.eigh(0.5 * (D + D.conj().T))
+        D = (U * np.maximum(lam, 0.0)) @ U.conj().T
+        iu, ju = np.triu_indices(k, 1)
+        out.append(np.concatenate([np.diag(D).real,
+                                   np.stack([D[iu, ju].real, D[iu, ju].imag], 1).reshape(-1)]))
+    return out
 
 
 def _complexify(Xm: np.ndarray, m: int) -> np.ndarray:
@@ -337,6 +446,7 @@ class _CvxpyLmi:
         else:
             expr = self.G0 - self.var * np.eye(dim)
         cons: list[cp.Constraint] = []
+        self.blocks = blocks
         self.thetas: list[cp.Variable] = []
         self.params: list[list[cp.Parameter]] = []
         traces = []
@@ -370,12 +480,16 @@ class _CvxpyLmi:
             for p, T in zip(ps, ts, strict=True):
                 p.value = _emb(T)
         t0 = time.perf_counter()
-        try:
+
+        def run(limit: float) -> str:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
-                self.problem.solve(solver=cp.CLARABEL, warm_start=False, **_SOLVER_OPTS,
-                                   **_CVXPY_ONLY_OPTS)
-            status = str(self.problem.status)
+                self.problem.solve(solver=cp.CLARABEL, warm_start=False, time_limit=limit,
+                                   **_SOLVER_OPTS, **_CVXPY_ONLY_OPTS)
+            return str(self.problem.status)
+
+        try:
+            status = str(_guarded_call(run))
         except (cp.SolverError, ValueError, ArithmeticError):
             status = "error"
         timing["solve_total"] = timing.get("solve_total", 0.0) + time.perf_counter() - t0
@@ -388,7 +502,8 @@ class _CvxpyLmi:
             return _LmiOut("failed")
         if any(th.value is None for th in self.thetas):
             return _LmiOut("failed")
-        theta = [np.asarray(th.value, dtype=float).reshape(-1) for th in self.thetas]
+        theta = _project_scales([np.asarray(th.value, dtype=float).reshape(-1)
+                                 for th in self.thetas], self.blocks)
         X = self.lmi.dual_value
         m = G0.shape[0]
         dual = _complexify(np.asarray(X), m) if X is not None else None
@@ -493,15 +608,23 @@ class _ClarabelLmi:
     def _call(self, A: sp.csc_matrix, b: np.ndarray, timing: dict[str, float]
               ) -> tuple[str, np.ndarray | None, np.ndarray | None]:
         t0 = time.perf_counter()
-        try:
+
+        def run(limit: float) -> object:
+            self.settings.time_limit = float(limit)
             solver = self.clarabel.DefaultSolver(self.P, self.q, A, b, self.cones, self.settings)
-            sol = solver.solve()
+            return solver.solve()
+
+        sol: Any
+        try:
+            sol = _guarded_call(run)
             status = str(sol.status)
         except (ValueError, RuntimeError, ArithmeticError):
             status = "error"
             sol = None
         dt = time.perf_counter() - t0
         timing["solve_total"] = timing.get("solve_total", 0.0) + dt
+        if status == "MaxTime":
+            raise _SolverAbort("Clarabel stopped at the time limit of the point")
         if sol is None:
             return status, None, None
         timing["clarabel"] = timing.get("clarabel", 0.0) + float(sol.solve_time)
@@ -535,10 +658,11 @@ class _ClarabelLmi:
         status, x, z = self._call(self._matrix(A), b, timing)
         return self._result(status, x, z)
 
-    def solve_many(self, G0: np.ndarray, Gs: np.ndarray, T: np.ndarray, timing: dict[str, float]
-                   ) -> list[_LmiOut]:
+    def solve_many(self, G0: np.ndarray, Gs: np.ndarray, T: np.ndarray, timing: dict[str, float],
+                   time_limit: float = DEFAULT_TIME_LIMIT) -> list[_LmiOut]:
         """``solve`` for a stack of 'maxs' problems with one D-scale each: G0, Gs, T of shape
-        (f, m, m). The conic data of all points are filled at once; one Clarabel call per point."""
+        (f, m, m). The conic data of all points are filled at once; one Clarabel call per point,
+        each under its own budget (:func:`_guarded_point`)."""
         assert self.kind == "maxs" and self.K == 1
         f, r0 = G0.shape[0], self.r0
         A = np.broadcast_to(self.A_dense, (f, *self.A_dense.shape)).copy()
@@ -555,7 +679,8 @@ class _ClarabelLmi:
                 Ai = self.A_csc
             else:
                 Ai = sp.csc_matrix(A[i])
-            out.append(self._result(*self._call(Ai, b[i], timing)))
+            out.append(_guarded_point(lambda Ai=Ai, bi=b[i]: self._result(*self._call(Ai, bi, timing)),
+                                      time_limit))
         return out
 
     def _result(self, status: str, x: np.ndarray | None, z: np.ndarray | None) -> _LmiOut:
@@ -568,7 +693,7 @@ class _ClarabelLmi:
             return _LmiOut("failed")
         if x.size != 1 + K or not np.all(np.isfinite(x)):
             return _LmiOut("failed")
-        theta = [np.array([x[1 + j]]) for j in range(K)]
+        theta = _project_scales([np.array([x[1 + j]]) for j in range(K)], [("full", 1)] * K)
         dual = _complexify(self._smat(z[r0:]), self.m) if np.all(np.isfinite(z)) else None
         return _LmiOut("optimal" if status in ok else "inaccurate", float(x[0]), theta, dual)
 
@@ -1165,7 +1290,10 @@ def _point(pm: _PointModel, mode: str, rtol: float, timing: dict[str, float], ba
             if basis is not None and _pass < 2:
                 basis, kappa, fm0 = None, None, _scaled_forms(pm, ghat)[0]  # retry, plain basis
                 continue
-            return np.nan, np.nan, STATUS_FAILED, calls, method, None
+            if not use_sdp:
+                return np.nan, np.nan, STATUS_FAILED, calls, method, None
+            inaccurate = True  # no verified result at all: the bisection fallback below
+            break
         lower = max(lower, ghat * np.sqrt(out.s_lower)) if np.isfinite(out.s_lower) else np.inf
         cands = [S * x for x in out.candidates] + cands  # latest pass first
         s = out.s_lower
@@ -1196,13 +1324,21 @@ def _point(pm: _PointModel, mode: str, rtol: float, timing: dict[str, float], ba
                          for th, k in zip(out.theta, kappa or [1.0] * len(out.theta), strict=True)]
     if not np.isfinite(lower):
         return np.inf, np.inf, STATUS_UNEXPLAINABLE, calls, method, None
-    upper, best = _upper_from(pm, cands, lower, upper, best)
-    if best is not None and upper > lower * (1 + 1e-7):
-        t_ref = time.perf_counter()
-        d2 = pm.refine(best)
-        timing["refine"] = timing.get("refine", 0.0) + time.perf_counter() - t_ref
-        if d2 is not None:
-            best, upper = d2, pm.gamma_of(d2)
+    upper, best = _explicit_delta(pm, cands, lower, upper, best, timing)
+    if inaccurate and (best is None or upper > lower * (1 + _INACCURATE_GAP) + 1e-300):
+        # the SDP stalled (or failed) and its verified bounds do not close: a stalled iterate's
+        # D-scales may be far from optimal, so solve the same LMI by bisection (feasibility
+        # problems, scale of the uncertainty block fixed) and keep the best verified bounds. The
+        # gap left then is the LMI's own (relaxation gap with several noise blocks), reported as is.
+        fmb = _scaled_forms(pm, ghat, basis, kappa)[0]
+        outb = _engine_bisection(fmb, timing, rtol, True, backend)
+        calls += outb.calls
+        method = "sdp+bisect"
+        if outb.status != "ok" or not np.isfinite(outb.s_lower):
+            return np.nan, np.nan, STATUS_FAILED, calls, method, None
+        lower = max(lower, ghat * np.sqrt(outb.s_lower))
+        upper, best = _explicit_delta(pm, [S * x for x in outb.candidates], lower, upper, best,
+                                      timing)
     if best is None:
         return lower, np.nan, STATUS_LOWER_ONLY, calls, method, None
     # a verified Delta below a verified certificate means the numerics broke, beyond the floor set
@@ -1210,9 +1346,21 @@ def _point(pm: _PointModel, mode: str, rtol: float, timing: dict[str, float], ba
     floor = 1e-7 + 1e3 * np.finfo(float).eps * sig_max / max(excess, 1e-300)
     if upper < lower * (1 - floor):
         return np.nan, np.nan, STATUS_FAILED, calls, method, None
-    if inaccurate and upper > lower * (1 + _INACCURATE_GAP) + 1e-300:
-        return np.nan, np.nan, STATUS_FAILED, calls, method, None
     return lower, max(upper, lower), STATUS_OK, calls, method, best
+
+
+def _explicit_delta(pm: _PointModel, cands: list[np.ndarray], lower: float, upper: float,
+                    best: list[np.ndarray] | None, timing: dict[str, float]
+                    ) -> tuple[float, list[np.ndarray] | None]:
+    """:func:`_upper_from`, then the local SQP refinement when a gap above 1e-7 is left."""
+    upper, best = _upper_from(pm, cands, lower, upper, best)
+    if best is not None and upper > lower * (1 + 1e-7):
+        t_ref = time.perf_counter()
+        d2 = pm.refine(best)
+        timing["refine"] = timing.get("refine", 0.0) + time.perf_counter() - t_ref
+        if d2 is not None:
+            best, upper = d2, pm.gamma_of(d2)
+    return upper, best
 
 
 # --------------------------------------------------------------------------------------------------
@@ -1317,10 +1465,12 @@ class _SisoPoints:
 
 
 def _siso_batch(M: np.ndarray, W: np.ndarray, Zt: np.ndarray, V: np.ndarray, lay: _Layout,
-                noise: str, backend: str, timing: dict[str, float]
+                noise: str, backend: str, timing: dict[str, float],
+                time_limit: float = DEFAULT_TIME_LIMIT
                 ) -> tuple[dict[str, np.ndarray], list[list[np.ndarray] | None], np.ndarray]:
-    """One-SDP bounds for SISO points (arrays over the points). Returns the results, the explicit
-    Deltas, and a mask of the points left to :func:`_point` (their results are placeholders)."""
+    """One-SDP bounds for SISO points (arrays over the points). Returns the results (with the
+    per-point 'reason' and the solver seconds 'spent'), the explicit Deltas, and a mask of the
+    points left to :func:`_point` (their results are placeholders)."""
     f = M.shape[0]
     w = lay.blocks[0].weight
     pts = _SisoPoints(M, W, Zt, V, w, noise)
@@ -1330,6 +1480,8 @@ def _siso_batch(M: np.ndarray, W: np.ndarray, Zt: np.ndarray, V: np.ndarray, lay
     status = np.full(f, STATUS_FAILED, dtype="<U13")
     method = np.full(f, "", dtype="<U12")
     calls = np.zeros(f, dtype=int)
+    reason = np.full(f, "", dtype=object)
+    spent = np.zeros(f)
     deltas: list[list[np.ndarray] | None] = [None] * f
     todo = np.ones(f, dtype=bool)  # handed back to _point
     ac = np.abs(c)
@@ -1353,7 +1505,7 @@ def _siso_batch(M: np.ndarray, W: np.ndarray, Zt: np.ndarray, V: np.ndarray, lay
     idx = np.flatnonzero(run)
     if idx.size == 0:
         return {"lower": lower, "upper": upper, "status": status, "method": method,
-                "calls": calls}, deltas, todo
+                "calls": calls, "reason": reason, "spent": spent}, deltas, todo
     a, m21, m12w, c, Vi = a[idx], m21[idx], m12w[idx], c[idx], V[idx]
     exc, sgm = excess[idx], sig_max[idx]
     n = idx.size
@@ -1388,11 +1540,19 @@ def _siso_batch(M: np.ndarray, W: np.ndarray, Zt: np.ndarray, V: np.ndarray, lay
     T = gram(Ak) - gram(Bk)
     lmi = _lmi(backend, "maxs", 2, (("full", 1),), False)
     if isinstance(lmi, _ClarabelLmi):
-        res = lmi.solve_many(F0, Fu, T, timing)
+        res = lmi.solve_many(F0, Fu, T, timing, time_limit)
     else:
-        res = [lmi.solve(F0[i], Fu[i], [[T[i]]], timing) for i in range(n)]
+        res = [_guarded_point(lambda i=i: lmi.solve(F0[i], Fu[i], [[T[i]]], timing), time_limit)
+               for i in range(n)]
     calls[idx] = 1
     method[idx] = "sdp"
+    spent[idx] = [r.seconds for r in res]
+    # a solver that raised (a pyo3 panic) or ran out of time: that point fails, with the reason
+    aborted = np.array([r.status == "aborted" for r in res])
+    ai = idx[aborted]
+    status[ai] = STATUS_FAILED
+    reason[ai] = [r.reason for r in res if r.status == "aborted"]
+    todo[ai] = False
     solved = np.array([r.status == "optimal" for r in res])
     # a stalled solve ('inaccurate') is kept only if the verified bounds close within 1e-7 below
     inacc = np.array([r.status == "inaccurate" for r in res])
@@ -1451,8 +1611,8 @@ def _siso_batch(M: np.ndarray, W: np.ndarray, Zt: np.ndarray, V: np.ndarray, lay
     lower[bi] = upper[bi] = np.nan
     status[bi] = STATUS_FAILED
     todo[idx[keep]] = False
-    return {"lower": lower, "upper": upper, "status": status, "method": method, "calls": calls}, \
-        deltas, todo
+    return {"lower": lower, "upper": upper, "status": status, "method": method, "calls": calls,
+            "reason": reason, "spent": spent}, deltas, todo
 
 
 def _prepare(me: np.ndarray, W: np.ndarray, Zt: np.ndarray, noise_bound: float | np.ndarray
@@ -1465,17 +1625,37 @@ def _prepare(me: np.ndarray, W: np.ndarray, Zt: np.ndarray, noise_bound: float |
     if W_a.shape[0] != f:
         raise ValueError(f"W has {W_a.shape[0]} frequencies, Zt has {f}")
     M = as_freq_matrix(me, f)
-    V = np.broadcast_to(np.asarray(noise_bound, dtype=float), (f,)).copy()
-    if np.any(V < 0) or not np.all(np.isfinite(V)):
-        raise ValueError("noise_bound must be finite and >= 0")
-    return M, W_a, Zt_a, V
+    return M, W_a, Zt_a, check_noise_bound(noise_bound, f)
+
+
+def check_noise_bound(noise_bound: float | np.ndarray, n_freq: int | None = None) -> np.ndarray:
+    """The noise bound V (m) as a float array ``(n_freq,)`` (or its own shape); ``ValueError``
+    naming the noise bound if any entry is negative, NaN or infinite (a configuration error, not
+    a property of one point's data)."""
+    try:
+        V = np.asarray(noise_bound, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"noise bound V must be a real number or array (m), got {noise_bound!r}"
+                         ) from exc
+    if n_freq is not None:
+        V = np.broadcast_to(V, (n_freq,))
+    with np.errstate(invalid="ignore"):
+        bad = ~(V >= 0) | ~np.isfinite(V)
+    if np.any(bad):
+        where = np.flatnonzero(np.reshape(bad, -1))
+        vals = np.reshape(V, -1)[where]
+        raise ValueError(f"noise bound V must be finite and >= 0 (m); got {vals[:3].tolist()} at "
+                         f"{where.size} of {V.size} point(s) (first index {int(where[0])})")
+    return np.array(V, dtype=float)
 
 
 def _run(me: np.ndarray, W: np.ndarray, Zt: np.ndarray, noise_bound: float | np.ndarray,
          structure: Structure | None, mode: str, rtol: float, fail_at: Collection[int],
-         backend: str) -> GammaResult:
+         backend: str, time_limit: float = DEFAULT_TIME_LIMIT) -> GammaResult:
     if backend not in BACKENDS:
         raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
+    if not time_limit > 0:
+        raise ValueError(f"time_limit must be > 0 s, got {time_limit!r}")
     t0 = time.perf_counter()
     structure = structure or Structure()
     M, W_a, Zt_a, V = _prepare(me, W, Zt, noise_bound)
@@ -1491,19 +1671,31 @@ def _run(me: np.ndarray, W: np.ndarray, Zt: np.ndarray, noise_bound: float | np.
     fails = set(int(i) for i in fail_at) | _INJECTED
     todo = np.ones(f, dtype=bool)
     deltas = [None] * f
+    reason = np.full(f, "", dtype=object)
+    spent = np.zeros(f)  # solver seconds of the batched first pass, charged to the point's budget
+    # a point whose data are not finite (NaN/inf in Me, W or Zt) is marked, never solved
+    finite = (np.all(np.isfinite(M), axis=(1, 2)) & np.all(np.isfinite(W_a), axis=1)
+              & np.all(np.isfinite(Zt_a), axis=1))
+    for i in np.flatnonzero(~finite):
+        if i not in fails:
+            status[i], method[i] = STATUS_BAD_DATA, ""
+            reason[i] = "Me, W or Zt is not finite (NaN or inf) at this point"
+    todo &= finite
     if (_SISO_BATCH and mode != "bisection" and n_out == 1 and lay.nu == 1 and lay.nv == 1
             and len(lay.blocks) == 1 and lay.blocks[0].lmi_kind == "full"):
         # SISO: the per-point numpy batched over the frequencies (same algorithm, see _siso_batch)
-        sel = np.array([i not in fails for i in range(f)], dtype=bool)
+        sel = np.array([i not in fails for i in range(f)], dtype=bool) & finite
         if np.any(sel):
             out, dl, left = _siso_batch(M[sel], W_a[sel], Zt_a[sel], V[sel], lay, structure.noise,
-                                        backend, timing)
+                                        backend, timing, time_limit)
             isel = np.flatnonzero(sel)
             done = isel[~left]
             lower[done] = out["lower"][~left]
             upper[done] = out["upper"][~left]
             status[done] = out["status"][~left]
             method[done] = out["method"][~left]
+            reason[done] = out["reason"][~left]
+            spent[isel] = out["spent"]
             calls += int(out["calls"].sum())  # includes the first passes of points left to _point
             for k, i in enumerate(isel):
                 if not left[k]:
@@ -1516,18 +1708,30 @@ def _run(me: np.ndarray, W: np.ndarray, Zt: np.ndarray, noise_bound: float | np.
         if not todo[i]:
             continue
         pm = _PointModel(M[i], W_a[i], Zt_a[i], float(V[i]), lay, structure.noise)
-        lo, up, st, nc, meth, d = _point(pm, mode, rtol, timing, backend)
+        try:
+            with _point_budget(time_limit - spent[i]):
+                lo, up, st, nc, meth, d = _point(pm, mode, rtol, timing, backend)
+        except _SolverAbort as exc:
+            lo, up, st, nc, meth, d = np.nan, np.nan, STATUS_FAILED, 0, "", None
+            reason[i] = str(exc)
+        except (np.linalg.LinAlgError, ArithmeticError) as exc:
+            lo, up, st, nc, meth, d = np.nan, np.nan, STATUS_FAILED, 0, "", None
+            reason[i] = f"{type(exc).__name__}: {exc}"
         lower[i], upper[i], status[i], method[i] = lo, up, st, meth
         calls += nc
         deltas[i] = d
+    for i in fails:
+        if 0 <= i < f:
+            reason[i] = "injected failure (testing hook)"
     timing["wall"] = time.perf_counter() - t0
-    return GammaResult(lower, upper, status, calls, method, deltas, timing)
+    return GammaResult(lower, upper, status, calls, method, deltas, timing, reason)
 
 
 def required_gamma(me: np.ndarray, W: np.ndarray, Zt: np.ndarray,
                    noise_bound: float | np.ndarray, structure: Structure | None = None, *,
                    fail_at: Collection[int] = (), rtol: float = 1e-8,
-                   backend: str = DEFAULT_BACKEND) -> GammaResult:
+                   backend: str = DEFAULT_BACKEND,
+                   time_limit: float = DEFAULT_TIME_LIMIT) -> GammaResult:
     """Smallest gamma(w) for which ``F_u(Me, gamma Delta) W + V Delta_v`` reproduces ``Zt``.
 
     ``me``: ``(f, n_v + n_out, n_u + n_in)`` complex; ``W``: ``(f, n_in)`` or ``(f,)`` input
@@ -1540,18 +1744,26 @@ def required_gamma(me: np.ndarray, W: np.ndarray, Zt: np.ndarray,
     directly, Clarabel called without cvxpy's per-solve canonicalization; falls back to cvxpy for
     Hermitian D-scales) or 'cvxpy' (the problem built once with cvxpy Parameters, re-solved per
     frequency). SISO data: the per-point numpy is batched over the frequencies (see the module
-    docstring).
+    docstring). ``time_limit``: seconds of solver time per frequency point (default 10).
+
+    Per point, never for the whole batch: data that are not finite give status 'bad_data'; a
+    solver that raises (also a ``BaseException`` such as Clarabel's pyo3 ``PanicException``; only
+    ``KeyboardInterrupt``/``SystemExit`` propagate) or runs out of time gives 'solver_failed' with
+    the reason in ``GammaResult.reason``. A negative, NaN or infinite noise bound is a
+    ``ValueError``.
     """
-    return _run(me, W, Zt, noise_bound, structure, "auto", rtol, fail_at, backend)
+    return _run(me, W, Zt, noise_bound, structure, "auto", rtol, fail_at, backend, time_limit)
 
 
 def required_gamma_bisection(me: np.ndarray, W: np.ndarray, Zt: np.ndarray,
                              noise_bound: float | np.ndarray, structure: Structure | None = None,
                              *, fail_at: Collection[int] = (), rtol: float = 1e-9,
-                             backend: str = DEFAULT_BACKEND) -> GammaResult:
+                             backend: str = DEFAULT_BACKEND,
+                             time_limit: float = DEFAULT_TIME_LIMIT) -> GammaResult:
     """Same bounds by bisection on gamma with an LMI feasibility problem per step (the classic
     approach of the dissertation, section 3.1); for benchmarking the one-SDP formulation."""
-    return _run(me, W, Zt, noise_bound, structure, "bisection", rtol, fail_at, backend)
+    return _run(me, W, Zt, noise_bound, structure, "bisection", rtol, fail_at, backend,
+                time_limit)
 
 
 @dataclass

@@ -11,9 +11,18 @@ exactly: the Moebius coefficients are fitted to the images of Delta = 0 and thre
 (a 4 x 4 homogeneous system, rank 3; the fit residual checks that the map is Moebius), then the
 image of the disk follows in closed form (pole inside the disk -> outside of a circle).
 
-For io-channel structures with noise, ``E22 -> E22 + r Delta`` with ``r = gamma + V/|W|``
-(additive) or ``r = gamma |E22| + V/|W|`` (multiplicative): the data noise ``v/W`` and the model
-uncertainty add in the same channel, so one complex scalar covers both exactly.
+Additive io uncertainty with noise: ``E22 -> E22 + r Delta`` with ``r = gamma + V/|W|``: the data
+noise ``v/W`` and the model uncertainty add in the same channel, so one complex scalar covers both
+exactly.
+
+Multiplicative io uncertainty is applied as validation and :mod:`rotorcheck.nominal` apply it, to
+the whole output including the damage path: ``T = (1 + Delta) H(D) + v/W`` with
+``H(D) = E22 + E21 D (1 - E11 D)^-1 E12``, ``|Delta| <= gamma``, ``|v| <= V``. Without noise
+(or with gamma = 0) the set is again one Moebius image (exact). With both, the set of ``H`` is
+``{(T - n)/(1 + Delta)}``, a product of two disks, which is not a disk: it is enclosed by the
+smallest disk about the product of the centres (triangle inequality, touching the set), which
+``H -> D`` maps exactly. The result is an outer set, exact to first order: its excess is of the
+order ``gamma V/|T W|`` relative.
 """
 
 from __future__ import annotations
@@ -30,6 +39,7 @@ __all__ = [
     "damage_dynamics",
     "damage_set",
     "damage_set_io",
+    "damage_set_multiplicative",
     "io_radius",
     "moebius_disk_image",
 ]
@@ -289,9 +299,78 @@ def io_radius(gamma: np.ndarray, noise_bound: float | np.ndarray, W: np.ndarray,
 def damage_set_io(E11: np.ndarray, E12: np.ndarray, E21: np.ndarray, E22: np.ndarray,
                   T: np.ndarray, gamma: np.ndarray, noise_bound: float | np.ndarray,
                   W: np.ndarray, kind: str = "additive") -> DamageSet:
-    """Exact ``D_u`` set for an additive / multiplicative io uncertainty with noise (SISO, (f,)
-    arrays): ``E22_hat = E22 + r Delta``, ``r`` from :func:`io_radius`. ``T`` = measured
-    ``Zt / W`` of the damaged sweep."""
+    """``D_u`` set for an io uncertainty with noise (SISO, (f,) arrays); ``T`` = measured
+    ``Zt / W`` of the damaged sweep.
+
+    ``kind='additive'``: exact, ``E22_hat = E22 + r Delta``, ``r`` from :func:`io_radius`.
+    ``kind='multiplicative'``: :func:`damage_set_multiplicative` (the uncertainty scales the damage
+    path too, as in validation; outer set, exact without noise)."""
+    if kind == "multiplicative":
+        return damage_set_multiplicative(E11, E12, E21, E22, T, gamma, noise_bound, W)
     r = io_radius(gamma, noise_bound, W, E22, kind)
     me_e = io_me(E11, E12, E21, E22, "additive")
     return damage_set(me_e, T, r)
+
+
+def damage_set_multiplicative(E11: np.ndarray, E12: np.ndarray, E21: np.ndarray, E22: np.ndarray,
+                              T: np.ndarray, gamma: np.ndarray | float,
+                              noise_bound: float | np.ndarray, W: np.ndarray) -> DamageSet:
+    """Set of ``D`` with ``T = (1 + Delta) H(D) + v/W``, ``|Delta| <= gamma``, ``|v| <= V`` (SISO).
+
+    ``H(D) = E22 + E21 D E12 / (1 - E11 D)`` is the damaged receptance without model error; the
+    output multiplicative uncertainty of :mod:`rotorcheck.nominal` (``z = (1 + Delta)(E21 f_d +
+    E22 w)``) scales it whole. With ``r_n = V/|W|`` the possible ``H`` are ``(T - n)/(1 + Delta)``,
+    ``|n| <= r_n``, enclosed by one disk (products of disks ``c_a + rho_a mu``, ``c_b + rho_b nu``
+    lie in the disk about ``c_a c_b`` of radius ``|c_a| rho_b + rho_a |c_b| + rho_a rho_b``):
+
+    * ``gamma < 1``: ``1/(1 + Delta)`` fills the disk about ``1/(1 - g^2)`` of radius
+      ``g/(1 - g^2)``, so ``H`` lies in the disk about ``T/(1 - g^2)`` of radius
+      ``(g |T| + r_n (1 + g))/(1 - g^2)``;
+    * else, if ``q = r_n/|T| < 1``: ``T/H = (1 + Delta)/(1 - n/T)`` lies in the disk about
+      ``1/(1 - q^2)`` of radius ``(g + q (1 + g))/(1 - q^2)``;
+    * else every ``H`` is possible (``Delta = -1`` and ``n = T``): kind 'plane'.
+
+    Both disks are exact when ``V = 0`` or ``gamma = 0`` and touch the true set; ``H -> D`` is a
+    Moebius map, so the image is computed exactly by :func:`moebius_disk_image`. ``gamma`` NaN
+    (no healthy bound): 'undecided'. ``nominal`` is eq. 3.11 with the nominal model
+    (``Delta = 0``, ``n = 0``), a member of the set.
+    """
+    E11, E12, E21, E22, T, W = (np.asarray(x, dtype=complex).reshape(-1)
+                                for x in (E11, E12, E21, E22, T, W))
+    f = max(x.size for x in (E11, E12, E21, E22, T, W))
+    E11, E12, E21, E22, T, W = (np.broadcast_to(x, (f,)) for x in (E11, E12, E21, E22, T, W))
+    g = np.broadcast_to(np.asarray(gamma, dtype=float).reshape(-1), (f,))
+    V = np.broadcast_to(np.asarray(noise_bound, dtype=float).reshape(-1), (f,))
+    if np.any(V < 0) or np.any(g < 0):
+        raise ValueError("gamma and the noise bound V must be >= 0")
+    with np.errstate(divide="ignore", invalid="ignore"):
+        rn = V / np.abs(W)
+        rn = np.where(V == 0, 0.0, rn)
+        aT = np.abs(T)
+        q = np.where(rn == 0, 0.0, rn / aT)
+        use_h = g < 1
+        use_r = ~use_h & (q < 1)
+        ch = T / (1 - g**2)
+        rh = (g * aT + rn * (1 + g)) / (1 - g**2)
+        cr = 1 / (1 - q**2)
+        rr = (g + q * (1 + g)) / (1 - q**2)
+    radius = np.where(use_h, rh, np.where(use_r, rr, np.inf))
+    unit = np.where(np.isnan(g), np.nan,
+                    np.where(~np.isfinite(radius), np.inf, np.where(radius == 0, 0.0, 1.0)))
+    ch, rh = np.where(use_h, ch, 0), np.where(use_h & np.isfinite(rh), rh, 0)
+    cr, rr = np.where(use_r, cr, 1), np.where(use_r & np.isfinite(rr), rr, 0)
+    kk = E12 * E21
+
+    def du(H: np.ndarray) -> np.ndarray:
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return 1.0 / (kk / (H - E22) + E11)
+
+    def fun(mu: np.ndarray) -> np.ndarray:
+        mu = np.asarray(mu, dtype=complex)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            H = np.where(use_h, ch + rh * mu, T / (cr + rr * mu))
+        return du(H)
+
+    out = moebius_disk_image(fun, unit, n_freq=f)
+    out.nominal = du(np.array(T))
+    return out

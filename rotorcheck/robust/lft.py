@@ -259,11 +259,13 @@ def engineering_me(Z: np.ndarray, L: np.ndarray, R: np.ndarray,
 
 def io_me(E11: np.ndarray, E12: np.ndarray, E21: np.ndarray, E22: np.ndarray,
           kind: str = "additive") -> np.ndarray:
-    """Uncertain engineering system with the uncertainty on the io channel only (E22).
+    """Uncertain engineering system with the uncertainty on the io output.
 
-    ``kind='additive'``: ``E22 -> E22 + Delta``; ``'multiplicative'``: ``E22 -> (I + Delta) E22``
-    (output side). Returns ``Me_E`` with ``F_u(Me_E, Delta) = [[E11, E12], [E21, E22_hat]]``,
-    ports (damage, io).
+    ``kind='additive'``: ``E22 -> E22 + Delta`` (E21 unchanged); ``'multiplicative'`` (output
+    side, as :mod:`rotorcheck.nominal` builds it: ``z = (I + Delta)(E21 f_d + E22 w)``):
+    ``[E21, E22] -> (I + Delta) [E21, E22]``, i.e. the damage path to the output is scaled too.
+    Returns ``Me_E`` with ``F_u(Me_E, Delta) = [[E11, E12], [E21_hat, E22_hat]]``, ports
+    (damage, io).
     """
     E11, E12, E21, E22 = (as_freq_matrix(x) for x in (E11, E12, E21, E22))
     f = max(x.shape[0] for x in (E11, E12, E21, E22))
@@ -277,7 +279,7 @@ def io_me(E11: np.ndarray, E12: np.ndarray, E21: np.ndarray, E22: np.ndarray,
                               np.broadcast_to(np.eye(n_in, dtype=complex), (f, n_in, n_in))], 2)
     elif kind == "multiplicative":
         nv, nu = n_out, n_out
-        M12 = np.concatenate([np.zeros((f, nv, nd), complex), E22], 2)
+        M12 = np.concatenate([E21, E22], 2)
     else:
         raise ValueError(f"kind must be 'additive' or 'multiplicative', got {kind!r}")
     M11 = np.zeros((f, nv, nu), complex)

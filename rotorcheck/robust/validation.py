@@ -9,7 +9,10 @@ Validation (FDMVOP): per frequency the healthy uncertainty bound ``gamma_h(w)``:
   it wherever the model error exceeds the noise (false alarms).
 * ``enclose='system'``: the smallest gamma whose model set contains every system consistent with
   the data and V, i.e. the whole data disk ``|Z - Zt| <= V`` (SISO, one complex scalar Delta;
-  exact closed form via the Moebius pre-image; additive: ``(|Zt - G W| + V)/|W|``).
+  exact closed form via the Moebius pre-image; additive: ``(|Zt - G W| + V)/|W|``), in units of the
+  weighted block: ``|Delta| <= weight * gamma`` (the Structure's ``Block.weight``, as in 'data').
+  Where ``Me12 Me21 W = 0`` the uncertainty cannot reach the output: 'unexplainable', never a
+  number (unless ``V = 0`` and the data equal the nominal output exactly: gamma = 0).
 
 Several healthy sweeps: gamma_h is the maximum over the sweeps, point by point.
 
@@ -29,12 +32,15 @@ import numpy as np
 from rotorcheck.robust.closed_form import gamma_enclose_system_siso
 from rotorcheck.robust.gmu import (
     DEFAULT_BACKEND,
+    DEFAULT_TIME_LIMIT,
+    STATUS_BAD_DATA,
     STATUS_FAILED,
     STATUS_LOWER_ONLY,
     STATUS_OK,
     STATUS_UNEXPLAINABLE,
     GammaResult,
     Structure,
+    check_noise_bound,
     required_gamma,
 )
 from rotorcheck.robust.lft import as_freq_matrix
@@ -51,11 +57,17 @@ __all__ = [
 
 STATUS_FAULT = "fault"
 STATUS_NO_BASELINE = "no_baseline"
-_SEVERITY = {STATUS_OK: 0, STATUS_LOWER_ONLY: 1, STATUS_UNEXPLAINABLE: 2, STATUS_FAILED: 3}
+_SEVERITY = {STATUS_OK: 0, STATUS_LOWER_ONLY: 1, STATUS_UNEXPLAINABLE: 2, STATUS_FAILED: 3,
+             STATUS_BAD_DATA: 4}
+_UNDECIDED = (STATUS_FAILED, STATUS_NO_BASELINE, STATUS_BAD_DATA)
 
 
 def _v(noise_bound: float | np.ndarray | NoiseBound) -> float | np.ndarray:
-    return noise_bound.value_m if isinstance(noise_bound, NoiseBound) else noise_bound
+    """V (m) from a number, an array or a :class:`NoiseBound`; ``ValueError`` naming the noise
+    bound if it is negative, NaN or infinite anywhere."""
+    V = noise_bound.value_m if isinstance(noise_bound, NoiseBound) else noise_bound
+    check_noise_bound(V)
+    return V
 
 
 @dataclass
@@ -65,7 +77,8 @@ class ValidationResult:
     ``gamma``: the baseline gamma_h (enclose='data': verified upper bound; 'system': closed form);
     ``gamma_lower``/``gamma_upper``: the LMI pair (equal to ``gamma`` for 'system');
     ``status``: 'ok' | 'unexplainable' (no finite gamma encloses the data) | 'solver_failed' |
-    'lower_only'; worst over the sweeps.
+    'lower_only' | 'bad_data' (Me, W or Zt not finite there); worst over the sweeps;
+    ``reason``: '' or why a point failed (first sweep that gives one).
     """
 
     gamma: np.ndarray
@@ -76,6 +89,7 @@ class ValidationResult:
     noise_bound_m: float | np.ndarray
     n_solver_calls: int = 0
     per_sweep: list[GammaResult] = field(default_factory=list)
+    reason: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=object))
 
     @property
     def enclosed(self) -> bool:
@@ -92,14 +106,16 @@ def _as_list(x: np.ndarray | Sequence[np.ndarray]) -> list[np.ndarray]:
 def validate(me: np.ndarray, W: np.ndarray | Sequence[np.ndarray],
              Zt: np.ndarray | Sequence[np.ndarray], noise_bound: float | np.ndarray | NoiseBound,
              enclose: str = "data", structure: Structure | None = None, *,
-             fail_at: Collection[int] = (), backend: str = DEFAULT_BACKEND) -> ValidationResult:
+             fail_at: Collection[int] = (), backend: str = DEFAULT_BACKEND,
+             time_limit: float = DEFAULT_TIME_LIMIT) -> ValidationResult:
     """gamma_h per frequency from healthy data.
 
     ``me``: ``(f, n_v + n_out, n_u + n_in)``; ``W``/``Zt``: input (N) and output (m) phasors,
     ``(f, n_in)``/``(f, n_out)`` or ``(f,)``, or lists of them for several healthy sweeps (max over
     sweeps); ``noise_bound``: V (m) or a :class:`NoiseBound`; ``enclose``: 'data' | 'system';
-    ``backend``: LMI backend of :func:`rotorcheck.robust.gmu.required_gamma`; ``fail_at``: testing
-    hook (indices treated as solver failures).
+    ``backend``/``time_limit``: LMI backend and per-point solver time limit (s) of
+    :func:`rotorcheck.robust.gmu.required_gamma`; ``fail_at``: testing hook (indices treated as
+    solver failures). ``ValueError`` if V is negative, NaN or infinite anywhere.
     """
     V = _v(noise_bound)
     Ws, Zs = _as_list(W), _as_list(Zt)
@@ -111,36 +127,63 @@ def validate(me: np.ndarray, W: np.ndarray | Sequence[np.ndarray],
     lo = np.full(f, -np.inf)
     up = np.full(f, -np.inf)
     sev = np.zeros(f, dtype=int)
+    reason = np.full(f, "", dtype=object)
     calls = 0
     per: list[GammaResult] = []
     for Wk, Zk in zip(Ws, Zs, strict=True):
         if enclose == "data":
-            res = required_gamma(me, Wk, Zk, V, structure, fail_at=fail_at, backend=backend)
+            res = required_gamma(me, Wk, Zk, V, structure, fail_at=fail_at, backend=backend,
+                                 time_limit=time_limit)
             per.append(res)
             calls += res.n_solver_calls
             g_lo, g_up, st = res.gamma_lower, res.gamma_upper, res.status
+            rk = res.reason
         else:
-            M = as_freq_matrix(me, f)
-            if M.shape[1:] != (2, 2) or (structure is not None and structure.blocks is not None
-                                         and len(structure.blocks) != 1):
-                raise NotImplementedError(
-                    "enclose='system' is implemented for SISO data with one complex scalar "
-                    "uncertainty (Me of shape (f, 2, 2))")
-            g = gamma_enclose_system_siso(M, Wk, Zk, V)
-            st = np.where(np.isfinite(g), STATUS_OK, STATUS_UNEXPLAINABLE)
-            st = np.asarray(st, dtype="<U13")
-            for i in set(int(j) for j in fail_at):
-                st[i], g[i] = STATUS_FAILED, np.nan
+            g, st, rk = _enclose_system(me, Wk, Zk, V, structure, f, fail_at)
             g_lo = g_up = g
         lo = np.fmax(lo, g_lo)
         up = np.fmax(up, g_up)
         sev = np.maximum(sev, np.array([_SEVERITY.get(s, 3) for s in st]))
+        reason = np.where(reason == "", rk, reason)
     inv = {v: k for k, v in _SEVERITY.items()}
     status = np.array([inv[s] for s in sev], dtype="<U13")
     gam = np.where(status == STATUS_OK, up, np.where(status == STATUS_UNEXPLAINABLE, np.inf, np.nan))
-    lo = np.where(status == STATUS_FAILED, np.nan, lo)
-    up = np.where(status == STATUS_FAILED, np.nan, up)
-    return ValidationResult(gam, lo, up, status, enclose, V, calls, per)
+    undecided = np.isin(status, _UNDECIDED)
+    lo = np.where(undecided, np.nan, lo)
+    up = np.where(undecided, np.nan, up)
+    return ValidationResult(gam, lo, up, status, enclose, V, calls, per, reason)
+
+
+def _enclose_system(me: np.ndarray, W: np.ndarray, Zt: np.ndarray, V: float | np.ndarray,
+                    structure: Structure | None, f: int, fail_at: Collection[int]
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """enclose='system' for one sweep: (gamma, status, reason), each (f,).
+
+    The closed form gives the smallest ``|Delta|``; the block bound is ``|Delta| <= weight gamma``,
+    so gamma is that divided by the block weight."""
+    M = as_freq_matrix(me, f)
+    blocks = (structure or Structure()).blocks
+    if M.shape[1:] != (2, 2) or (blocks is not None and len(blocks) != 1):
+        raise NotImplementedError(
+            "enclose='system' is implemented for SISO data with one complex scalar "
+            "uncertainty (Me of shape (f, 2, 2))")
+    block = (structure or Structure()).resolve(1, 1)[0]
+    Wv = np.asarray(W, dtype=complex).reshape(f, -1)
+    Zv = np.asarray(Zt, dtype=complex).reshape(f, -1)
+    if Wv.shape[1] != 1 or Zv.shape[1] != 1:
+        raise NotImplementedError("enclose='system' needs one input and one output")
+    finite = np.all(np.isfinite(M), axis=(1, 2)) & np.isfinite(Wv[:, 0]) & np.isfinite(Zv[:, 0])
+    with np.errstate(invalid="ignore"):
+        g = gamma_enclose_system_siso(M, Wv[:, 0], Zv[:, 0], V) / block.weight
+    st = np.asarray(np.where(np.isfinite(g), STATUS_OK, STATUS_UNEXPLAINABLE), dtype="<U13")
+    reason = np.full(f, "", dtype=object)
+    reason[st == STATUS_UNEXPLAINABLE] = ("no finite gamma encloses the data: the uncertainty "
+                                          "does not reach the output, or alpha <= 0")
+    st[~finite], g[~finite] = STATUS_BAD_DATA, np.nan
+    reason[~finite] = "Me, W or Zt is not finite (NaN or inf) at this point"
+    for i in set(int(j) for j in fail_at):
+        st[i], g[i], reason[i] = STATUS_FAILED, np.nan, "injected failure (testing hook)"
+    return g, st, reason
 
 
 @dataclass
@@ -151,7 +194,8 @@ class DetectionResult:
     explains it, NaN on failure); ``gamma_required_upper``: verified upper bound;
     ``gamma_healthy``: gamma_h; ``fault``: bool; ``status``: 'ok' | 'fault' | 'unexplainable'
     (no finite gamma explains the new data: counted as a fault) | 'solver_failed' (no decision) |
-    'no_baseline' (gamma_h not finite at this point: no decision).
+    'bad_data' (Me, W or the new data not finite at this point: no decision) | 'no_baseline'
+    (gamma_h not finite at this point: no decision); ``reason``: '' or why a point failed.
     """
 
     gamma_required: np.ndarray
@@ -161,6 +205,7 @@ class DetectionResult:
     status: np.ndarray
     rtol: float
     n_solver_calls: int = 0
+    reason: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=object))
 
     @property
     def n_fault(self) -> int:
@@ -171,14 +216,17 @@ class DetectionResult:
 def detect(me: np.ndarray, W: np.ndarray, Zt_new: np.ndarray,
            noise_bound: float | np.ndarray | NoiseBound, gamma_h: np.ndarray,
            structure: Structure | None = None, *, rtol: float = 1e-6,
-           fail_at: Collection[int] = (), backend: str = DEFAULT_BACKEND) -> DetectionResult:
+           fail_at: Collection[int] = (), backend: str = DEFAULT_BACKEND,
+           time_limit: float = DEFAULT_TIME_LIMIT) -> DetectionResult:
     """Fault points of new data against the healthy bound ``gamma_h`` (f,).
 
-    fault iff ``gamma_required_lower > gamma_h (1 + rtol)`` (certified invalidation).
+    fault iff ``gamma_required_lower > gamma_h (1 + rtol)`` (certified invalidation). ``ValueError``
+    if V is negative, NaN or infinite anywhere.
     """
     V = _v(noise_bound)
     gh = np.asarray(gamma_h, dtype=float).reshape(-1)
-    res = required_gamma(me, W, Zt_new, V, structure, fail_at=fail_at, backend=backend)
+    res = required_gamma(me, W, Zt_new, V, structure, fail_at=fail_at, backend=backend,
+                         time_limit=time_limit)
     f = gh.size
     if res.gamma_lower.size != f:
         raise ValueError(f"gamma_h has {f} points, the data {res.gamma_lower.size}")
@@ -188,8 +236,8 @@ def detect(me: np.ndarray, W: np.ndarray, Zt_new: np.ndarray,
         st = res.status[i]
         if not np.isfinite(gh[i]):
             status[i] = STATUS_NO_BASELINE
-        elif st == STATUS_FAILED:
-            status[i] = STATUS_FAILED
+        elif st in (STATUS_FAILED, STATUS_BAD_DATA):
+            status[i] = st
         elif st == STATUS_UNEXPLAINABLE:
             status[i], fault[i] = STATUS_UNEXPLAINABLE, True
         elif res.gamma_lower[i] > gh[i] * (1 + rtol):
@@ -197,7 +245,7 @@ def detect(me: np.ndarray, W: np.ndarray, Zt_new: np.ndarray,
         else:
             status[i] = STATUS_OK
     return DetectionResult(res.gamma_lower, res.gamma_upper, gh, fault, status, rtol,
-                           res.n_solver_calls)
+                           res.n_solver_calls, res.reason)
 
 
 @dataclass
@@ -228,7 +276,7 @@ def verdict(fault: np.ndarray, status: np.ndarray, healthy_status: np.ndarray | 
     Rule: 'damage' if ``n_fault >= max(min_points, ceil(min_fraction * n))`` or the longest run of
     adjacent fault points is ``>= min_run`` (fault points are certified invalidations, so they count
     even when other points could not be decided); otherwise 'inconclusive' if any point is
-    undecided (solver failure, no baseline) or the healthy data could not be enclosed somewhere
+    undecided (solver failure, bad data, no baseline) or the healthy data could not be enclosed somewhere
     (``healthy_status`` not all 'ok'); otherwise 'healthy'.
     """
     fault = np.asarray(fault, dtype=bool)
@@ -237,7 +285,7 @@ def verdict(fault: np.ndarray, status: np.ndarray, healthy_status: np.ndarray | 
     thr = max(min_points, int(np.ceil(min_fraction * n)))
     n_fault = int(np.count_nonzero(fault))
     run = _longest_run(fault)
-    undecided = int(np.count_nonzero(np.isin(status, [STATUS_FAILED, STATUS_NO_BASELINE])))
+    undecided = int(np.count_nonzero(np.isin(status, _UNDECIDED)))
     if n_fault >= thr or run >= min_run:
         why = (f"{n_fault} fault points (threshold {thr})" if n_fault >= thr
                else f"{run} adjacent fault points (threshold {min_run})")
@@ -248,7 +296,7 @@ def verdict(fault: np.ndarray, status: np.ndarray, healthy_status: np.ndarray | 
     if undecided or bad_healthy:
         why = []
         if undecided:
-            why.append(f"{undecided} points undecided (solver failure or no baseline)")
+            why.append(f"{undecided} points undecided (solver failure, bad data or no baseline)")
         if bad_healthy:
             why.append(f"healthy data not enclosed at {bad_healthy} points")
         return Verdict("inconclusive", "; ".join(why), n, n_fault, undecided, run, thr)

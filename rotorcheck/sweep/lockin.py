@@ -29,6 +29,7 @@ __all__ = [
     "average_periods",
     "lockin_periods",
     "samples_per_period",
+    "shaft_harmonic_fit",
     "tone_lockin",
     "white_noise_phasor_var",
 ]
@@ -173,3 +174,72 @@ def white_noise_phasor_var(sample_std: float | np.ndarray, samples_per_period: f
     """
     s = np.asarray(sample_std, dtype=np.float64)
     return 4.0 * s**2 / float(samples_per_period)
+
+
+def shaft_harmonic_fit(
+    per_period: np.ndarray,
+    f_exc_hz: float,
+    shaft_hz: float,
+    orders: int = 4,
+    rtol: float = 1e-6,
+) -> tuple[np.ndarray, np.ndarray, int]:
+    r"""Mean phasor with the shaft-speed harmonics removed, the variance of that mean and its dof.
+
+    A tone at ``F = k * shaft_hz`` (unbalance 1X, misalignment 2X, a cracked rotor's harmonics, or
+    the sidebands ``f + k * shaft_hz`` of a periodic plant) is not synchronous with the excitation
+    ``f``; over consecutive periods of ``T = 1/f`` its lock-in phasor is a geometric sequence
+    (see :func:`tone_lockin`: ``g(a)`` carries ``exp(j a t_k)``, ``t_k = t_0 + k T``):
+
+        X_p = X + sum_k ( b_k z_k^p + c_k conj(z_k)^p ) + noise_p,   z_k = exp(j 2 pi k shaft_hz / f),
+
+    whatever the shaft angle at the start. Least squares over the ``N`` periods with these known
+    ratios estimates ``X`` free of the leak (which a plain mean keeps, and which a random start
+    angle turns into a false difference between two sweeps). Regressors that are numerically
+    dependent on the ones before them (``z = 1``: ``k shaft_hz / f`` an integer, where the tone is
+    either rejected exactly by the lock-in or indistinguishable from ``X``; ``z`` real; two orders
+    aliasing to one ratio) are dropped.
+
+    ``per_period``: ``(N, ...)`` complex per-period phasors of one point. Returns ``(mean (...),
+    var_of_mean (...), dof)``: ``var = s^2 [(A^H A)^{-1}]_{00}`` with the residual variance
+    ``s^2 = |r|^2 / (N - q)`` for ``q`` kept regressors (``E|mean - X|^2`` for circular complex
+    Gaussian noise, independent periods), and ``dof = 2 (N - q)`` real degrees of freedom of that
+    variance estimate (``|mean - X|^2 / var ~ F(2, dof)``). With ``orders = 0``, ``shaft_hz = 0``
+    or too few periods (``N < q + 3`` after dropping) the plain mean is returned with ``dof =
+    2 (N - 1)`` (:func:`average_periods`).
+    """
+    x = np.asarray(per_period, dtype=np.complex128)
+    n = x.shape[0]
+    flat = x.reshape(n, -1)
+    if orders <= 0 or shaft_hz <= 0.0 or n < 5:
+        mean, var, _ = average_periods(x)
+        return mean, var, 2 * (n - 1)
+    p = np.arange(n)
+    cols = [np.ones(n, dtype=np.complex128)]
+    for k in range(1, orders + 1):
+        z = np.exp(2j * np.pi * k * shaft_hz / f_exc_hz)
+        cols += [z**p, np.conj(z) ** p]
+    # greedy Gram-Schmidt: keep a column only if it adds a direction (relative to its own norm)
+    kept: list[np.ndarray] = []
+    basis: list[np.ndarray] = []
+    for c in cols:
+        r = c.copy()
+        for q_ in basis:
+            r -= (q_.conj() @ r) * q_
+        nr = float(np.linalg.norm(r))
+        if nr > rtol * np.linalg.norm(c):
+            kept.append(c)
+            basis.append(r / nr)
+        if len(kept) >= n - 3:
+            break
+    q = len(kept)
+    if q == 1 or n < q + 3:
+        mean, var, _ = average_periods(x)
+        return mean, var, 2 * (n - 1)
+    A = np.stack(kept, axis=1)  # (N, q)
+    coef, *_ = np.linalg.lstsq(A, flat, rcond=None)
+    resid = flat - A @ coef
+    s2 = np.sum(np.abs(resid) ** 2, axis=0) / (n - q)
+    g00 = float(np.real(np.linalg.inv(A.conj().T @ A)[0, 0]))
+    mean = coef[0].reshape(x.shape[1:])
+    var = (s2 * g00).reshape(x.shape[1:])
+    return mean, var, 2 * (n - q)

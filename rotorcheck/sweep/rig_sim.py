@@ -122,8 +122,38 @@ def rig_plant(
     return RigPlant(plant, disturbances, system, in_dof, out_dof)
 
 
-def step_settings(config: RigConfig) -> StepSettings:
-    """Stepped-sine settings from the rig's ``measurement`` section."""
+def at_shaft_angle(rp: RigPlant, speed_rpm: float, shaft_angle_rad: float) -> RigPlant:
+    """The same rig with the shaft at ``shaft_angle_rad`` (rad) at the sweep's t = 0.
+
+    Everything that turns with the shaft (unbalance, misalignment, a crack's orientation) is shifted
+    in time by ``theta0 / Omega`` while the excitation is not; a tone at ``f + k * speed`` (plant
+    sideband) or ``k * speed`` (synchronous disturbance) then gains the factor ``exp(j k theta0)``
+    (time-shift of a linear time-periodic system). ``theta0 = 0`` is a key-phasor-triggered sweep.
+    """
+    if shaft_angle_rad == 0.0 or speed_rpm == 0.0:
+        return rp
+    shaft_hz = speed_rpm / 60.0
+    base = rp.plant
+
+    def order(offset_hz: np.ndarray) -> np.ndarray:
+        return np.rint(np.asarray(offset_hz, dtype=float) / shaft_hz)
+
+    def tones(f_hz: float) -> tuple[np.ndarray, np.ndarray]:
+        tf, ta = base.tones(f_hz)
+        tf = np.asarray(tf, dtype=float).reshape(-1)
+        ta = np.asarray(ta, dtype=complex).reshape(tf.size, base.n_out)
+        return tf, ta * np.exp(1j * order(tf - f_hz) * shaft_angle_rad)[:, None]
+
+    plant = Plant(tones, base.n_out, base.name)
+    dist = [Tone(d.freq_hz, np.asarray(d.amplitude) * np.exp(1j * float(order(np.asarray(d.freq_hz))) *
+                                                            shaft_angle_rad))
+            for d in rp.disturbances]
+    return RigPlant(plant, dist, rp.system, rp.in_dof, rp.out_dof)
+
+
+def step_settings(config: RigConfig, keep_periods: bool = True) -> StepSettings:
+    """Stepped-sine settings from the rig's ``measurement`` section (per-period phasors kept unless
+    ``keep_periods`` is False: they let the analysis remove shaft-speed harmonics)."""
     m = config.measurement
     return StepSettings(
         n_periods=m.n_periods,
@@ -132,7 +162,22 @@ def step_settings(config: RigConfig) -> StepSettings:
         force_amplitude=m.force_amplitude,
         output_noise_std=m.output_noise_std,
         input_noise_std=m.input_noise_std,
+        keep_periods=keep_periods,
     )
+
+
+def shaft_angle_from(spec: str | float, seed: int) -> float:
+    """Start angle (rad) from ``"random"`` (uniform over a turn, drawn from ``seed``: reproducible)
+    or a number in degrees."""
+    if isinstance(spec, str) and spec.strip().lower() == "random":
+        return float(np.random.default_rng([int(seed), 0x5A4F]).uniform(0.0, 2.0 * np.pi))
+    try:
+        deg = float(spec)
+    except ValueError:
+        raise InputError(None, "--shaft-angle", f"expected degrees or 'random', got {spec!r}") from None
+    if not np.isfinite(deg):
+        raise InputError(None, "--shaft-angle", f"must be finite, got {spec!r}")
+    return float(np.radians(deg))
 
 
 def simulate_rig(
@@ -145,15 +190,24 @@ def simulate_rig(
     created_utc: str = "2026-01-01T00:00:00Z",
     n_harmonics: int = 8,
     settings: StepSettings | None = None,
+    shaft_angle_rad: float = 0.0,
 ) -> Sweep:
-    """Simulated stepped-sine sweep of ``config`` (seeded, deterministic) as a one-run Sweep."""
-    rp = rig_plant(config, speed_rpm, fault, n_harmonics)
+    """Simulated stepped-sine sweep of ``config`` (seeded, deterministic) as a one-run Sweep.
+
+    ``shaft_angle_rad``: shaft angle at the sweep's start (0: key-phasor triggered; any other value
+    a free-running start, see :func:`at_shaft_angle`). Per-period phasors are stored when
+    ``settings.keep_periods``.
+    """
+    rp = at_shaft_angle(rig_plant(config, speed_rpm, fault, n_harmonics), speed_rpm, shaft_angle_rad)
     st = settings if settings is not None else step_settings(config)
     res = simulate_fast(rp.plant, np.asarray(freq_hz, dtype=float), st, rp.disturbances, rng=seed)
     rid = run_id or f"{speed_rpm:g}rpm"
     what = f"fault {fault!r}" if fault else "healthy"
-    notes = f"{what}; seed {seed}; {st.n_periods} periods; noise std {st.output_noise_std} m/sample"
-    run = res.to_run(rid, speed_rpm, notes=notes)
+    n_per = st.n_periods if isinstance(st.n_periods, int) else f"{min(st.n_periods)}-{max(st.n_periods)}"
+    notes = (f"{what}; seed {seed}; {n_per} periods; noise std {st.output_noise_std} m/sample; "
+             f"shaft angle at start {np.degrees(shaft_angle_rad):.6g} deg")
+    channels = rig_channels(config)
+    run = res.to_run(rid, speed_rpm, channels=channels if st.keep_periods else None, notes=notes)
     generator = (
         f"rotorcheck {__version__} simulate (rig {config.rig_id} sha256 {config.sha256()[:12]}, {what})"
     )
@@ -162,6 +216,6 @@ def simulate_rig(
         source="simulated",
         generator=generator,
         created_utc=created_utc,
-        channels=rig_channels(config),
+        channels=channels,
         runs={rid: run},
     )

@@ -19,7 +19,7 @@ import numpy as np
 from rotorcheck.config import load_config
 from rotorcheck.resources import configs_dir
 from rotorcheck.sweep.format import Sweep, compare_sweeps, read_sweep, write_sweep
-from rotorcheck.sweep.rig_sim import simulate_rig
+from rotorcheck.sweep.rig_sim import shaft_angle_from, simulate_rig, step_settings
 
 CREATED_UTC = "2026-01-01T00:00:00Z"
 
@@ -39,10 +39,15 @@ class Sample:
     make: Callable[[], Sweep]
 
 
-def _crack_rig(fault: str | None, speed: float, grid: np.ndarray, seed: int) -> Callable[[], Sweep]:
+def _crack_rig(fault: str | None, speed: float, grid: np.ndarray, seed: int,
+               free_running: bool = False) -> Callable[[], Sweep]:
+    """A crack-rig sample; rotating runs store per-period phasors (shaft harmonics removable);
+    ``free_running``: the shaft angle at the start is random (drawn from ``seed``)."""
     def make() -> Sweep:
         truth = load_config(configs_dir() / "crack_rig_truth.yaml")
-        return simulate_rig(truth, grid, speed, fault=fault, seed=seed, created_utc=CREATED_UTC)
+        angle = shaft_angle_from("random", seed) if free_running else 0.0
+        return simulate_rig(truth, grid, speed, fault=fault, seed=seed, created_utc=CREATED_UTC,
+                            settings=step_settings(truth, keep_periods=speed != 0.0), shaft_angle_rad=angle)
 
     return make
 
@@ -50,7 +55,8 @@ def _crack_rig(fault: str | None, speed: float, grid: np.ndarray, seed: int) -> 
 def _three_mass(fault: str | None) -> Callable[[], Sweep]:
     def make() -> Sweep:
         truth = load_config(configs_dir() / "three_mass_truth.yaml")
-        return simulate_rig(truth, GRID_THREE_MASS, 0.0, fault=fault, seed=0, created_utc=CREATED_UTC)
+        return simulate_rig(truth, GRID_THREE_MASS, 0.0, fault=fault, seed=0, created_utc=CREATED_UTC,
+                            settings=step_settings(truth, keep_periods=False))
 
     return make
 
@@ -58,10 +64,18 @@ def _three_mass(fault: str | None) -> Callable[[], Sweep]:
 SAMPLES: tuple[Sample, ...] = (
     Sample("crack_rig/healthy_0rpm.h5", _crack_rig(None, 0.0, GRID_0RPM, seed=101)),
     Sample("crack_rig/open_crack_0rpm.h5", _crack_rig("open_crack", 0.0, GRID_0RPM, seed=102)),
-    Sample("crack_rig/healthy_1000rpm.h5", _crack_rig(None, 1000.0, GRID_1000RPM, seed=103)),
+    # seed 108, not 103: with the truth rig of issue 9, seed 103 drew a baseline with a 3.45-sigma point
+    # (91.1 Hz; family-wise p = 0.002 against the noiseless truth) that 3 of 40 fresh repeats then flagged
+    # (measured detection, 99 %); the bundled baseline shows the typical case, bench/detection_power.py
+    # measures the false-alarm rate over fresh pairs
+    Sample("crack_rig/healthy_1000rpm.h5", _crack_rig(None, 1000.0, GRID_1000RPM, seed=108)),
     Sample("crack_rig/breathing_crack_1000rpm.h5",
            _crack_rig("breathing_crack", 1000.0, GRID_1000RPM, seed=104)),
     Sample("crack_rig/healthy_1000rpm_repeat.h5", _crack_rig(None, 1000.0, GRID_1000RPM, seed=105)),
+    # free-running (random start angle): 1X at 33.3 Hz and 2X at 66.7 Hz (beside mode 1) in band
+    Sample("crack_rig/healthy_2000rpm.h5", _crack_rig(None, 2000.0, GRID_1000RPM, seed=106, free_running=True)),
+    Sample("crack_rig/healthy_2000rpm_repeat.h5",
+           _crack_rig(None, 2000.0, GRID_1000RPM, seed=107, free_running=True)),
     Sample("three_mass/healthy.h5", _three_mass(None)),
     Sample("three_mass/damaged.h5", _three_mass("stiffness_loss")),
 )
