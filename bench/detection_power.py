@@ -39,8 +39,8 @@ from rotorcheck.sweep.rig_sim import simulate_rig, step_settings
 
 GRID = np.linspace(30.0, 600.0, 262)
 NOISE = (1.0, 4.0, 16.0)
-DEPTHS = (0.025, 0.05, 0.10, 0.20, 0.30, 0.40, 0.50)
-MODULUS = (0.995, 0.99, 0.98, 0.95, 0.90, 0.80, 0.46)
+DEPTHS = (0.01, 0.015, 0.025, 0.035, 0.05, 0.075, 0.10, 0.20, 0.30, 0.50)
+MODULUS = (0.9995, 0.999, 0.998, 0.995, 0.99, 0.98, 0.95, 0.90, 0.80, 0.46)
 DETECTORS = ("default", "system", "model-free", "chi2")
 
 
@@ -141,7 +141,31 @@ def table(result: dict[str, Any]) -> str:
             r = by_noise.get(n, {})
             cells += [f"{r[d]:.2f}" if d in r else "" for d in DETECTORS]
         lines.append(f"| {case} | {kinds[case]} | " + " | ".join(cells) + " |")
+    lines += ["", "smallest severity detected in >= 90 % of the sweeps (and every larger one):", ""]
+    lines.append("| crack | " + " | ".join(f"{d} {n:g}x" for n in noises for d in DETECTORS) + " |")
+    lines.append("|---|" + "---:|" * (len(noises) * len(DETECTORS)))
+    for prefix, label, key in (("breathing", "breathing, depth of diameter", _depth),
+                               ("open crack", "open crack, stiffness loss 1 - E factor", _loss)):
+        ordered = sorted((c for c in cases if c.startswith(prefix)), key=key)
+        cells = []
+        for n in noises:
+            for d in DETECTORS:
+                best = "none"
+                for c in reversed(ordered):  # from the largest severity down, while detected
+                    if cases[c].get(n, {}).get(d, 0.0) < 0.9:
+                        break
+                    best = f"{key(c):.3g} %"
+                cells.append(best)
+        lines.append(f"| {label} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
+
+
+def _depth(case: str) -> float:
+    return float(case.split()[1].rstrip("%"))
+
+
+def _loss(case: str) -> float:
+    return 100.0 * (1.0 - float(case.split()[-1]))
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -10,7 +10,8 @@ Datasets (validated stage): ``frequency_hz`` (f), ``gamma`` (f), ``gamma_lower``
 (after removing shaft-speed harmonics where the sweep stored per-period phasors: root attribute
 ``shaft_orders_removed``); for measured detection ``healthy_frf`` (f, n_out) complex m/N (mean over
 the healthy sweeps), ``healthy_frf_var`` (f, n_out) m^2/N^2 (variance of that mean) and
-``healthy_frf_dof`` (f, n_out) (its real degrees of freedom; inf = known).
+``healthy_frf_dof`` (f, n_out) (its real degrees of freedom; inf = known); with the 'per-point' noise
+method ``noise_bound_per_point_m`` (f) m (``noise_bound_m`` is then its maximum).
 """
 
 from __future__ import annotations
@@ -57,6 +58,7 @@ class Baseline:
     healthy_frf_var: np.ndarray | None = None
     healthy_frf_dof: np.ndarray | None = None
     shaft_orders_removed: int = 0
+    noise_bound_per_point_m: np.ndarray | None = None
     extra: dict[str, str] = field(default_factory=dict)
 
     @property
@@ -67,7 +69,7 @@ class Baseline:
 _ATTRS = ("rig_id", "rig_sha256", "run_id", "speed_rpm", "noise_bound_m", "noise_method",
           "noise_confidence", "uncertainty", "parameter", "enclose", "stage", "created_utc")
 _DATASETS = ("frequency_hz", "gamma", "gamma_lower", "model_frf", "input_phasor", "output_phasor",
-             "healthy_frf", "healthy_frf_var", "healthy_frf_dof")
+             "healthy_frf", "healthy_frf_var", "healthy_frf_dof", "noise_bound_per_point_m")
 
 
 def write_baseline(baseline: Baseline, path: str | Path) -> None:
@@ -138,6 +140,9 @@ def read_baseline(path: str | Path) -> Baseline:
             var = b.healthy_frf_var
             if var is not None and np.any((var < 0) | np.isinf(var)):
                 raise InputError(p, "/healthy_frf_var", "variances must be >= 0 and finite (NaN: no estimate)")
+    per = b.noise_bound_per_point_m
+    if per is not None and (per.ndim != 1 or np.any(per < 0) or np.any(np.isinf(per))):
+        raise InputError(p, "/noise_bound_per_point_m", "must be a 1-D array of values >= 0 (NaN: no estimate)")
     if not np.isfinite(b.noise_bound_m) or b.noise_bound_m < 0:
         raise InputError(p, "/@noise_bound_m", f"must be finite and >= 0, got {b.noise_bound_m}")
     return b

@@ -160,7 +160,7 @@ def fit_noise(
     sweep: Annotated[Path | None, typer.Argument(help="Healthy sweep (default: bundled healthy_1000rpm).")] = None,
     rig: RigOpt = None,
     out: OutOpt = DEFAULT_OUT,
-    method: Annotated[str, typer.Option(help="pooled | max | floor | manual")] = "pooled",
+    method: Annotated[str, typer.Option(help="pooled | per-point | max | floor | manual")] = "pooled",
     value: Annotated[float | None, typer.Option("--value", help="Manual bound, m (--method manual).")] = None,
     confidence: Annotated[float, typer.Option(help="Family-wise confidence over the points.")] = 0.99,
     run: RunOpt = None,
@@ -185,7 +185,7 @@ def fit_noise(
                             run_id=mrun.run_id, speed_rpm=mrun.speed_rpm, noise_bound_m=nb.value_m,
                             noise_method=nb.method, noise_confidence=float(nb.confidence or 0.0),
                             uncertainty=cfg.uncertainty.structure, parameter=cfg.uncertainty.parameter or "",
-                            stage="noise"), target)
+                            stage="noise", noise_bound_per_point_m=nb.details.get("per_point_m")), target)
     conf = f", {nb.confidence:.0%} family-wise over {mrun.frequency_hz.size} points" if nb.confidence else ""
     err.print(f"noise bound V = {nb.value_m * 1e6:.4g} um ({nb.method}{conf}) from {sweep_path}")
     excess = nb.details.get("excess_scatter_hz", [])
@@ -231,7 +231,9 @@ def validate(
         if not prior.validated:
             if prior.rig_sha256 != cfg.sha256():
                 raise InputError(target, "/@rig_sha256", "the noise fit was made for another rig description")
-            noise = NoiseBound(prior.noise_bound_m, prior.noise_method, prior.noise_confidence)
+            per = prior.noise_bound_per_point_m
+            noise = NoiseBound(prior.noise_bound_m, prior.noise_method, prior.noise_confidence,
+                               {} if per is None else {"per_point_m": per})
             err.print(f"noise bound V = {prior.noise_bound_m * 1e6:.4g} um from {target} ({prior.noise_method})")
     stems = [out / s for s in workflow.PLOT_STEMS_VALIDATE] if plots else []
     check_writable([st.with_suffix(e) for st in stems for e in (".png", ".pdf")], force)

@@ -205,7 +205,7 @@ def remove_shaft_harmonics(
 # step 2: noise bound
 
 
-NOISE_METHODS = ("pooled", "max", "floor", "manual")
+NOISE_METHODS = ("pooled", "per-point", "max", "floor", "manual")
 
 
 def fit_noise(
@@ -219,7 +219,9 @@ def fit_noise(
     scatter is far above the pool (F test at the same family-wise level) are listed in
     ``details["excess_scatter_hz"]``. ``max``: the largest per-point bound (conservative).
     ``floor``: the dissertation's noise floor (scatter of the data around a smooth local fit).
-    ``manual``: ``manual_m`` as given.
+    ``manual``: ``manual_m`` as given. ``per-point``: V(w) per point from each point's own variance
+    and degrees of freedom (F quantile; ``details["per_point_m"]``), used per frequency by
+    validate/detect with ``--enclose system|data`` (detect then takes the new sweep's own V(w)).
     """
     from rotorcheck.robust import noise
 
@@ -227,6 +229,8 @@ def fit_noise(
         if manual_m is None or not np.isfinite(manual_m) or manual_m < 0:
             raise InputError(None, "--value", "a manual noise bound needs a finite value >= 0 (m)")
         return noise.noise_bound_manual(float(manual_m))
+    if method == "per-point":
+        return noise.noise_bound_per_point(run.output_var, _dof(run), confidence)
     if method == "max":
         nb = noise.noise_bound_from_variance(run.output_var, confidence, n_periods=int(np.min(run.n_periods)))
     elif method == "pooled":
@@ -298,7 +302,10 @@ def validate(
     model = nominal_model(rig, first.frequency_hz, first.speed_rpm)
     # 'measured' detects against the measured healthy FRF; its gamma is still the model-error bound
     # of 'system' (what validation is for: how far the nominal model is from the healthy rig)
-    res = validation.validate(model.me, [r.W for r in runs], [r.Zt for r in runs], noise_bound,
+    V = noise_values(noise_bound)
+    if not np.isscalar(V):  # per-point: every healthy run's own V(w), the largest per point
+        V = np.max([noise_values(noise_bound, r) for r in runs], axis=0)
+    res = validation.validate(model.me, [r.W for r in runs], [r.Zt for r in runs], V,
                               enclose="system" if enclose == "measured" else enclose, fail_at=fail_at)
     healthy = healthy_estimate(runs)
     base = Baseline(
@@ -311,16 +318,34 @@ def validate(
         input_phasor=first.W[:, None], output_phasor=first.Zt[:, None],
         healthy_frf=healthy.frf, healthy_frf_var=healthy.var, healthy_frf_dof=healthy.dof,
         shaft_orders_removed=first.harmonics_removed,
+        noise_bound_per_point_m=None if np.isscalar(V) else np.asarray(V, dtype=float),
     )
     return ValidationOutcome(base, res, model, runs, rig)
+
+
+def _dof(run: MeasuredRun) -> np.ndarray:
+    return run.dof if run.dof is not None else 2.0 * (run.n_periods.astype(float) - 1.0)
+
+
+def noise_values(noise_bound: Any, run: MeasuredRun | None = None) -> float | np.ndarray:
+    """V (m) as the validation/detection LMIs take it: uniform, or per point for a 'per-point' bound
+    (recomputed from ``run``'s own variances at the same confidence when a run is given)."""
+    per = noise_bound.details.get("per_point_m") if noise_bound.details else None
+    if noise_bound.method != "per-point" or per is None:
+        return float(noise_bound.value_m)
+    if run is None:
+        return np.asarray(per, dtype=float)
+    from rotorcheck.robust.noise import noise_bound_per_point
+
+    return np.asarray(noise_bound_per_point(run.output_var, _dof(run), float(noise_bound.confidence)).details[
+        "per_point_m"], dtype=float)
 
 
 def frf_estimate(run: MeasuredRun) -> Any:
     """The run's FRF with its noise (variance of the mean FRF and its dof) for measured detection."""
     from rotorcheck.robust.measured import frf_estimate as _est
 
-    dof = run.dof if run.dof is not None else 2.0 * (run.n_periods.astype(float) - 1.0)
-    return _est(run.W, run.Zt, run.output_var, dof)
+    return _est(run.W, run.Zt, run.output_var, _dof(run))
 
 
 def healthy_estimate(runs: list[MeasuredRun]) -> Any:
@@ -499,7 +524,7 @@ def detect(
             notes.append("the sweep stores no per-period phasors: shaft-speed harmonics (1X, 2X, ...) could not "
                          "be removed; with a free-running start angle they may show as differences near kX")
     else:
-        det = validation.detect(model.me, run.W, run.Zt, baseline.noise_bound_m, baseline.gamma, fail_at=fail_at)
+        det = validation.detect(model.me, run.W, run.Zt, _baseline_v(baseline, run), baseline.gamma, fail_at=fail_at)
         ver = validation.verdict(det.fault, det.status, baseline.gamma_status)
     damage = identify.damage_dynamics(E[:, 0, 0], E[:, 0, 1], E[:, 1, 0], E[:, 1, 1], T)
     if model.structure in ("additive", "multiplicative"):
@@ -555,6 +580,16 @@ def anchored_summary(outcome: DetectionOutcome) -> str:
             f"{np.median(hi) / 1e3:.4g}] kN/m (positive: stiffness loss)")
 
 
+def _baseline_v(baseline: Any, run: MeasuredRun) -> float | np.ndarray:
+    """The noise bound for new data against ``baseline``: uniform, or the new run's own V(w)."""
+    if baseline.noise_bound_per_point_m is None:
+        return float(baseline.noise_bound_m)
+    from rotorcheck.robust.noise import NoiseBound
+
+    nb = NoiseBound(baseline.noise_bound_m, "per-point", baseline.noise_confidence, {"per_point_m": []})
+    return noise_values(nb, run)
+
+
 def _healthy_frf(baseline: Any) -> np.ndarray | None:
     if baseline.healthy_frf is not None:
         return np.asarray(baseline.healthy_frf)[:, 0]
@@ -600,7 +635,7 @@ def measured_verdict(fault: np.ndarray, status: np.ndarray, confidence: float, n
 # plots
 
 
-def uncertainty_disk(model: Any, gamma: np.ndarray, noise_bound_m: float, W: np.ndarray
+def uncertainty_disk(model: Any, gamma: np.ndarray, noise_bound_m: float | np.ndarray, W: np.ndarray
                      ) -> tuple[np.ndarray, np.ndarray]:
     """Centre and radius (m/N) of the set of receptances the healthy uncertain model explains."""
     G = model.frf
@@ -623,6 +658,10 @@ def uncertainty_disk(model: Any, gamma: np.ndarray, noise_bound_m: float, W: np.
     return centre, radius + noise
 
 
+def _v_of(b: Any) -> float | np.ndarray:
+    return b.noise_bound_per_point_m if b.noise_bound_per_point_m is not None else b.noise_bound_m
+
+
 def _plot_index(f: np.ndarray, at_hz: float | None, score: np.ndarray) -> int:
     if at_hz is not None:
         return int(np.argmin(np.abs(f - at_hz)))
@@ -637,7 +676,7 @@ def validation_plots(outcome: ValidationOutcome, out_dir: str | Path, at_hz: flo
 
     out = Path(out_dir)
     b, run, model = outcome.baseline, outcome.runs[0], outcome.model
-    centre, radius = uncertainty_disk(model, b.gamma, b.noise_bound_m, run.W)
+    centre, radius = uncertainty_disk(model, b.gamma, _v_of(b), run.W)
     title = f"{outcome.rig.rig_id}: validation at {run.speed_rpm:g} rpm ({b.uncertainty}, enclose {b.enclose})"
     files = save_figure(bode_band_figure(run.frequency_hz, model.frf, centre, radius, healthy_frf=run.frf,
                                          title=title), out / "validation_bode")
@@ -656,10 +695,11 @@ def detection_plots(outcome: DetectionOutcome, out_dir: str | Path, at_hz: float
     out = Path(out_dir)
     b, run, model = outcome.baseline, outcome.run, outcome.model
     fault = np.asarray(outcome.detection.fault, dtype=bool)
-    centre, radius = uncertainty_disk(model, b.gamma, b.noise_bound_m, run.W)
-    healthy = None
-    if b.input_phasor is not None and b.output_phasor is not None:
-        healthy = b.output_phasor[:, 0] / b.input_phasor[:, 0]
+    healthy = _healthy_frf(b)
+    if outcome.measured is not None and healthy is not None:  # the measured set: T_h within the allowance
+        centre, radius = healthy, outcome.measured.radius[:, 0]
+    else:
+        centre, radius = uncertainty_disk(model, b.gamma, _v_of(b), run.W)
     title = f"{outcome.rig.rig_id}: detection at {run.speed_rpm:g} rpm ({outcome.verdict.verdict})"
     files = save_figure(bode_band_figure(run.frequency_hz, model.frf, centre, radius, healthy_frf=healthy,
                                          damaged_frf=run.frf, fault=fault, title=title), out / "detection_bode")

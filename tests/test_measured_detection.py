@@ -190,3 +190,28 @@ def test_shaft_harmonic_fit_without_rotation_is_the_plain_mean() -> None:
     assert m == pytest.approx(per.mean())
     assert v == pytest.approx(np.sum(np.abs(per - per.mean()) ** 2) / (16 * 15))
     assert dof == 30
+
+
+@pytest.mark.parametrize("periods", ["2", "4", "64", "8-160"])
+def test_per_point_noise_bound_coverage_monte_carlo(periods: str) -> None:
+    """fit-noise --method per-point: P(|error of the mean| <= V_k at every point) >= 0.99."""
+    from rotorcheck.robust.noise import noise_bound_per_point
+
+    rng = np.random.default_rng({"2": 11, "4": 12, "64": 13, "8-160": 14}[periods])
+    nf, reps, misses = 120, 1500, 0
+    n = (np.round(np.linspace(8, 160, nf)).astype(int) if periods == "8-160" else np.full(nf, int(periods)))
+    for _ in range(reps):
+        sd = np.exp(rng.uniform(-2, 2, nf))
+        est = _sweep(rng, np.zeros(nf, complex), n, sd)
+        V = noise_bound_per_point(est.var[:, 0], est.dof[:, 0], 0.99).details["per_point_m"]
+        misses += bool(np.any(np.abs(est.frf[:, 0]) > V))
+    assert 1 - misses / reps >= 0.99 - 3 * np.sqrt(0.0099 / reps)
+    # and a pooled exponential quantile (the variance treated as known) does not hold at 2 periods
+    if periods == "2":
+        miss = 1 - 0.99 ** (1 / nf)
+        bad = 0
+        for _ in range(300):
+            sd = np.ones(nf)
+            est = _sweep(rng, np.zeros(nf, complex), n, sd)
+            bad += bool(np.any(np.abs(est.frf[:, 0]) > np.sqrt(est.var[:, 0] * -np.log(miss))))
+        assert bad / 300 > 0.5

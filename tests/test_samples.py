@@ -41,9 +41,11 @@ EXTRA_SAMPLES = ("crack_rig/healthy_2000rpm.h5", "crack_rig/healthy_2000rpm_repe
 EXPECTED = {
     "crack_rig/healthy_0rpm.h5": (0.0, samples.GRID_0RPM, 101, None),
     "crack_rig/open_crack_0rpm.h5": (0.0, samples.GRID_0RPM, 102, "open_crack"),
-    "crack_rig/healthy_1000rpm.h5": (1000.0, samples.GRID_1000RPM, 103, None),
+    "crack_rig/healthy_1000rpm.h5": (1000.0, samples.GRID_1000RPM, 108, None),
     "crack_rig/breathing_crack_1000rpm.h5": (1000.0, samples.GRID_1000RPM, 104, "breathing_crack"),
     "crack_rig/healthy_1000rpm_repeat.h5": (1000.0, samples.GRID_1000RPM, 105, None),
+    "crack_rig/healthy_2000rpm.h5": (2000.0, samples.GRID_1000RPM, 106, None),
+    "crack_rig/healthy_2000rpm_repeat.h5": (2000.0, samples.GRID_1000RPM, 107, None),
     "three_mass/healthy.h5": (0.0, samples.GRID_THREE_MASS, 0, None),
     "three_mass/damaged.h5": (0.0, samples.GRID_THREE_MASS, 0, "stiffness_loss"),
 }
@@ -65,7 +67,7 @@ def test_cli_md_bundled_names_exist_and_catalogue_matches() -> None:
     # the catalogue that regenerates data_samples/ makes exactly the contract's files, no more
     assert sorted(s.path for s in samples.SAMPLES) == sorted(CLI_MD_SAMPLES + EXTRA_SAMPLES)
     on_disk = sorted(p.relative_to(SAMPLE_DIR).as_posix() for p in SAMPLE_DIR.rglob("*.h5"))
-    assert on_disk == sorted(CLI_MD_SAMPLES)
+    assert on_disk == sorted(CLI_MD_SAMPLES + EXTRA_SAMPLES)
 
 
 def test_bundled_samples_total_under_2_mb() -> None:

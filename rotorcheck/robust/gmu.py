@@ -48,8 +48,16 @@ Numerics (method.md's pitfalls and what the tests showed):
 * pre-checks ``|Zt - Me22 W| <= V`` (gamma = 0, no solve) and ``Me12 W = 0`` or ``Me21 = 0``
   (status 'unexplainable', gamma = inf, never a number);
 * explicit projection onto Ker N (no free multiplier); no chordal decomposition; one thread;
-* solver status point by point: Clarabel's 'InsufficientProgress' / 'AlmostSolved' iterates are
-  used only if the independently verified bounds agree within 1e-6 (else 'solver_failed', NaN);
+* solver status point by point: the D-scales of every solver answer are projected onto their
+  cones before the certificate is checked (a stalled iterate returns scales of about -1e-7 for
+  noise blocks inactive at the optimum; with them the "certified" lower bound exceeded the exact
+  answer by up to 4e-7 relative and points failed); Clarabel's 'InsufficientProgress' /
+  'AlmostSolved' iterates are used if the independently verified bounds agree within 1e-6, else
+  the point is re-solved by bisection on the same LMI (method 'sdp+bisect');
+* per point, never the batch: non-finite Me, W or Zt -> 'bad_data'; a solver raising (also a
+  ``BaseException`` such as Clarabel's pyo3 ``PanicException``) or a point exceeding
+  ``time_limit`` seconds (passed to Clarabel as its ``time_limit``) -> 'solver_failed' with the
+  reason in ``GammaResult.reason``; a negative or NaN noise bound is a ``ValueError``;
 * accuracy floor: gamma* is a function of ``|c| - V``; the data determine it only to about
   ``eps |Zt| / (|c| - V)`` relative (1e-6 at ``(|c| - V)/|c| ~ 1e-7`` with ``|Zt| ~ 1e3 |c|``).
 
@@ -1781,7 +1789,7 @@ class ImplicitBound:
 def implicit_lmi_bound(N: np.ndarray, A: Sequence[np.ndarray], B: Sequence[np.ndarray],
                        kinds: Sequence[str], gamma_block: Sequence[bool],
                        radius: Sequence[float] | None = None, *, backend: str = DEFAULT_BACKEND,
-                       rtol: float = 1e-8) -> ImplicitBound:
+                       rtol: float = 1e-8, time_limit: float = DEFAULT_TIME_LIMIT) -> ImplicitBound:
     """The LMI on a user-built implicit LFT at ONE frequency (no automatic scaling: pass a
     well-scaled problem).
 
@@ -1789,6 +1797,8 @@ def implicit_lmi_bound(N: np.ndarray, A: Sequence[np.ndarray], B: Sequence[np.nd
     output rows of block i; ``kinds[i]``: 'scalar' | 'full' | 'repeated'; ``gamma_block[i]``: block
     bounded by ``radius[i] * gamma`` (else by ``radius[i]``, default 1). One gamma block of scalar
     or full kind: one SDP (or an exact eigenvalue without other blocks); otherwise bisection.
+    ``time_limit``: seconds for all solver calls; a solver that raises or runs out of time gives
+    status 'solver_failed'.
     """
     if backend not in BACKENDS:
         raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
@@ -1808,12 +1818,16 @@ def implicit_lmi_bound(N: np.ndarray, A: Sequence[np.ndarray], B: Sequence[np.nd
     fm = _Forms(P, gam, fix)
     timing: dict[str, float] = {}
     single = len(gam) == 1 and gam[0][0] == "full"
-    if single and not fix:
-        out = _engine_eig(fm)
-    elif single:
-        out = _engine_sdp(fm, timing, backend)
-    else:
-        out = _engine_bisection(fm, timing, rtol, False, backend)
+    try:
+        with _point_budget(time_limit):
+            if single and not fix:
+                out = _engine_eig(fm)
+            elif single:
+                out = _engine_sdp(fm, timing, backend)
+            else:
+                out = _engine_bisection(fm, timing, rtol, False, backend)
+    except _SolverAbort:  # the solver raised (pyo3 panic) or ran out of time
+        return ImplicitBound(np.nan, None, STATUS_FAILED, 0)
     if out.status == "unbounded":
         return ImplicitBound(np.inf, None, "unbounded", out.calls)
     if out.status != "ok":

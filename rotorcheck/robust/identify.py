@@ -70,7 +70,8 @@ def damage_dynamics(E11: np.ndarray, E12: np.ndarray, E21: np.ndarray, E22: np.n
 
 @dataclass
 class DamageSet:
-    """Exact set of the identified damage dynamics over ``|Delta| <= r``, per frequency (f,).
+    """Exact set of the identified damage dynamics over ``|Delta| <= r``, per frequency (f,)
+    (an outer set for multiplicative uncertainty with noise: :func:`damage_set_multiplicative`).
 
     ``kind``: 'point' (r = 0), 'disk' (``|D - centre| <= radius``), 'outside'
     (``|D - centre| >= radius``, unbounded) or 'halfplane' (``Re(conj(normal) D) >= offset``,

@@ -34,6 +34,7 @@ __all__ = [
     "noise_bound_from_periods",
     "noise_bound_from_variance",
     "noise_bound_manual",
+    "noise_bound_per_point",
     "phasor_mean_variance",
     "point_level",
 ]
@@ -230,4 +231,31 @@ def noise_bound_pooled(output_var: np.ndarray, confidence: float = 0.99, family:
         "family": family, "n_points": n, "point_level": p, "pooled_sd_m": float(np.sqrt(s2)),
         "n_periods": n_periods, "excess_scatter_index": [int(i) for i in excess],
         "max_sd_m": float(np.sqrt(flat[idx].max())),
+    })
+
+
+def noise_bound_per_point(output_var: np.ndarray, dof: np.ndarray, confidence: float = 0.99,
+                          family: str = "sidak") -> NoiseBound:
+    """V(w) per point (m) from the stored variance of each averaged phasor and its own dof.
+
+    ``output_var`` (f,) m^2, the estimated variance of the mean phasor; ``dof`` (f,) its real degrees
+    of freedom (``2 (N - 1)`` for N periods, fewer after removing shaft harmonics). With the variance
+    estimated, ``|v|^2 / var_hat ~ F(2, dof)`` exactly (complex circular Gaussian, independent
+    periods), so ``V_k = sqrt(var_k F^-1(p; 2, dof_k))`` with the per-point level ``p`` for
+    ``confidence`` family-wise (Sidak) holds with few periods and with the period count varying over
+    the sweep (Monte Carlo in the tests). ``value_m`` is the largest V_k (a uniform fallback);
+    ``details["per_point_m"]`` the array.
+    """
+    var, finite, n = _checked_variance(output_var)
+    d = np.broadcast_to(np.asarray(dof, dtype=float), var.shape)
+    if np.any(d[finite] <= 0):
+        raise ValueError("degrees of freedom must be > 0")
+    miss = point_miss(confidence, n, family)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        q = np.where(np.isinf(d), -np.log(miss), 0.5 * d * np.expm1(-2.0 / d * np.log(miss)))
+        per = np.sqrt(var * q)
+    per = np.where(finite, per, np.nan)
+    return NoiseBound(float(np.nanmax(per)), "per-point", confidence, {
+        "family": family, "n_points": n, "point_miss": miss, "per_point_m": per,
+        "median_m": float(np.nanmedian(per)),
     })
