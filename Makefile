@@ -15,7 +15,7 @@ $(STAMP): pyproject.toml
 venv: $(STAMP)
 
 demo: $(STAMP)
-	MPLBACKEND=Agg $(BIN)/python -m rotorcheck.demo
+	MPLBACKEND=Agg $(BIN)/python -m tools.demo
 
 test: $(STAMP)
 	$(BIN)/ruff check rotorcheck tests bench
@@ -25,10 +25,10 @@ lint: $(STAMP)
 	$(BIN)/ruff check rotorcheck tests bench
 
 samples: $(STAMP)
-	$(BIN)/python -m rotorcheck.sweep.samples data_samples
+	$(BIN)/python -m tools.samples data_samples
 
 golden: $(STAMP)
-	MPLBACKEND=Agg $(BIN)/python -m rotorcheck.golden --write
+	MPLBACKEND=Agg $(BIN)/python -m tools.golden --write
 
 bench: $(STAMP)
 	MPLBACKEND=Agg $(BIN)/python -m bench

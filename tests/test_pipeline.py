@@ -16,7 +16,8 @@ import numpy as np
 import pytest
 import yaml
 
-from rotorcheck import golden, workflow
+from rotorcheck import workflow
+from tools import golden
 from rotorcheck.cli import EXIT_DAMAGE, EXIT_INCONCLUSIVE, EXIT_INPUT, EXIT_OK, main
 from rotorcheck.config import load_config
 from rotorcheck.fe.assembly import build_system

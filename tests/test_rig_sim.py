@@ -20,7 +20,7 @@ from rotorcheck.fe.frf import receptance
 from rotorcheck.fe.system import RPM_TO_RAD_S, MechanicalSystem
 from rotorcheck.sweep.format import compare_sweeps, read_sweep
 from rotorcheck.sweep.rig_sim import rig_plant, simulate_rig, step_settings, synchronous_forces
-from rotorcheck.sweep.samples import GRID_0RPM, GRID_1000RPM, GRID_THREE_MASS
+from tools.samples import GRID_0RPM, GRID_1000RPM, GRID_THREE_MASS
 from rotorcheck.sweep.simulator import StepSettings, response_tones, simulate_fast, simulate_time_domain
 
 REPO = Path(__file__).resolve().parents[1]

@@ -9,7 +9,7 @@ import h5py
 import numpy as np
 import pytest
 
-from rotorcheck.sweep import samples
+from tools import samples
 from rotorcheck.sweep.format import compare_sweeps, read_sweep
 
 REPO = Path(__file__).resolve().parents[1]
@@ -114,7 +114,7 @@ def test_bundled_file_equals_regenerated_bit_for_bit(regenerated: Path, name: st
 
 
 def test_check_samples_reports_a_tampered_copy(tmp_path: Path, regenerated: Path) -> None:
-    """``python -m rotorcheck.sweep.samples --check`` passes on data_samples/ and fails, naming the
+    """``python -m tools.samples --check`` passes on data_samples/ and fails, naming the
     file, on a copy where one frequency point moved by one ulp."""
     assert samples.main(["--check", str(SAMPLE_DIR)]) == 0
     name = "crack_rig/healthy_0rpm.h5"

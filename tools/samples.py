@@ -1,7 +1,7 @@
 """The bundled sample sweeps (``data_samples/``), regenerated deterministically by ``make samples``.
 
 Every sample is a seeded simulation of a truth rig (``configs/*_truth.yaml``), never of the nominal
-model, so validation has real model error to absorb. ``python -m rotorcheck.sweep.samples DIR``
+model, so validation has real model error to absorb. ``python -m tools.samples DIR``
 writes them; ``--check`` compares the files in DIR with what the code makes (bit for bit).
 """
 

@@ -2,7 +2,7 @@
 
 Runs fit-noise, validate and detect through the command line on every bundled case and keeps a
 summary (verdicts, fault counts and frequencies, noise bounds, gamma and D_u at a few points).
-``python -m rotorcheck.golden --write`` (``make golden``) rewrites ``tests/golden/samples.json``;
+``python -m tools.golden --write`` (``make golden``) rewrites ``tests/golden/samples.json``;
 without ``--write`` it compares and exits 1 on a difference. Nothing else rewrites the file.
 """
 
