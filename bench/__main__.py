@@ -6,7 +6,8 @@ import importlib
 import sys
 import time
 
-BENCHES = ("bench.bench_fe", "bench.bench_validation", "bench.bench_crack", "bench.bench_pipeline")
+BENCHES = ("bench.bench_fe", "bench.bench_engine", "bench.bench_validation", "bench.bench_crack",
+           "bench.bench_pipeline")
 
 
 def main() -> int:

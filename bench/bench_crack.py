@@ -28,9 +28,9 @@ import numpy as np
 from rotorcheck.config import load_config
 from rotorcheck.faults.crack import crack_stiffness
 from rotorcheck.faults.harmonic_balance import cracked_tones
-from rotorcheck.faults.time_sim import steady_state_lockin
 from rotorcheck.fe.assembly import build_system
-from rotorcheck.sweep.lockin import tone_lockin
+from rotorcheck.signal.lockin import tone_lockin
+from rotorcheck.sim.time_sim import steady_state_lockin
 
 RIG = Path(__file__).resolve().parents[1] / "configs" / "crack_rig_truth.yaml"
 SPEED_RPM = 1000.0

@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from rotorcheck.robust import gmu
+from rotorcheck.robust import mu as gmu
 from rotorcheck.robust.closed_form import gamma_required_additive
 from rotorcheck.robust.lft import additive_me
 

@@ -35,7 +35,7 @@ from rotorcheck import workflow
 from rotorcheck.config import RigConfig, load_config
 from rotorcheck.resources import configs_dir
 from rotorcheck.robust.noise import point_miss
-from rotorcheck.sweep.rig_sim import simulate_rig, step_settings
+from rotorcheck.sim.rig_sim import simulate_rig, step_settings
 
 GRID = np.linspace(30.0, 600.0, 262)
 NOISE = (1.0, 4.0, 16.0)

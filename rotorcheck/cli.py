@@ -39,6 +39,7 @@ OutOpt = Annotated[Path, typer.Option("--out", help="Output folder (created).")]
 JsonOpt = Annotated[bool, typer.Option("--json", help="Print one JSON document on stdout.")]
 ForceOpt = Annotated[bool, typer.Option("--force", help="Overwrite existing outputs.")]
 DEFAULT_OUT = Path("rotorcheck-out")
+PlotFormatOpt = Annotated[str, typer.Option("--plot-format", help="png (default) | pdf | both.")]
 
 
 def _emit_json(doc: dict[str, Any]) -> None:
@@ -61,13 +62,17 @@ def model(
     as_json: JsonOpt = False,
     force: ForceOpt = False,
     plots: Annotated[bool, typer.Option(help="Write Campbell and mode-shape plots.")] = True,
+    plot_format: PlotFormatOpt = "png",
 ) -> int:
     """Natural frequencies, damping, whirl and critical speeds; Campbell and mode-shape plots."""
     from rotorcheck.resources import default_rig_path
     from rotorcheck.workflow import model_report
 
     rig_path = rig if rig is not None else default_rig_path("crack_rig")
-    result = model_report(rig_path, speed_rpm=speed, out_dir=out if plots else None, force=force)
+    from rotorcheck.workflow import plot_formats
+
+    result = model_report(rig_path, speed_rpm=speed, out_dir=out if plots else None, force=force,
+                          formats=plot_formats(plot_format))
     summary = result["summary"]
     table = Table(title=f"{summary['rig_id']} at {speed:g} rpm", title_justify="left")
     for col in ("mode", "f (Hz)", "zeta", "whirl"):
@@ -91,7 +96,7 @@ def info(
     confidence: Annotated[float, typer.Option(help="Family-wise confidence of the noise bound.")] = 0.99,
 ) -> int:
     """Validate a sweep file and summarise it: runs, speeds, grid, channels, noise estimate."""
-    from rotorcheck.sweep.format import read_sweep, sweep_sha256
+    from rotorcheck.sweep.hdf5io import read_sweep, sweep_sha256
     from rotorcheck.sweep.summary import summarize
 
     sw = read_sweep(sweep)
@@ -127,15 +132,17 @@ def crack(
     fault: Annotated[str, typer.Option("--fault", help="Breathing crack in the rig.")] = "breathing_crack",
     unbalance: Annotated[float, typer.Option("--unbalance", help="Unbalance at the first disc, g m.")] = 0.2,
     out: OutOpt = DEFAULT_OUT,
+    plot_format: PlotFormatOpt = "png",
     as_json: JsonOpt = False,
     force: ForceOpt = False,
 ) -> int:
     """The cracked rotor: stiffness over a revolution, orbits, spectra at 1000 and 750 rpm (Fig. 56-58)."""
     from rotorcheck.resources import configs_dir
-    from rotorcheck.workflow import crack_report
+    from rotorcheck.workflow import crack_report, plot_formats
 
     rig_path = rig if rig is not None else configs_dir() / "crack_rig_truth.yaml"
-    doc = crack_report(rig_path, fault=fault, unbalance_g_m=unbalance, out_dir=out, force=force)
+    doc = crack_report(rig_path, fault=fault, unbalance_g_m=unbalance, out_dir=out, force=force,
+                       formats=plot_formats(plot_format))
     for key, h in doc["harmonics"].items():
         amps = ", ".join(f"{n}X {x * 1e6:.3g}" for n, x in zip(h["order"][1:5], h["x_m"][1:5]))
         err.print(f"{key:16s} x at station {doc['station']} (um): {amps}")
@@ -146,10 +153,15 @@ def crack(
     return EXIT_OK
 
 
-def _fail_at() -> tuple[int, ...]:
-    """Testing hook: ``ROTORCHECK_FAIL_AT=3,17`` makes the solver fail at those point indices."""
-    raw = os.environ.get("ROTORCHECK_FAIL_AT", "").strip()
-    return tuple(int(x) for x in raw.split(",") if x.strip()) if raw else ()
+def _fail_at(spec: str) -> tuple[int, ...]:
+    """Testing hook ``--fail-at 3,17`` (hidden): the solver fails at those point indices."""
+    try:
+        return tuple(int(x) for x in spec.split(",") if x.strip())
+    except ValueError:
+        raise InputError(None, "--fail-at", f"expected comma-separated point indices, got {spec!r}") from None
+
+
+FailAtOpt = Annotated[str, typer.Option("--fail-at", hidden=True, help="Testing: fail the solver at these points.")]
 
 
 RunOpt = Annotated[str | None, typer.Option("--run", help="Run id inside the sweep file (default: the only one).")]
@@ -169,7 +181,7 @@ def fit_noise(
 ) -> int:
     """Step 2: fit the noise bound V (m) and write it into <out>/baseline.h5."""
     from rotorcheck import workflow
-    from rotorcheck.baseline import Baseline, write_baseline
+    from rotorcheck.baseline import write_baseline
     from rotorcheck.fileio import check_writable
     from rotorcheck.resources import samples_dir
 
@@ -181,11 +193,7 @@ def fit_noise(
     cfg = workflow.load_rig(workflow.resolve_rig(rig, sweep_path))
     mrun = workflow.load_run(sweep_path, cfg, run)
     nb = workflow.fit_noise(mrun, method=method, confidence=confidence, manual_m=value)
-    write_baseline(Baseline(rig_id=cfg.rig_id, rig_sha256=cfg.sha256(), sweep_sha256=[mrun.sha256],
-                            run_id=mrun.run_id, speed_rpm=mrun.speed_rpm, noise_bound_m=nb.value_m,
-                            noise_method=nb.method, noise_confidence=float(nb.confidence or 0.0),
-                            uncertainty=cfg.uncertainty.structure, parameter=cfg.uncertainty.parameter or "",
-                            stage="noise", noise_bound_per_point_m=nb.details.get("per_point_m")), target)
+    write_baseline(workflow.noise_baseline(cfg, mrun, nb), target)
     conf = f", {nb.confidence:.0%} family-wise over {mrun.frequency_hz.size} points" if nb.confidence else ""
     err.print(f"noise bound V = {nb.value_m * 1e6:.4g} um ({nb.method}{conf}) from {sweep_path}")
     excess = nb.details.get("excess_scatter_hz", [])
@@ -194,8 +202,7 @@ def fit_noise(
                   + ", ".join(f"{x:.1f}" for x in excess[:12]) + (" ..." if len(excess) > 12 else "") + " Hz")
     err.print(f"wrote {target}")
     if as_json:
-        _emit_json({"noise_bound_m": nb.value_m, "method": nb.method, "confidence": nb.confidence,
-                    "sweep": str(sweep_path), "baseline": str(target), "details": nb.details})
+        _emit_json(workflow.noise_report(nb, sweep_path, target).to_dict())
     return EXIT_OK
 
 
@@ -211,39 +218,31 @@ def validate(
     run: RunOpt = None,
     at: Annotated[float | None, typer.Option("--at", help="Frequency (Hz) of the complex-plane plot.")] = None,
     plots: Annotated[bool, typer.Option(help="Write the validation plots.")] = True,
+    plot_format: PlotFormatOpt = "png",
+    fail_at: FailAtOpt = "",
     as_json: JsonOpt = False,
     force: ForceOpt = False,
 ) -> int:
     """Step 3: bound the model error per frequency (gamma) so the uncertain model encloses the healthy data."""
     from rotorcheck import workflow
-    from rotorcheck.baseline import read_baseline, write_baseline
+    from rotorcheck.baseline import write_baseline
     from rotorcheck.fileio import check_writable
-    from rotorcheck.robust.noise import NoiseBound
 
+    formats = workflow.plot_formats(plot_format)
     cfg = workflow.load_rig(workflow.resolve_rig(rig, sweeps[0]))
     runs = [workflow.load_run(p, cfg, run) for p in sweeps]
     target = out / "baseline.h5"
-    noise = None
-    if target.exists():
-        prior = read_baseline(target)
-        if prior.validated and not force:
-            raise InputError(target, "", "a validated baseline exists; refusing to overwrite (use --force)")
-        if not prior.validated:
-            if prior.rig_sha256 != cfg.sha256():
-                raise InputError(target, "/@rig_sha256", "the noise fit was made for another rig description")
-            per = prior.noise_bound_per_point_m
-            noise = NoiseBound(prior.noise_bound_m, prior.noise_method, prior.noise_confidence,
-                               {} if per is None else {"per_point_m": per})
-            err.print(f"noise bound V = {prior.noise_bound_m * 1e6:.4g} um from {target} ({prior.noise_method})")
-    stems = [out / s for s in workflow.PLOT_STEMS_VALIDATE] if plots else []
-    check_writable([st.with_suffix(e) for st in stems for e in (".png", ".pdf")], force)
+    noise = workflow.prior_noise(target, cfg, force)
+    if noise is not None:
+        err.print(f"noise bound V = {noise.value_m * 1e6:.4g} um from {target} ({noise.method})")
+    check_writable(workflow.plot_paths(out, workflow.PLOT_STEMS_VALIDATE, formats) if plots else [], force)
     if noise is None:
         noise = workflow.fit_noise(runs[0])
         err.print(f"no noise fit in {out}: fitted V = {noise.value_m * 1e6:.4g} um ({noise.method}, "
                   f"{noise.confidence:.0%}) from {runs[0].path}")
-    outcome = workflow.validate(cfg, runs, noise, enclose=enclose, fail_at=_fail_at())
+    outcome = workflow.validate(cfg, runs, noise, enclose=enclose, fail_at=_fail_at(fail_at))
     write_baseline(outcome.baseline, target)
-    files = workflow.validation_plots(outcome, out, at) if plots else []
+    files = workflow.validation_plots(outcome, out, at, formats) if plots else []
     res = outcome.result
     n_bad = outcome.n_not_enclosed
     g = res.gamma[np.isfinite(res.gamma)]
@@ -257,10 +256,7 @@ def validate(
     for p_ in [str(target), *files]:
         err.print(f"wrote {p_}")
     if as_json:
-        _emit_json({"frequency_hz": runs[0].frequency_hz, "gamma": res.gamma, "gamma_lower": res.gamma_lower,
-                    "status": [str(x) for x in res.status], "noise_bound_m": noise.value_m,
-                    "noise_method": noise.method, "enclose": enclose, "uncertainty": outcome.model.structure,
-                    "n_points": int(res.gamma.size), "n_not_enclosed": n_bad, "baseline": str(target)})
+        _emit_json(outcome.typed_report(noise, target).to_dict())
     return EXIT_INCONCLUSIVE if n_bad else EXIT_OK
 
 
@@ -275,6 +271,8 @@ def detect(
     plots: Annotated[bool, typer.Option(help="Write the detection plots.")] = True,
     confidence: Annotated[float, typer.Option(
         help="Family-wise confidence of measured detection (1 - false-alarm probability per sweep).")] = 0.99,
+    plot_format: PlotFormatOpt = "png",
+    fail_at: FailAtOpt = "",
     as_json: JsonOpt = False,
     force: ForceOpt = False,
 ) -> int:
@@ -284,17 +282,17 @@ def detect(
     from rotorcheck.fileio import check_writable
     from rotorcheck.report.reports import REPORT_FILES, write_reports
 
+    formats = workflow.plot_formats(plot_format)
     base_path = baseline if baseline is not None else out / "baseline.h5"
-    stems = [out / s for s in workflow.PLOT_STEMS_DETECT] if plots else []
-    check_writable([out / f for f in REPORT_FILES] + [st.with_suffix(e) for st in stems for e in (".png", ".pdf")],
-                   force)
+    check_writable([out / f for f in REPORT_FILES]
+                   + (workflow.plot_paths(out, workflow.PLOT_STEMS_DETECT, formats) if plots else []), force)
     base = read_baseline(base_path)
     cfg = workflow.load_rig(workflow.resolve_rig(rig, sweep))
     mrun = workflow.load_run(sweep, cfg, run)
     workflow.check_baseline(base, cfg, mrun, base_path)
-    outcome = workflow.detect(cfg, base, mrun, fail_at=_fail_at(), confidence=confidence)
+    outcome = workflow.detect(cfg, base, mrun, fail_at=_fail_at(fail_at), confidence=confidence)
     report = outcome.report()
-    plot_files = workflow.detection_plots(outcome, out, at) if plots else []
+    plot_files = workflow.detection_plots(outcome, out, at, formats) if plots else []
     files = write_reports(report, out, plot_files)
     v = outcome.verdict
     colour = {"damage": "bold red", "healthy": "bold green", "inconclusive": "bold yellow"}[v.verdict]
@@ -340,8 +338,8 @@ def simulate(
     from rotorcheck import workflow
     from rotorcheck.fileio import check_writable
     from rotorcheck.resources import configs_dir
-    from rotorcheck.sweep.format import write_sweep
-    from rotorcheck.sweep.rig_sim import shaft_angle_from, simulate_rig, step_settings
+    from rotorcheck.sim.rig_sim import shaft_angle_from, simulate_rig, step_settings
+    from rotorcheck.sweep.hdf5io import write_sweep
 
     if points < 2 or not (0 < f_min < f_max):
         raise InputError(None, "--points/--f-min/--f-max", "need 0 < f-min < f-max and at least 2 points")

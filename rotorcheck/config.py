@@ -523,7 +523,7 @@ def _loc(loc: tuple[Any, ...]) -> str:
     return out
 
 
-def _message(err: dict[str, Any]) -> str:
+def _message(err: Any) -> str:
     t, ctx = err.get("type", ""), err.get("ctx") or {}
     if t == "greater_than":
         return f"must be > {ctx.get('gt')}"

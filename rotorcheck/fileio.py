@@ -1,21 +1,25 @@
-"""Atomic writes and the no-silent-overwrite rule for every output rotorcheck produces."""
+"""Atomic writes and the no-silent-overwrite rule for every output rotorcheck produces.
+
+One writer for the whole package: :func:`atomic_path` creates a temporary file in the target's
+folder, hands it to the caller, then fsyncs it and moves it onto the target. The temporary file is
+created with mode ``0o666`` through ``O_CREAT | O_EXCL``, so the kernel applies the umask (and any
+default ACL of the folder) exactly as for a plain ``open(path, "w")``; the umask is never read by
+flipping it, so no process-wide state changes.
+"""
 
 from __future__ import annotations
 
 import contextlib
 import os
-import tempfile
+import secrets
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 
 from rotorcheck.errors import OutputExistsError
 
+__all__ = ["atomic_path", "atomic_write_bytes", "atomic_write_text", "check_writable"]
 
-def umask_mode(path: str | Path) -> None:
-    """Give a mkstemp file (0600) the mode a plain open() would: 0666 less the umask."""
-    mask = os.umask(0)
-    os.umask(mask)
-    os.chmod(path, 0o666 & ~mask)
+_CREATE_ATTEMPTS = 100
 
 
 def check_writable(paths: Iterable[str | Path], force: bool) -> None:
@@ -28,32 +32,92 @@ def check_writable(paths: Iterable[str | Path], force: bool) -> None:
         )
 
 
-@contextlib.contextmanager
-def atomic_path(path: str | Path) -> Iterator[Path]:
-    """Yield a temporary path in the target's folder; on success it replaces ``path`` atomically."""
-    target = Path(path)
-    target.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=target.parent)
-    os.close(fd)
-    umask_mode(tmp)
-    tmp_path = Path(tmp)
+def _refusal(target: str) -> FileExistsError:
+    return FileExistsError(f"{target}: exists; refusing to overwrite (pass force=True / --force)")
+
+
+def _create_temp(target: Path) -> Path:
+    """Create an empty, new temp file next to ``target`` with the mode ``open()`` would give."""
+    flags = os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_CLOEXEC", 0)
+    for _ in range(_CREATE_ATTEMPTS):
+        tmp = target.parent / f".{target.name}.{secrets.token_hex(6)}.tmp"
+        try:
+            fd = os.open(tmp, flags, 0o666)
+        except FileExistsError:
+            continue
+        os.close(fd)
+        return tmp
+    raise FileExistsError(f"{target}: no free temporary file name in {target.parent}")
+
+
+def _fsync_file(path: Path) -> None:
+    fd = os.open(path, os.O_RDONLY)
     try:
-        yield tmp_path
-        with open(tmp_path, "rb+") as fh:
-            os.fsync(fh.fileno())
-        os.replace(tmp_path, target)
+        os.fsync(fd)
     finally:
-        if tmp_path.exists():
-            tmp_path.unlink()
+        os.close(fd)
 
 
-def atomic_write_text(path: str | Path, text: str) -> None:
+def _fsync_dir(folder: Path) -> None:
+    """Make a rename durable; silently skipped where folders cannot be opened or synced."""
+    with contextlib.suppress(OSError):
+        fd = os.open(folder, os.O_RDONLY)
+        try:
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+
+
+def _publish(tmp: Path, target: Path, overwrite: bool) -> None:
+    """Move the finished ``tmp`` onto ``target``; without ``overwrite`` never replace a file."""
+    if overwrite:
+        os.replace(tmp, target)
+        return
+    try:
+        os.link(tmp, target)  # atomic create-if-absent
+    except FileExistsError:
+        raise _refusal(os.fspath(target)) from None
+    except OSError:
+        # file system without hard links: best-effort check, then rename
+        if target.exists():
+            raise _refusal(os.fspath(target)) from None
+        os.replace(tmp, target)
+    else:
+        tmp.unlink()
+
+
+@contextlib.contextmanager
+def atomic_path(path: str | os.PathLike[str], *, overwrite: bool = True) -> Iterator[Path]:
+    """Yield a new empty temp file in the target's folder; on success it becomes ``path``.
+
+    The target's folder is created if missing. On success the temp file is fsynced and renamed
+    onto ``path`` (then the folder is fsynced); on error it is removed and ``path`` is untouched.
+    With ``overwrite=False`` an existing ``path`` raises ``FileExistsError`` before any work and
+    the publish step never replaces a file that appeared meanwhile.
+    """
+    target = Path(path)
+    if not overwrite and target.exists():
+        raise _refusal(os.fspath(path))
+    target.parent.mkdir(parents=True, exist_ok=True)
+    tmp = _create_temp(target)
+    try:
+        yield tmp
+        _fsync_file(tmp)
+        _publish(tmp, target, overwrite)
+    except BaseException:
+        with contextlib.suppress(FileNotFoundError):
+            tmp.unlink()
+        raise
+    _fsync_dir(target.parent)
+
+
+def atomic_write_text(path: str | os.PathLike[str], text: str, *, overwrite: bool = True) -> None:
     """Write ``text`` (UTF-8) to ``path`` atomically."""
-    with atomic_path(path) as tmp:
+    with atomic_path(path, overwrite=overwrite) as tmp:
         tmp.write_text(text, encoding="utf-8")
 
 
-def atomic_write_bytes(path: str | Path, data: bytes) -> None:
+def atomic_write_bytes(path: str | os.PathLike[str], data: bytes, *, overwrite: bool = True) -> None:
     """Write ``data`` to ``path`` atomically."""
-    with atomic_path(path) as tmp:
+    with atomic_path(path, overwrite=overwrite) as tmp:
         tmp.write_bytes(data)

@@ -26,6 +26,8 @@ import numpy as np
 
 from rotorcheck.config import RigConfig
 from rotorcheck.errors import InputError
+from rotorcheck.fe.assembly import build_system
+from rotorcheck.fe.frf import system_receptance
 from rotorcheck.fe.system import MechanicalSystem
 
 TWO_PI = 2.0 * np.pi
@@ -61,7 +63,8 @@ class NominalModel:
 def _parameter_factors(
     config: RigConfig, system: MechanicalSystem, name: str, freq_hz: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
-    """L (f, n) and R (n,) with dZ = L delta R^T for a rank-one parameter ``name`` (dotted path)."""
+    """``a`` (f,) and the unit vector ``r`` (n,) of a rank-one parameter ``name`` (dotted path):
+    ``dZ = L delta R^T`` with ``L = a(w) r`` and ``R = r``."""
     parts = name.split(".")
     n = system.n_dof
     w2 = (TWO_PI * freq_hz) ** 2
@@ -70,7 +73,7 @@ def _parameter_factors(
         if parts[1] not in system.mass_index:
             raise InputError(None, "uncertainty.parameter", f"unknown mass {parts[1]!r}")
         unit[system.mass_index[parts[1]]] = 1.0
-        return -w2[:, None] * unit[None, :], unit
+        return -w2, unit
     if len(parts) == 3 and parts[0] == "lumped_springs" and parts[2] == "stiffness":
         springs = {s.name: s for s in config.lumped_springs}
         if parts[1] not in springs:
@@ -80,13 +83,13 @@ def _parameter_factors(
             unit[system.mass_index[a]] += 1.0
         if b != "ground":
             unit[system.mass_index[b]] -= 1.0
-        return np.ones_like(freq_hz)[:, None] * unit[None, :], unit
+        return np.ones_like(freq_hz), unit
     if len(parts) == 3 and parts[0] == "bearings" and parts[2] in ("kxx", "kyy"):
         bearings = {b.name: b for b in config.bearings}
         if parts[1] not in bearings:
             raise InputError(None, "uncertainty.parameter", f"unknown bearing {parts[1]!r}")
         unit[system.dof(bearings[parts[1]].station, parts[2][1])] = 1.0
-        return np.ones_like(freq_hz)[:, None] * unit[None, :], unit
+        return np.ones_like(freq_hz), unit
     raise InputError(
         None,
         "uncertainty.parameter",
@@ -101,33 +104,35 @@ def nominal_model(
     speed_rpm: float = 0.0,
     system: MechanicalSystem | None = None,
 ) -> NominalModel:
-    """Build the augmented plant P(w) of ``config`` at ``speed_rpm`` on ``freq_hz`` (Hz)."""
-    from rotorcheck.fe.assembly import build_system
+    """Build the augmented plant P(w) of ``config`` at ``speed_rpm`` on ``freq_hz`` (Hz).
 
+    One receptance of the engine (:mod:`rotorcheck.fe.frf`) at the outputs [damage port, sensor
+    (, R)] for the inputs [damage port, actuator (, r)] gives every entry.
+    """
     if config.damage is None:
         raise InputError(None, "damage", "the rig has no damage port; identification needs one")
     sys_ = system if system is not None else build_system(config)
     f = np.atleast_1d(np.asarray(freq_hz, dtype=float))
-    Z = sys_.dynamic_stiffness(f, speed_rpm)  # (f, n, n)
     n = sys_.n_dof
     i_in = sys_.port_dof(config.ports.actuator)
     i_out = sys_.port_dof(config.ports.sensor)
     i_d = sys_.port_dof(config.damage.port)
     structure = config.uncertainty.structure
 
-    # columns we need H = Z^-1 applied to: damage port, actuator, and (parametric) L
-    rhs = np.zeros((len(f), n, 3), dtype=complex)
-    rhs[:, i_d, 0] = 1.0
-    rhs[:, i_in, 1] = 1.0
-    R = None
+    outputs = np.zeros((2, n))
+    outputs[0, i_d] = outputs[1, i_out] = 1.0
+    inputs = np.zeros((n, 2))
+    inputs[i_d, 0] = inputs[i_in, 1] = 1.0
+    a = None
     if structure == "parametric":
         assert config.uncertainty.parameter is not None
-        L, R = _parameter_factors(config, sys_, config.uncertainty.parameter, f)
-        rhs[:, :, 2] = -L
-    X = np.linalg.solve(Z, rhs)  # (f, n, 3): H e_d, H b, -H L
-    Hd, Hb, HL = X[:, :, 0], X[:, :, 1], X[:, :, 2]
-    E11, E12 = Hd[:, i_d], Hb[:, i_d]
-    E21, E22 = Hd[:, i_out], Hb[:, i_out]
+        a, unit = _parameter_factors(config, sys_, config.uncertainty.parameter, f)
+        outputs = np.vstack([outputs, unit])
+        inputs = np.hstack([inputs, unit[:, None]])
+    band = float(np.max(np.abs(f))) if f.size else None
+    H = system_receptance(sys_, speed_rpm, outputs, inputs, band_hz=band).at_hz(f)  # (f, 2|3, 2|3)
+    E11, E12 = H[:, 0, 0], H[:, 0, 1]
+    E21, E22 = H[:, 1, 0], H[:, 1, 1]
 
     P = np.zeros((len(f), 3, 3), dtype=complex)
     P[:, 1, 1], P[:, 1, 2], P[:, 2, 1], P[:, 2, 2] = E11, E12, E21, E22
@@ -138,12 +143,13 @@ def nominal_model(
         P[:, 0, 1], P[:, 0, 2] = E21, E22
         P[:, 2, 0] = 1.0
     else:
-        assert R is not None
-        P[:, 0, 0] = HL @ R
-        P[:, 0, 1] = Hd @ R
-        P[:, 0, 2] = Hb @ R
-        P[:, 1, 0] = HL[:, i_d]
-        P[:, 2, 0] = HL[:, i_out]
+        assert a is not None
+        # -H L = -a H r: the response to the parameter's own force pattern
+        P[:, 0, 0] = -a * H[:, 2, 2]
+        P[:, 0, 1] = H[:, 2, 0]
+        P[:, 0, 2] = H[:, 2, 1]
+        P[:, 1, 0] = -a * H[:, 0, 2]
+        P[:, 2, 0] = -a * H[:, 1, 2]
     return NominalModel(
         rig_id=config.rig_id,
         speed_rpm=float(speed_rpm),

@@ -33,8 +33,25 @@ def load_rig(path: str | Path) -> RigConfig:
     return load_config(path)
 
 
+#: plot file formats by the CLI's ``--plot-format``
+PLOT_FORMATS = {"png": ("png",), "pdf": ("pdf",), "both": ("png", "pdf")}
+
+
+def plot_formats(name: str) -> tuple[str, ...]:
+    """``png`` (default) | ``pdf`` | ``both`` -> file formats; InputError naming ``--plot-format``."""
+    if name not in PLOT_FORMATS:
+        raise InputError(None, "--plot-format", f"must be one of {', '.join(PLOT_FORMATS)}, got {name!r}")
+    return PLOT_FORMATS[name]
+
+
+def plot_paths(out_dir: str | Path, stems: tuple[str, ...] | list[str], formats: tuple[str, ...]) -> list[Path]:
+    """The files the plots ``stems`` will be written to in ``out_dir``."""
+    return [Path(out_dir) / f"{s}.{e}" for s in stems for e in formats]
+
+
 def model_report(
-    rig_path: str | Path, speed_rpm: float = 0.0, out_dir: str | Path | None = None, force: bool = False
+    rig_path: str | Path, speed_rpm: float = 0.0, out_dir: str | Path | None = None, force: bool = False,
+    formats: tuple[str, ...] = ("png",),
 ) -> dict[str, Any]:
     """Modal summary of a rig at ``speed_rpm`` and, with ``out_dir``, Campbell and mode-shape plots.
 
@@ -50,11 +67,12 @@ def model_report(
     summary.setdefault("campbell_max_rpm", config.analysis.campbell_max_rpm)
     files: list[str] = []
     if out_dir is not None:
-        files = _model_plots(config, build_system(config), speed_rpm, Path(out_dir), force)
+        files = _model_plots(config, build_system(config), speed_rpm, Path(out_dir), force, formats)
     return {"summary": summary, "files": files}
 
 
-def _model_plots(config: RigConfig, system: Any, speed_rpm: float, out: Path, force: bool) -> list[str]:
+def _model_plots(config: RigConfig, system: Any, speed_rpm: float, out: Path, force: bool,
+                 formats: tuple[str, ...]) -> list[str]:
     import numpy as np
 
     from rotorcheck.fe.modal import campbell
@@ -63,11 +81,11 @@ def _model_plots(config: RigConfig, system: Any, speed_rpm: float, out: Path, fo
     from rotorcheck.report.figures import save_figure
 
     stems = [out / "campbell", out / "mode_shapes"]
-    check_writable([s.with_suffix(ext) for s in stems for ext in (".png", ".pdf")], force)
+    check_writable([s.with_suffix("." + ext) for s in stems for ext in formats], force)
     speeds = np.linspace(0.0, config.analysis.campbell_max_rpm, 41)
     camp = campbell(system, speeds, config.analysis.n_modes)
-    files = save_figure(campbell_figure(camp), stems[0])
-    files += save_figure(mode_shape_figure(system, speed_rpm, config.analysis.n_modes), stems[1])
+    files = save_figure(campbell_figure(camp), stems[0], formats)
+    files += save_figure(mode_shape_figure(system, speed_rpm, config.analysis.n_modes), stems[1], formats)
     return [str(f) for f in files]
 
 
@@ -117,7 +135,7 @@ def resolve_rig(rig_path: str | Path | None, sweep_path: str | Path) -> Path:
     """``--rig`` or, by default, the bundled rig named by the sweep's ``rig_id``."""
     if rig_path is not None:
         return Path(rig_path)
-    from rotorcheck.sweep.format import read_sweep
+    from rotorcheck.sweep.hdf5io import read_sweep
 
     return default_rig_path(read_sweep(sweep_path).rig_id)
 
@@ -130,7 +148,7 @@ def load_run(path: str | Path, config: RigConfig, run_id: str | None = None,
     ``shaft_orders`` X) fitted out before the phasor and its variance are formed (0: keep the
     file's averaged phasors).
     """
-    from rotorcheck.sweep.format import read_sweep, sweep_sha256
+    from rotorcheck.sweep.hdf5io import read_sweep, sweep_sha256
 
     p = Path(path)
     return measured_run(read_sweep(p), config, run_id, p, sweep_sha256(p), shaft_orders)
@@ -154,7 +172,7 @@ def measured_run(sweep: Any, config: RigConfig, run_id: str | None = None, path:
     for ch, port, name in ((sweep.inputs[0], config.ports.actuator, "actuator"),
                            (sweep.outputs[0], config.ports.sensor, "sensor")):
         expected = (port.station, port.direction) if config.kind == "rotor" else (
-            [m.name for m in config.masses].index(port.mass) + 1, ch.direction)
+            [m.name for m in config.masses].index(str(port.mass)) + 1, ch.direction)
         if (ch.node, ch.direction) != expected:
             raise InputError(p, "/channels", f"channel {ch.name!r} is at node {ch.node} {ch.direction}, the rig's "
                              f"{name} port is at {expected[0]} {expected[1]}")
@@ -187,7 +205,7 @@ def remove_shaft_harmonics(
     """Input and output phasors (N, m), output variance of the mean (m^2) and its real dof per
     point, with the shaft-speed harmonics 1X..``orders``X fitted out of the per-period phasors
     (:func:`rotorcheck.sweep.lockin.shaft_harmonic_fit`; a free-running start angle leaves no leak)."""
-    from rotorcheck.sweep.lockin import shaft_harmonic_fit
+    from rotorcheck.signal.lockin import shaft_harmonic_fit
 
     nf = frequency_hz.size
     W = np.empty(nf, complex)
@@ -244,6 +262,49 @@ def fit_noise(
     return nb
 
 
+def noise_baseline(rig: RigConfig, run: MeasuredRun, noise_bound: Any) -> Any:
+    """The baseline after step 2 (stage 'noise'): the noise bound and where it came from."""
+    from rotorcheck.baseline import Baseline
+
+    return Baseline(rig_id=rig.rig_id, rig_sha256=rig.sha256(), sweep_sha256=[run.sha256], run_id=run.run_id,
+                    speed_rpm=run.speed_rpm, noise_bound_m=noise_bound.value_m, noise_method=noise_bound.method,
+                    noise_confidence=float(noise_bound.confidence or 0.0), uncertainty=rig.uncertainty.structure,
+                    parameter=rig.uncertainty.parameter or "", stage="noise",
+                    noise_bound_per_point_m=noise_bound.details.get("per_point_m"))
+
+
+def prior_noise(baseline_path: str | Path, rig: RigConfig, force: bool) -> Any:
+    """The noise bound of an existing stage-'noise' baseline at ``baseline_path`` (None if there is none).
+
+    A validated baseline there is refused unless ``force`` (it would be overwritten); a noise fit made
+    for another rig description is refused (InputError naming the field).
+    """
+    from rotorcheck.baseline import read_baseline
+    from rotorcheck.robust.noise import NoiseBound
+
+    path = Path(baseline_path)
+    if not path.exists():
+        return None
+    prior = read_baseline(path)
+    if prior.validated:
+        if not force:
+            raise InputError(path, "", "a validated baseline exists; refusing to overwrite (use --force)")
+        return None
+    if prior.rig_sha256 != rig.sha256():
+        raise InputError(path, "/@rig_sha256", "the noise fit was made for another rig description")
+    per = prior.noise_bound_per_point_m
+    return NoiseBound(prior.noise_bound_m, prior.noise_method, prior.noise_confidence,
+                      {} if per is None else {"per_point_m": per})
+
+
+def noise_report(noise_bound: Any, sweep: str | Path, baseline_path: str | Path) -> Any:
+    """``fit-noise --json`` as a :class:`rotorcheck.report.schema.NoiseReport`."""
+    from rotorcheck.report.schema import NoiseReport
+
+    return NoiseReport(noise_bound.value_m, noise_bound.method, noise_bound.confidence, str(sweep),
+                       str(baseline_path), noise_bound.details)
+
+
 # --------------------------------------------------------------------------------------------
 # step 3: validation
 
@@ -260,7 +321,17 @@ class ValidationOutcome:
 
     @property
     def n_not_enclosed(self) -> int:
+        """Points where gamma_h could not be verified (unexplainable, solver failure, bad data)."""
         return int(np.count_nonzero(self.result.status != "ok"))
+
+    def typed_report(self, noise_bound: Any, baseline_path: str | Path) -> Any:
+        """``validate --json`` as a :class:`rotorcheck.report.schema.ValidationReport`."""
+        from rotorcheck.report.schema import ValidationReport
+
+        res = self.result
+        return ValidationReport(self.runs[0].frequency_hz, res.gamma, res.gamma_lower, [str(x) for x in res.status],
+                                float(noise_bound.value_m), noise_bound.method, self.baseline.enclose,
+                                self.model.structure, int(res.gamma.size), self.n_not_enclosed, str(baseline_path))
 
 
 def _same_grid(a: np.ndarray, b: np.ndarray) -> bool:
@@ -302,9 +373,9 @@ def validate(
     model = nominal_model(rig, first.frequency_hz, first.speed_rpm)
     # 'measured' detects against the measured healthy FRF; its gamma is still the model-error bound
     # of 'system' (what validation is for: how far the nominal model is from the healthy rig)
-    V = noise_values(noise_bound)
-    if not np.isscalar(V):  # per-point: every healthy run's own V(w), the largest per point
-        V = np.max([noise_values(noise_bound, r) for r in runs], axis=0)
+    V: float | np.ndarray = noise_values(noise_bound)
+    if not isinstance(V, float):  # per-point: every healthy run's own V(w), the largest per point
+        V = np.max(np.array([noise_values(noise_bound, r) for r in runs], dtype=float), axis=0)
     res = validation.validate(model.me, [r.W for r in runs], [r.Zt for r in runs], V,
                               enclose="system" if enclose == "measured" else enclose, fail_at=fail_at)
     healthy = healthy_estimate(runs)
@@ -318,7 +389,7 @@ def validate(
         input_phasor=first.W[:, None], output_phasor=first.Zt[:, None],
         healthy_frf=healthy.frf, healthy_frf_var=healthy.var, healthy_frf_dof=healthy.dof,
         shaft_orders_removed=first.harmonics_removed,
-        noise_bound_per_point_m=None if np.isscalar(V) else np.asarray(V, dtype=float),
+        noise_bound_per_point_m=None if isinstance(V, float) else np.asarray(V, dtype=float),
     )
     return ValidationOutcome(base, res, model, runs, rig)
 
@@ -382,87 +453,54 @@ class DetectionOutcome:
         return {"healthy": 0, "damage": 1, "inconclusive": 3}[self.verdict.verdict]
 
     def report(self) -> dict[str, Any]:
-        """The report.json document (cli.md keys plus context)."""
+        """The report.json document (cli.md keys plus context): :meth:`typed_report` as a dict."""
+        return self.typed_report().to_dict()
+
+    def typed_report(self) -> Any:
+        """The report as a :class:`rotorcheck.report.schema.DetectionReport`."""
+        from rotorcheck.report.schema import DetectionReport
+
         f = self.run.frequency_hz
         fault = np.asarray(self.detection.fault, dtype=bool)
         ds = self.damage_set
         m = self.measured
-        return {
-            "verdict": self.verdict.verdict,
-            "verdict_reason": self.verdict.reason,
-            "verdict_rule": MEASURED_RULE if m is not None else VERDICT_RULE,
-            "n_points": int(f.size),
-            "n_fault_points": int(np.count_nonzero(fault)),
-            "fault_frequencies_hz": [float(x) for x in f[fault]],
-            "rig_id": self.rig.rig_id,
-            "rig_sha256": self.rig.sha256(),
-            "sweep": str(self.run.path),
-            "sweep_sha256": self.run.sha256,
-            "run_id": self.run.run_id,
-            "speed_rpm": self.run.speed_rpm,
-            "band_hz": list(self.run.band_hz),
-            "noise_bound_m": self.baseline.noise_bound_m,
-            "noise_method": self.baseline.noise_method,
-            "uncertainty": self.baseline.uncertainty,
-            "parameter": self.baseline.parameter,
-            "enclose": self.baseline.enclose,
-            "damage_port": _port_name(self.rig),
-            "shaft_orders_removed": self.run.harmonics_removed,
-            **self._measured_keys(),
-            "notes": self.notes,
-            "frequency_hz": f,
-            "gamma_healthy": self.detection.gamma_healthy,
-            "gamma_required": self.detection.gamma_required,
-            "gamma_required_upper": self.detection.gamma_required_upper,
-            "fault": fault,
-            "status": [str(s) for s in self.detection.status],
-            "damage_dynamics_re": self.damage.real,
-            "damage_dynamics_im": self.damage.imag,
-            "damage_bound_kind": [str(k) for k in ds.kind],
-            "damage_bound_min_abs": ds.min_abs,
-            "damage_bound_max_abs": ds.max_abs,
-            "damage_bound_phase_min_deg": np.degrees(ds.phase_min),
-            "damage_bound_phase_max_deg": np.degrees(ds.phase_max),
-            **self._anchored_keys(),
-        }
-
-    def _measured_keys(self) -> dict[str, Any]:
-        m = self.measured
-        if m is None:
-            return {}
-        return {
-            "confidence": m.confidence,
-            "n_tests": m.n_tests,
-            "point_miss_probability": m.point_miss,
-            "p_value": m.family_p_value,
-            "gamma_meaning": "measured detection: gamma_required = |T_new - T_healthy| (m/N), gamma_healthy = "
-                             "the noise allowance of that difference at the per-point level (m/N)",
-            "point_p_value": m.p_value,
-            "variance_dof": m.dof[:, 0],
-        }
-
-    def _noise_only_keys(self) -> dict[str, Any]:
-        a, b = self.anchored_noise_only, self.anchored_set
-        if a is None:
-            return {}
-        return {"damage_anchored_channel_error": getattr(b, "channel_error", None),
-                "damage_anchored_noise_min_abs": a.min_abs, "damage_anchored_noise_max_abs": a.max_abs}
-
-    def _anchored_keys(self) -> dict[str, Any]:
-        if self.anchored is None or self.anchored_set is None:
-            return {}
-        a = self.anchored_set
-        return {
-            "damage_dynamics_anchored_re": self.anchored.real,
-            "damage_dynamics_anchored_im": self.anchored.imag,
-            "damage_anchored_bound_kind": [str(k) for k in a.kind],
-            "damage_anchored_bound_min_abs": a.min_abs,
-            "damage_anchored_bound_max_abs": a.max_abs,
-            "damage_anchored_bound_phase_min_deg": np.degrees(a.phase_min),
-            "damage_anchored_bound_phase_max_deg": np.degrees(a.phase_max),
-            "damage_anchored_bound_confidence": self.measured.confidence if self.measured is not None else None,
-            **self._noise_only_keys(),
-        }
+        rep = DetectionReport(
+            verdict=self.verdict.verdict, verdict_reason=self.verdict.reason,
+            verdict_rule=MEASURED_RULE if m is not None else VERDICT_RULE,
+            n_points=int(f.size), n_fault_points=int(np.count_nonzero(fault)),
+            fault_frequencies_hz=[float(x) for x in f[fault]], rig_id=self.rig.rig_id,
+            rig_sha256=self.rig.sha256(), sweep=str(self.run.path), sweep_sha256=self.run.sha256,
+            run_id=self.run.run_id, speed_rpm=self.run.speed_rpm, band_hz=list(self.run.band_hz),
+            noise_bound_m=self.baseline.noise_bound_m, noise_method=self.baseline.noise_method,
+            uncertainty=self.baseline.uncertainty, parameter=self.baseline.parameter,
+            enclose=self.baseline.enclose, damage_port=_port_name(self.rig),
+            shaft_orders_removed=self.run.harmonics_removed, notes=self.notes, frequency_hz=f,
+            gamma_healthy=self.detection.gamma_healthy, gamma_required=self.detection.gamma_required,
+            gamma_required_upper=self.detection.gamma_required_upper, fault=fault,
+            status=[str(s) for s in self.detection.status],
+            damage_dynamics_re=self.damage.real, damage_dynamics_im=self.damage.imag,
+            damage_bound_kind=[str(k) for k in ds.kind], damage_bound_min_abs=ds.min_abs,
+            damage_bound_max_abs=ds.max_abs, damage_bound_phase_min_deg=np.degrees(ds.phase_min),
+            damage_bound_phase_max_deg=np.degrees(ds.phase_max),
+        )
+        if m is not None:
+            rep.confidence, rep.n_tests, rep.point_miss_probability = m.confidence, m.n_tests, m.point_miss
+            rep.p_value, rep.point_p_value, rep.variance_dof = m.family_p_value, m.p_value, m.dof[:, 0]
+            rep.gamma_meaning = ("measured detection: gamma_required = |T_new - T_healthy| (m/N), gamma_healthy = "
+                                 "the noise allowance of that difference at the per-point level (m/N)")
+        if self.anchored is not None and self.anchored_set is not None:
+            a = self.anchored_set
+            rep.damage_dynamics_anchored_re, rep.damage_dynamics_anchored_im = self.anchored.real, self.anchored.imag
+            rep.damage_anchored_bound_kind = [str(k) for k in a.kind]
+            rep.damage_anchored_bound_min_abs, rep.damage_anchored_bound_max_abs = a.min_abs, a.max_abs
+            rep.damage_anchored_bound_phase_min_deg = np.degrees(a.phase_min)
+            rep.damage_anchored_bound_phase_max_deg = np.degrees(a.phase_max)
+            rep.damage_anchored_bound_confidence = m.confidence if m is not None else None
+            if self.anchored_noise_only is not None:
+                rep.damage_anchored_channel_error = getattr(a, "channel_error", None)
+                rep.damage_anchored_noise_min_abs = self.anchored_noise_only.min_abs
+                rep.damage_anchored_noise_max_abs = self.anchored_noise_only.max_abs
+        return rep
 
 
 def _port_name(rig: RigConfig) -> str:
@@ -535,7 +573,8 @@ def detect(
     notes.append("damage_dynamics_* (eq. 3.11 with the nominal E22) carries the nominal model's error of E22 "
                  "(its size on a healthy shaft is the model error, not damage); damage_dynamics_anchored_* "
                  "anchors E22 at the measured healthy FRF and is the estimate to read")
-    anchored = anchored_set = None
+    anchored: np.ndarray | None = None
+    anchored_set: Any = None
     noise_only: Any = None
     Th = _healthy_frf(baseline)
     if Th is not None:
@@ -669,8 +708,9 @@ def _plot_index(f: np.ndarray, at_hz: float | None, score: np.ndarray) -> int:
     return int(np.argmax(finite))
 
 
-def validation_plots(outcome: ValidationOutcome, out_dir: str | Path, at_hz: float | None = None) -> list[str]:
-    """Bode with the uncertainty band and the complex plane at one frequency (PNG and PDF)."""
+def validation_plots(outcome: ValidationOutcome, out_dir: str | Path, at_hz: float | None = None,
+                     formats: tuple[str, ...] = ("png",)) -> list[str]:
+    """Bode with the uncertainty band and the complex plane at one frequency (``formats``)."""
     from rotorcheck.report.figures import save_figure
     from rotorcheck.report.plots import bode_band_figure, complex_plane_figure
 
@@ -679,15 +719,16 @@ def validation_plots(outcome: ValidationOutcome, out_dir: str | Path, at_hz: flo
     centre, radius = uncertainty_disk(model, b.gamma, _v_of(b), run.W)
     title = f"{outcome.rig.rig_id}: validation at {run.speed_rpm:g} rpm ({b.uncertainty}, enclose {b.enclose})"
     files = save_figure(bode_band_figure(run.frequency_hz, model.frf, centre, radius, healthy_frf=run.frf,
-                                         title=title), out / "validation_bode")
+                                         title=title), out / "validation_bode", formats)
     i = _plot_index(run.frequency_hz, at_hz, np.abs(run.frf - model.frf) / np.abs(model.frf))
     files += save_figure(complex_plane_figure(float(run.frequency_hz[i]), complex(model.frf[i]), complex(centre[i]),
                                               float(radius[i]), healthy=complex(run.frf[i])),
-                         out / "validation_complex_plane")
+                         out / "validation_complex_plane", formats)
     return [str(p) for p in files]
 
 
-def detection_plots(outcome: DetectionOutcome, out_dir: str | Path, at_hz: float | None = None) -> list[str]:
+def detection_plots(outcome: DetectionOutcome, out_dir: str | Path, at_hz: float | None = None,
+                    formats: tuple[str, ...] = ("png",)) -> list[str]:
     """Bode with band, healthy and new data and fault points; complex plane; damage dynamics."""
     from rotorcheck.report.figures import save_figure
     from rotorcheck.report.plots import bode_band_figure, complex_plane_figure, damage_dynamics_figure
@@ -701,8 +742,9 @@ def detection_plots(outcome: DetectionOutcome, out_dir: str | Path, at_hz: float
     else:
         centre, radius = uncertainty_disk(model, b.gamma, _v_of(b), run.W)
     title = f"{outcome.rig.rig_id}: detection at {run.speed_rpm:g} rpm ({outcome.verdict.verdict})"
-    files = save_figure(bode_band_figure(run.frequency_hz, model.frf, centre, radius, healthy_frf=healthy,
-                                         damaged_frf=run.frf, fault=fault, title=title), out / "detection_bode")
+    fig = bode_band_figure(run.frequency_hz, model.frf, centre, radius, healthy_frf=healthy, damaged_frf=run.frf,
+                           fault=fault, title=title)
+    files = save_figure(fig, out / "detection_bode", formats)
     with np.errstate(divide="ignore", invalid="ignore"):
         score = np.where(fault, outcome.detection.gamma_required / np.maximum(b.gamma, 1e-300), -np.inf)
     if not np.any(fault):
@@ -711,12 +753,12 @@ def detection_plots(outcome: DetectionOutcome, out_dir: str | Path, at_hz: float
     h_i = None if healthy is None else complex(healthy[i])
     fig = complex_plane_figure(float(run.frequency_hz[i]), complex(model.frf[i]), complex(centre[i]),
                                float(radius[i]), healthy=h_i, damaged=complex(run.frf[i]))
-    files += save_figure(fig, out / "detection_complex_plane")
+    files += save_figure(fig, out / "detection_complex_plane", formats)
     ds = outcome.damage_set
     title = f"{outcome.rig.rig_id}: damage dynamics at {_port_name(outcome.rig)}"
     fig = damage_dynamics_figure(run.frequency_hz, outcome.damage, ds.min_abs, ds.max_abs, np.degrees(ds.phase_min),
                                  np.degrees(ds.phase_max), fault=fault, title=title, anchored=outcome.anchored)
-    files += save_figure(fig, out / "damage_dynamics")
+    files += save_figure(fig, out / "damage_dynamics", formats)
     return [str(p) for p in files]
 
 
@@ -731,6 +773,7 @@ PLOT_STEMS_DETECT = ("detection_bode", "detection_complex_plane", "damage_dynami
 def crack_report(
     rig_path: str | Path, fault: str = "breathing_crack", unbalance_g_m: float = 0.2, station: int | None = None,
     speeds_rpm: tuple[float, float] = (1000.0, 750.0), out_dir: str | Path | None = None, force: bool = False,
+    formats: tuple[str, ...] = ("png",),
 ) -> dict[str, Any]:
     """Stiffness over a revolution, orbits and spectra of the cracked rotor (Fig. 56-58).
 
@@ -749,12 +792,14 @@ def crack_report(
     if not config.discs:
         raise InputError(rig_path, "discs", "the section 5.3 illustration puts the unbalance on the first disc")
     st = station if station is not None else config.ports.sensor.station
+    if st is None:
+        raise InputError(rig_path, "ports.sensor.station", "the illustration needs a sensor station")
     stems = []
     if out_dir is not None:
         from rotorcheck.fileio import check_writable
 
         stems = [Path(out_dir) / n for n in ("crack_stiffness", "crack_orbit", "crack_spectrum")]
-        check_writable([s.with_suffix(e) for s in stems for e in (".png", ".pdf")], force)
+        check_writable([s.with_suffix("." + e) for s in stems for e in formats], force)
 
     from rotorcheck.faults.analysis import critical_speed_summary, unbalance_harmonics
     from rotorcheck.fe.assembly import build_system
@@ -776,6 +821,6 @@ def crack_report(
 
         figs = crack_figures(system, crack, unb, station=st, speeds_rpm=speeds_rpm)
         for key, stem in zip(("stiffness", "orbit", "spectrum"), stems):
-            files += [str(p) for p in save_figure(figs[key], stem)]
+            files += [str(p) for p in save_figure(figs[key], stem, formats)]
     return {"rig_id": config.rig_id, "fault": fault, "station": st, "unbalance_g_m": unbalance_g_m,
             "harmonics": harmonics, "critical_speeds": crit, "files": files}

@@ -11,8 +11,8 @@ from rotorcheck.cli import EXIT_INPUT, EXIT_OK, main
 from rotorcheck.config import load_config
 from rotorcheck.faults.compliance import with_crack_depth
 from rotorcheck.resources import configs_dir
-from rotorcheck.sweep.format import read_sweep
-from rotorcheck.sweep.rig_sim import simulate_rig, step_settings
+from rotorcheck.sim.rig_sim import simulate_rig, step_settings
+from rotorcheck.sweep import read_sweep
 
 
 def _frf(path: Path) -> np.ndarray:

@@ -19,7 +19,7 @@ from rotorcheck.cli import main
 from rotorcheck.config import load_config
 from rotorcheck.fe.assembly import build_system
 from rotorcheck.fe.frf import receptance
-from rotorcheck.sweep.format import read_sweep
+from rotorcheck.sweep import read_sweep
 
 REPO = Path(__file__).resolve().parents[1]
 SAMPLES = REPO / "data_samples"

@@ -9,7 +9,7 @@ import pytest
 from scipy.stats import f as f_dist
 
 from rotorcheck.robust.measured import FrfEstimate, combine_sweeps, measured_detect, welch_dof
-from rotorcheck.sweep.lockin import shaft_harmonic_fit, tone_lockin
+from rotorcheck.signal.lockin import shaft_harmonic_fit, tone_lockin
 
 
 def _sweep(rng: np.random.Generator, truth: np.ndarray, n: np.ndarray, sd: np.ndarray) -> FrfEstimate:
@@ -26,7 +26,7 @@ def _sweep(rng: np.random.Generator, truth: np.ndarray, n: np.ndarray, sd: np.nd
 def test_family_wise_coverage_monte_carlo(periods: str) -> None:
     """P(no fault point on a healthy repeat) >= 0.99 (stated), within 3 binomial sigma."""
     rng = np.random.default_rng({"2": 1, "4": 2, "64": 3, "8-160": 4}[periods])
-    nf, reps = 120, 1500
+    nf, reps = 100, 1000
     truth = np.exp(1j * rng.uniform(0, 6, nf)) * np.exp(rng.uniform(-3, 3, nf))
     alarms = 0
     for _ in range(reps):
@@ -44,7 +44,11 @@ def test_family_wise_coverage_monte_carlo(periods: str) -> None:
 
 
 def test_siso_equals_certified_model_free_comparison() -> None:
-    """One output: fault iff |T_new - T_h| > sqrt((a + b) F^-1(1 - miss; 2, nu_Welch)), scipy's F."""
+    """One output: fault iff |T_new - T_h| > sqrt((a + b) t) with t the per-point quantile of the
+    difference statistic; the radius checked by root-finding (brentq) on a Monte Carlo-verified tail."""
+    from scipy.optimize import brentq
+    from scipy.stats import f as fdist
+
     rng = np.random.default_rng(5)
     nf = 300
     h = FrfEstimate(rng.standard_normal(nf) + 1j * rng.standard_normal(nf), rng.uniform(0.1, 1, nf),
@@ -52,17 +56,39 @@ def test_siso_equals_certified_model_free_comparison() -> None:
     new = FrfEstimate(h.frf[:, 0] + 3 * (rng.standard_normal(nf) + 1j * rng.standard_normal(nf)),
                       rng.uniform(0.1, 1, nf), rng.integers(2, 200, nf) * 2.0)
     res = measured_detect(new, h, 0.95)
-    a, b = new.var[:, 0], h.var[:, 0]
-    nu = (a + b) ** 2 / (a**2 / new.dof[:, 0] + b**2 / h.dof[:, 0])
+    a, b, na, nb = new.var[:, 0], h.var[:, 0], new.dof[:, 0], h.dof[:, 0]
     miss = 1 - 0.95 ** (1 / nf)
-    r = np.sqrt((a + b) * f_dist.isf(miss, 2, nu))
-    np.testing.assert_allclose(res.radius[:, 0], r, rtol=1e-9)
     d = np.abs(new.frf[:, 0] - h.frf[:, 0])
-    np.testing.assert_array_equal(res.fault, d > r)
+    for i in range(0, nf, 37):
+        rho = a[i] / b[i]
+        ends = [rho / fdist.isf(0.05, na[i], nb[i]), rho / fdist.ppf(0.05, na[i], nb[i])]
+        ws = [x / (1 + x) for x in ends]
+
+        def tail(t: float, i: int = i, ws: list[float] = ws) -> float:
+            return max((1 + 2 * t * w / na[i]) ** (-na[i] / 2) * (1 + 2 * t * (1 - w) / nb[i]) ** (-nb[i] / 2)
+                       for w in ws)
+
+        t_i = brentq(lambda t: tail(t) - miss, 1e-6, 1e9, xtol=1e-12, rtol=1e-12)
+        assert res.radius[i, 0] == pytest.approx(np.sqrt((a[i] + b[i]) * t_i), rel=1e-8)
+        assert res.p_value[i] == pytest.approx(tail(d[i] ** 2 / (a[i] + b[i])), rel=1e-8)
+    np.testing.assert_array_equal(res.fault, d > res.radius[:, 0])
     assert 0 < res.n_fault < nf
-    np.testing.assert_allclose(res.p_value, f_dist.sf(d**2 / (a + b), 2, nu), rtol=1e-8)
-    # the sweep p-value says the same as the verdict (Sidak)
     assert (res.family_p_value < 0.05) == (res.n_fault > 0)
+
+
+def test_difference_tail_closed_form_against_monte_carlo() -> None:
+    """P(|d|^2/(a_hat + b_hat) > t) = (1 + 2tw/nu_a)^(-nu_a/2) (1 + 2t(1-w)/nu_b)^(-nu_b/2)."""
+    from rotorcheck.robust.measured import difference_log_sf
+
+    rng = np.random.default_rng(15)
+    a, b, na, nb, k = 2.0, 0.5, 6.0, 10.0, 400_000
+    d2 = (a + b) * rng.exponential(size=k)
+    s = a * rng.chisquare(na, k) / na + b * rng.chisquare(nb, k) / nb
+    w = np.array(a / (a + b))
+    for t in (1.0, 3.0, 8.0):
+        mc = np.mean(d2 / s > t)
+        exact = float(np.exp(difference_log_sf(np.array(t), w, w, np.array(na), np.array(nb))))
+        assert mc == pytest.approx(exact, abs=4 * np.sqrt(exact * (1 - exact) / k))
 
 
 def test_known_variances_use_the_exponential_quantile() -> None:
@@ -198,7 +224,7 @@ def test_per_point_noise_bound_coverage_monte_carlo(periods: str) -> None:
     from rotorcheck.robust.noise import noise_bound_per_point
 
     rng = np.random.default_rng({"2": 11, "4": 12, "64": 13, "8-160": 14}[periods])
-    nf, reps, misses = 120, 1500, 0
+    nf, reps, misses = 100, 1000, 0
     n = (np.round(np.linspace(8, 160, nf)).astype(int) if periods == "8-160" else np.full(nf, int(periods)))
     for _ in range(reps):
         sd = np.exp(rng.uniform(-2, 2, nf))

@@ -14,7 +14,7 @@ from rotorcheck.config import RigConfig, load_config
 from rotorcheck.nominal import nominal_model
 from rotorcheck.resources import configs_dir
 from rotorcheck.robust.identify import damage_dynamics
-from rotorcheck.sweep.rig_sim import simulate_rig, step_settings
+from rotorcheck.sim.rig_sim import simulate_rig, step_settings
 
 GRID = np.linspace(30.0, 600.0, 262)
 FACTORS = (0.995, 0.98, 0.95, 0.9, 0.8, 0.6, 0.46)

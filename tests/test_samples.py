@@ -9,8 +9,8 @@ import h5py
 import numpy as np
 import pytest
 
+from rotorcheck.sweep import compare_sweeps, read_sweep
 from tools import samples
-from rotorcheck.sweep.format import compare_sweeps, read_sweep
 
 REPO = Path(__file__).resolve().parents[1]
 SAMPLE_DIR = REPO / "data_samples"

@@ -18,8 +18,8 @@ import numpy as np
 
 from rotorcheck.config import load_config
 from rotorcheck.resources import configs_dir
-from rotorcheck.sweep.format import Sweep, compare_sweeps, read_sweep, write_sweep
-from rotorcheck.sweep.rig_sim import shaft_angle_from, simulate_rig, step_settings
+from rotorcheck.sim.rig_sim import shaft_angle_from, simulate_rig, step_settings
+from rotorcheck.sweep import Sweep, compare_sweeps, read_sweep, write_sweep
 
 CREATED_UTC = "2026-01-01T00:00:00Z"
 

@@ -4,10 +4,11 @@
   Fourier series; the resolved sign of eq. 5.21 (crack closed at theta = 0).
 - :mod:`~rotorcheck.faults.crack`: eq. 5.25, the element reduction (eq. 5.24) in the rotating and
   fixed frames, its Fourier coefficients, the open-crack system.
-- :mod:`~rotorcheck.faults.harmonic_balance`: Hill's method for the LTP cracked rotor, the
-  simulator's plant callable and the synchronous disturbance tones.
-- :mod:`~rotorcheck.faults.time_sim`: Magnus-4 time integration (verification, orbits, spectra).
-- :mod:`~rotorcheck.faults.analysis`: critical speeds, unbalance harmonics/orbits, simulator hooks.
+- :mod:`~rotorcheck.faults.harmonic_balance`: Hill's method for the LTP cracked rotor (receptances
+  from the engine :mod:`rotorcheck.fe.frf`), the plant callable and the synchronous disturbance tones.
+- :mod:`~rotorcheck.faults.analysis`: critical speeds, unbalance harmonics and orbits.
+
+The simulator hooks and the time integration are in :mod:`rotorcheck.sim` (above faults and sweep).
 """
 
 from rotorcheck.faults.crack import (

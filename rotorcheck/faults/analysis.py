@@ -1,37 +1,29 @@
-"""Derived results for the cracked rotor: critical speeds, unbalance harmonics and orbits, and the
-hooks the sweep simulator takes (its ``Plant``, disturbance ``Tone`` s, ``dK`` Fourier and ``dK(t)``).
+"""Derived results for the cracked rotor: critical speeds, unbalance harmonics and orbits.
 
+(The sweep simulator's hooks for the cracked rotor live in :mod:`rotorcheck.sim.plants`.)
 SI units; frequencies in Hz and speeds in rpm at the interface.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import replace
 from typing import Any
 
 import numpy as np
 from scipy.optimize import minimize_scalar
 
-from rotorcheck.config import Crack, Misalignment, UnbalanceMass
+from rotorcheck.config import Crack, UnbalanceMass
 from rotorcheck.faults.crack import CrackStiffness, crack_stiffness
-from rotorcheck.faults.harmonic_balance import (
-    cracked_disturbance_tones,
-    cracked_tones,
-    fold_tones,
-    solve_hb,
-)
+from rotorcheck.faults.harmonic_balance import cracked_disturbance_tones, fold_tones, solve_hb
+from rotorcheck.fe.modal import critical_speeds, modes
 from rotorcheck.fe.system import RPM_TO_RAD_S, MechanicalSystem
 
 __all__ = [
     "averaged_system",
     "critical_speed_summary",
-    "dk_fourier",
     "frozen_system",
     "hb_resonance_hz",
-    "simulator_disturbances",
-    "simulator_plant",
-    "stiffness_perturbation",
     "unbalance_harmonics",
     "unbalance_orbit",
 ]
@@ -102,8 +94,6 @@ def critical_speed_summary(
     rest (``open_at_rest``); with ``in_dof``/``out_dof`` also the k = 0 HB resonance of the LTP
     system near mode 1 at ``speed_rpm``. Frequencies in Hz, speeds in rpm.
     """
-    from rotorcheck.fe.modal import critical_speeds, modes
-
     ck = _ck(system, crack)
     avg = averaged_system(system, ck)
     opened = frozen_system(system, ck, np.pi - ck.theta0)
@@ -168,64 +158,3 @@ def unbalance_orbit(
     t = np.linspace(0.0, 2.0 * np.pi / om, n_points)
     xy = np.real(np.exp(1j * om * np.outer(t, orders)) @ ph)
     return t, xy
-
-
-# --------------------------------------------------------------------------------------------
-# sweep simulator hooks
-
-
-def dk_fourier(system: MechanicalSystem, crack: Crack | CrackStiffness) -> dict[int, np.ndarray]:
-    """``dK(t) = -K_c(t) = sum_l dK_l e^{j l Omega t}`` as global (n, n) complex matrices, for
-    :func:`rotorcheck.sweep.simulator.harmonic_balance_plant` (which adds ``dK`` to ``K``)."""
-    ck = _ck(system, crack)
-    orders, kp = ck.harmonics()
-    return {int(p): -ck.scatter(k, system.n_dof) for p, k in zip(orders, kp)}
-
-
-def stiffness_perturbation(
-    system: MechanicalSystem, crack: Crack | CrackStiffness, speed_rpm: float
-) -> Callable[[float], np.ndarray]:
-    """``t -> dK(t) = -K_c(Omega t)`` (n, n) N/m for the simulator's time-domain path."""
-    ck = _ck(system, crack)
-    om = speed_rpm * RPM_TO_RAD_S
-    n = system.n_dof
-
-    def dk(t: float) -> np.ndarray:
-        return -ck.scatter(ck.at_rotation(om * float(t))[0], n)
-
-    return dk
-
-
-def simulator_plant(
-    system: MechanicalSystem,
-    crack: Crack | CrackStiffness | None,
-    speed_rpm: float,
-    in_dof: int,
-    out_dofs: Sequence[int] | int,
-    n_harmonics: int = 8,
-    name: str = "cracked_rotor_hb",
-) -> Any:
-    """:class:`rotorcheck.sweep.simulator.Plant` wrapping :func:`cracked_tones`."""
-    from rotorcheck.sweep.simulator import Plant
-
-    plant = cracked_tones(system, crack, speed_rpm, in_dof, out_dofs, n_harmonics)
-    return Plant(tones=plant, n_out=int(plant.out_dofs.size), name=name)
-
-
-def simulator_disturbances(
-    system: MechanicalSystem,
-    crack: Crack | CrackStiffness | None,
-    speed_rpm: float,
-    out_dofs: Sequence[int] | int,
-    unbalance: Sequence[UnbalanceMass] = (),
-    misalignment: Misalignment | None = None,
-    n_harmonics: int = 8,
-    misalignment_whirl: str = "forward",
-) -> list[Any]:
-    """Synchronous output tones as simulator ``Tone`` s (signed frequencies, absolute time, m)."""
-    from rotorcheck.sweep.simulator import Tone
-
-    f, a = cracked_disturbance_tones(
-        system, crack, speed_rpm, out_dofs, unbalance, misalignment, n_harmonics, misalignment_whirl
-    )
-    return [Tone(float(fi), ai) for fi, ai in zip(f, a) if np.any(ai != 0)]

@@ -52,6 +52,8 @@ from rotorcheck.faults.breathing import (
     mayes_davies_steering,
 )
 from rotorcheck.faults.compliance import crack_compliances
+from rotorcheck.fe.assembly import build_system
+from rotorcheck.fe.elements import X_PLANE, TimoshenkoBeam
 from rotorcheck.fe.system import BeamElementInfo, MechanicalSystem
 
 __all__ = [
@@ -288,8 +290,6 @@ def crack_stiffness(
 
     def timo(scale: float = 1.0) -> list[np.ndarray]:
         # the assembly's own element (same shear coefficient); x-plane block = standard plane
-        from rotorcheck.fe.elements import X_PLANE, TimoshenkoBeam
-
         out = []
         for e in els:
             beam = TimoshenkoBeam.from_info(replace(e, youngs_modulus=scale * e.youngs_modulus))
@@ -405,8 +405,6 @@ def open_crack_system(config: RigConfig, crack: Crack | None = None) -> Mechanic
     ``build_system(config, modulus_factors={element: factor})`` (on top of the config element's
     own factor). ``crack`` defaults to the config's first crack fault with a ``modulus_factor``.
     """
-    from rotorcheck.fe.assembly import build_system
-
     if crack is None:
         cracks = [f for f in config.faults.values() if isinstance(f, Crack) and f.modulus_factor is not None]
         if not cracks:

@@ -11,7 +11,7 @@ For a real input ``Re{U e^{jwt}}`` the real response is ``Re{U sum_k Q_k e^{j(w 
 (the conjugate part of the force produces the conjugate response), so tones are returned with
 **signed** frequencies ``f + k f_s`` (Hz; some negative when ``f < H f_s``) and complex amplitudes
 per unit input phasor ``U``; this is exactly the form ``x(t) = Re sum_m Y_m exp(j 2 pi F_m t)`` that
-:func:`rotorcheck.sweep.lockin.tone_lockin` accepts. :func:`fold_tones` gives the equivalent
+:func:`rotorcheck.signal.lockin.tone_lockin` accepts. :func:`fold_tones` gives the equivalent
 non-negative-frequency phasors for a given ``U`` (for display).
 
 Solver. K_c lives on the cracked element's m DOF (m = 8 for one element), so the (2H+1) n block
@@ -20,8 +20,10 @@ system is reduced exactly to (2H+1) m unknowns ``Y_k = S^T Q_k`` (S selects the 
     (I - blkdiag(S^T Z_k^-1 S) Kblk) Y = [S^T Z_0^-1 b at k = 0],  Kblk[k, j] = K_{k-j},
     Q_k = Z_k^-1 (b delta_k0 + S (Kblk Y)_k),
 
-with one batched n x n solve per tone (all frequencies and harmonics at once) and one batched
-(2H+1) m solve per frequency. :func:`hill_matrix` assembles the full block matrix (tests).
+with the receptances ``S^T Z_k^-1 [S, b]`` and ``C Z_k^-1 [S, b]`` of every tone from the engine
+(:class:`rotorcheck.fe.frf.Receptance`, all frequencies and harmonics at once) and one batched
+(2H+1) m solve per frequency. The full block (Hill) matrix and an independent dense HB are test
+oracles (tests/oracles/hb.py).
 """
 
 from __future__ import annotations
@@ -33,26 +35,26 @@ from typing import Any
 import numpy as np
 
 from rotorcheck.config import Crack, Misalignment, UnbalanceMass
-from rotorcheck.faults._blas import single_thread_blas
 from rotorcheck.faults.crack import CrackStiffness, crack_stiffness
+from rotorcheck.fe.blas import one_blas_thread
+from rotorcheck.fe.frf import Receptance
 from rotorcheck.fe.system import RPM_TO_RAD_S, MechanicalSystem
 
 __all__ = [
     "CrackedPlant",
     "HBResult",
     "HBSolver",
-    "Receptance",
     "convergence_table",
     "cracked_disturbance_tones",
     "cracked_tones",
     "fold_tones",
-    "hill_matrix",
     "misalignment_force",
     "solve_hb",
     "unbalance_force",
 ]
 
 TWO_PI = 2.0 * np.pi
+_CHUNK_ENTRIES = 8_000_000  # complex entries per chunk of frequencies (128 MB)
 
 
 @dataclass(frozen=True)
@@ -174,16 +176,22 @@ class HBSolver:
 
     def solve(self, freq_hz: np.ndarray | float, chunk: int = 64) -> HBResult:
         """Tones for the excitation frequencies ``freq_hz`` (Hz)."""
-        with single_thread_blas():
+        # many small dense operations: BLAS threads only synchronise (bench/bench_engine.py)
+        with one_blas_thread():
             return self._solve(freq_hz, chunk)
 
     def _solve(self, freq_hz: np.ndarray | float, chunk: int) -> HBResult:
         f = np.atleast_1d(np.asarray(freq_hz, dtype=float))
         H, m, nk, n_in = self.H, self.m, self.orders.size, self.n_in
         result = np.zeros((f.size, nk, self.outs.size, n_in), dtype=complex)
+        if f.size:  # every tone of this call in one band (a reduced basis is built once)
+            self.rec.ensure_band(float(np.max(np.abs(f))) + (H * self.omega / TWO_PI if self.coupled else 0.0))
         if not self.coupled:
             result[:, H] = self.rec(TWO_PI * f)
             return HBResult(f, self.orders, self.speed_rpm, result)
+        # bounded working memory per chunk: the receptances and the (2H+1) m system of each frequency
+        per_f = nk * (m + self.outs.size) * (m + n_in) + 2 * (nk * m) ** 2
+        chunk = max(1, min(int(chunk), _CHUNK_ENTRIES // per_f))
         for s in range(0, f.size, chunk):
             fc = f[s : s + chunk]
             nu = TWO_PI * fc[:, None] + self.orders[None, :] * self.omega  # (Fc, nk) rad/s
@@ -220,103 +228,11 @@ def solve_hb(
     ``inputs``: a DOF index (unit force), a list of DOFs, or force vectors (n,)/(n, n_in) (N);
     ``out_dofs``: DOF indices of the outputs; ``n_harmonics`` = H (tones k = -H..H).
     ``crack=None`` gives the healthy (time-invariant) response in the k = 0 tone.
-    ``method``: receptances by ``"modal"`` superposition of the state-space eigenvectors (one
-    eigendecomposition per speed), ``"direct"`` LU per tone, or ``"auto"`` (modal, falling back to
-    direct when the eigenvectors are ill-conditioned; see :class:`Receptance`).
+    ``method``: how the engine computes the receptances (:class:`rotorcheck.fe.frf.Receptance`:
+    ``"modal"``, ``"direct"``, ``"reduced"`` or ``"auto"``).
     """
     solver = HBSolver(system, crack, speed_rpm, inputs, out_dofs, n_harmonics, method, **crack_kw)
     return solver.solve(freq_hz, chunk)
-
-
-class Receptance:
-    """Sub-blocks ``Z(nu)^-1[rows][:, cols-as-vectors]`` of the receptance for many nu (rad/s).
-
-    ``cols`` (n, c): force vectors. Modal: ``x' = A x + [0; M^-1 f]``, ``A = V Lambda V^-1``, so
-    ``Z(nu)^-1 F = [I 0] V diag(1/(j nu - lambda)) V^-1 [0; M^-1 F]`` (exact, not truncated: all 2n
-    modes). ``"auto"`` checks the modal result against a direct solve at the mid frequency of the
-    eigenvalue range and falls back to ``"direct"`` above 1e-9 relative error.
-    """
-
-    def __init__(
-        self,
-        M: np.ndarray,
-        D: np.ndarray,
-        K: np.ndarray,
-        rows: np.ndarray,
-        cols: np.ndarray,
-        method: str = "auto",
-    ):
-        if method not in ("auto", "modal", "direct"):
-            raise ValueError(f"unknown method {method!r}")
-        self.M, self.D, self.K = M, D, K
-        self.rows, self.cols = np.asarray(rows), np.asarray(cols, dtype=complex)
-        n = M.shape[0]
-        self.method = "direct"
-        if method == "direct":
-            return
-        A = np.zeros((2 * n, 2 * n))
-        A[:n, n:] = np.eye(n)
-        A[n:, :n] = -np.linalg.solve(M, K)
-        A[n:, n:] = -np.linalg.solve(M, D)
-        lam, V = np.linalg.eig(A)
-        rhs = np.zeros((2 * n, self.cols.shape[1]), dtype=complex)
-        rhs[n:] = np.linalg.solve(M, self.cols)
-        try:
-            self._right = np.linalg.solve(V, rhs)  # (2n, c)
-        except np.linalg.LinAlgError:
-            if method == "modal":
-                raise
-            return
-        self._left = V[self.rows]  # (r, 2n)
-        self._lam = lam
-        self.method = "modal"
-        if method == "auto":
-            nu = np.array([[float(np.median(np.abs(lam.imag)))]])
-            err = np.abs(self._modal(nu) - self._direct(nu)).max()
-            if not np.isfinite(err) or err > 1e-9 * np.abs(self._direct(nu)).max():
-                self.method = "direct"
-
-    def _modal(self, nu: np.ndarray) -> np.ndarray:
-        d = 1.0 / (1j * nu[..., None] - self._lam)  # (..., 2n)
-        return np.matmul(self._left * d[..., None, :], self._right)
-
-    def _direct(self, nu: np.ndarray) -> np.ndarray:
-        Z = self.K - (nu**2)[..., None, None] * self.M + 1j * nu[..., None, None] * self.D
-        x = np.linalg.solve(Z, np.broadcast_to(self.cols, (*nu.shape, *self.cols.shape)))
-        return x[..., self.rows, :]
-
-    def __call__(self, nu: np.ndarray) -> np.ndarray:
-        """(..., r, c) complex for angular frequencies ``nu`` (rad/s) of any shape."""
-        nu = np.asarray(nu, dtype=float)
-        return self._modal(nu) if self.method == "modal" else self._direct(nu)
-
-
-def hill_matrix(
-    system: MechanicalSystem,
-    crack: CrackStiffness,
-    speed_rpm: float,
-    freq_hz: float,
-    n_harmonics: int,
-) -> np.ndarray:
-    """The full (2H+1) n Hill matrix ``blkdiag(Z_k) - [K_{k-j}]`` (reference for tests)."""
-    M, C, G, K = system.matrices(speed_rpm)
-    n = system.n_dof
-    omega = speed_rpm * RPM_TO_RAD_S
-    D = C + omega * G
-    H = int(n_harmonics)
-    nk = 2 * H + 1
-    porders, kp = _crack_blocks(crack, speed_rpm, H)
-    A = np.zeros((nk * n, nk * n), dtype=complex)
-    for i, k in enumerate(range(-H, H + 1)):
-        nu = TWO_PI * freq_hz + k * omega
-        A[i * n : (i + 1) * n, i * n : (i + 1) * n] = K - nu**2 * M + 1j * nu * D
-    for p, kpp in zip(porders, kp):
-        for i in range(nk):
-            j = i - int(p)
-            if 0 <= j < nk:
-                blk = A[i * n : (i + 1) * n, j * n : (j + 1) * n]
-                blk[np.ix_(crack.dofs, crack.dofs)] -= kpp
-    return A
 
 
 def fold_tones(

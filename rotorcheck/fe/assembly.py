@@ -7,7 +7,9 @@ built as one (ne, 8, 8) stack and scattered with ``np.add.at`` (no Python loop o
 matrix).
 
 Speed dependence: bearing coefficients (``SpeedTable``) and, through K, the modal damping. The
-matrices at a speed are computed once and cached (last 64 speeds).
+matrices are computed once per distinct set of bearing coefficients and cached (last 64 sets), so
+the speeds of a Campbell diagram over constant bearings share one modal-damping eigensolution; the
+set is the system's ``matrix_key``.
 
 Faults: ``modulus_factors={element: factor}`` scales Young's modulus of config element(s) (an open
 crack: ``{4: 0.46}``), on top of the config's own ``modulus_factor``; lumped models accept
@@ -145,13 +147,22 @@ def build_rotor(config: RigConfig, modulus_factors: Mapping[int, float] | None =
     damping = config.damping
     base = 4 * np.arange(positions.size)
     planes = (np.sort(np.r_[base, base + 3]), np.sort(np.r_[base + 1, base + 2]))
-    cache: OrderedDict[float, Matrices] = OrderedDict()
+    cache: OrderedDict[tuple[float, ...], Matrices] = OrderedDict()
+    names = ("kxx", "kxy", "kyx", "kyy", "cxx", "cxy", "cyx", "cyy")
 
-    def compute(speed_rpm: float) -> Matrices:
+    def key(speed_rpm: float) -> tuple[float, ...]:
+        """The bearing coefficients at ``speed_rpm``: everything the matrices depend on."""
+        out: list[float] = []
+        for b in bearings:
+            co = b.coefficients(speed_rpm)
+            out.extend(float(co[k]) for k in names)
+        return tuple(out)
+
+    def compute(coefficients: tuple[float, ...]) -> Matrices:
         K = K0.copy()
         Cb = C0.copy()
-        for b, d in zip(bearings, bearing_dofs):
-            co = b.coefficients(speed_rpm)
+        for j, d in enumerate(bearing_dofs):
+            co = dict(zip(names, coefficients[8 * j : 8 * j + 8]))
             sub = np.ix_(d, d)
             K[sub] += [[co["kxx"], co["kxy"]], [co["kyx"], co["kyy"]]]
             Cb[sub] += [[co["cxx"], co["cxy"]], [co["cyx"], co["cyy"]]]
@@ -164,15 +175,15 @@ def build_rotor(config: RigConfig, modulus_factors: Mapping[int, float] | None =
         return M, C, G, K
 
     def matrices(speed_rpm: float) -> Matrices:
-        key = float(speed_rpm)
-        hit = cache.get(key)
+        k = key(speed_rpm)
+        hit = cache.get(k)
         if hit is None:
-            hit = compute(key)
-            cache[key] = hit
+            hit = compute(k)
+            cache[k] = hit
             if len(cache) > _CACHE_SIZE:
                 cache.popitem(last=False)
         else:
-            cache.move_to_end(key)
+            cache.move_to_end(k)
         return tuple(a.copy() for a in hit)  # type: ignore[return-value]
 
     labels = tuple(
@@ -189,4 +200,5 @@ def build_rotor(config: RigConfig, modulus_factors: Mapping[int, float] | None =
         node_positions=positions,
         elements=infos,
         features=tuple(features),
+        _key=key,
     )

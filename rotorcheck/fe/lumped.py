@@ -70,4 +70,10 @@ def build_lumped(
         labels=tuple(names),
         _matrices=matrices,
         mass_index=index,
+        _key=_speed_independent,
     )
+
+
+def _speed_independent(speed_rpm: float) -> tuple[()]:
+    """Lumped models do not depend on speed: one matrix key for all speeds."""
+    return ()

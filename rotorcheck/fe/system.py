@@ -10,8 +10,9 @@ al. (eq. 5.23): ``[u (x), v (y), theta (rotation about x), psi (rotation about y
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Hashable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -72,6 +73,11 @@ class MechanicalSystem:
     ``matrices(speed_rpm)`` returns ``(M, C, G, K)`` with C the (modal or Rayleigh) structural
     damping plus bearing damping at that speed, G the gyroscopic matrix per unit spin speed
     (multiply by Omega in rad/s), K the stiffness including bearings at that speed.
+
+    ``matrix_key(speed_rpm)``: speeds with equal keys have equal ``(M, C, G, K)`` (a rotor's bearing
+    coefficients at that speed; the speed itself when unknown), so work that depends on the matrices
+    only (reduced bases, undamped modes) is done once per key and kept in the per-object
+    :attr:`cache` (never shared with a ``dataclasses.replace`` copy).
     """
 
     kind: str  # "rotor" | "lumped"
@@ -84,6 +90,12 @@ class MechanicalSystem:
     mass_index: dict[str, int] = field(default_factory=dict)  # lumped: mass name -> DOF
     # (kind, name, station): "bearing" | "disc" | "spring" parts of a rotor, for plots and reports
     features: tuple[tuple[str, str, int], ...] = ()
+    _key: Callable[[float], Hashable] | None = None
+    cache: dict[Any, Any] = field(default_factory=dict, init=False, repr=False, compare=False)
+
+    def matrix_key(self, speed_rpm: float = 0.0) -> Hashable:
+        """Equal keys, equal matrices (see the class docstring)."""
+        return float(speed_rpm) if self._key is None else self._key(float(speed_rpm))
 
     def matrices(self, speed_rpm: float = 0.0) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """(M, C, G, K) at ``speed_rpm``; dense float arrays of shape (n_dof, n_dof)."""
@@ -121,7 +133,11 @@ class MechanicalSystem:
         return np.sort(np.r_[base, base + 3]), np.sort(np.r_[base + 1, base + 2])
 
     def dynamic_stiffness(self, freq_hz: np.ndarray, speed_rpm: float = 0.0) -> np.ndarray:
-        """Z(w) = K - w^2 M + j w (C + Omega G), shape (f, n, n), complex (N/m)."""
+        """Z(w) = K - w^2 M + j w (C + Omega G), shape (f, n, n), complex (N/m).
+
+        Dense over the whole grid: for checks on a few frequencies. Receptances come from
+        :mod:`rotorcheck.fe.frf`, which never forms this stack.
+        """
         M, C, G, K = self.matrices(speed_rpm)
         w = 2.0 * np.pi * np.atleast_1d(np.asarray(freq_hz, dtype=float))
         D = C + speed_rpm * RPM_TO_RAD_S * G

@@ -124,7 +124,7 @@ def mode_shape_figure(
     the plane's largest deflection; largest translation of the mode = 1), with bearings
     (triangles), discs (bars) and stations marked.
     """
-    md = modes(system, speed_rpm)
+    md = modes(system, speed_rpm, n_modes=2 * n_modes + 2)  # degenerate pairs count twice
     picked: list[int] = []
     for i in range(len(md)):
         f = md.frequency_hz[i]

@@ -16,6 +16,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from rotorcheck.config import Crack, UnbalanceMass
+from rotorcheck.faults.analysis import unbalance_harmonics, unbalance_orbit
 from rotorcheck.faults.crack import rotating_reduction
 from rotorcheck.fe.system import MechanicalSystem
 
@@ -112,8 +113,6 @@ def crack_figures(
 ) -> dict[str, Any]:
     """Fig. 56-58 for a rig by harmonic balance; returns ``{"stiffness", "orbit", "spectrum"}``
     figures and the plotted ``data`` (harmonic amplitudes in m, orbits in m)."""
-    from rotorcheck.faults.analysis import unbalance_harmonics, unbalance_orbit
-
     e = next(el for el in system.elements if el.segment == crack.element)
     outs = [system.dof(station, "x"), system.dof(station, "y")]
     data: dict[str, Any] = {}

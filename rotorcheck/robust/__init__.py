@@ -1,7 +1,8 @@
 """Robust-control numerics: LFTs, the generalized-mu LMI, closed forms, noise bound, validation,
 detection and identification. Pure numerics on complex arrays with a leading frequency axis."""
 
-from rotorcheck.robust.gmu import (
+from rotorcheck.robust.identify import DamageSet, damage_dynamics, damage_set, damage_set_io
+from rotorcheck.robust.mu import (
     Block,
     GammaResult,
     Structure,
@@ -9,7 +10,6 @@ from rotorcheck.robust.gmu import (
     required_gamma,
     required_gamma_bisection,
 )
-from rotorcheck.robust.identify import DamageSet, damage_dynamics, damage_set, damage_set_io
 from rotorcheck.robust.noise import (
     NoiseBound,
     noise_bound_from_floor,

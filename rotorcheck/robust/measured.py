@@ -15,14 +15,18 @@ periods and points; noiseless input phasor):
   ``a = var_new / |W_new|^2``, ``b = var_h / |W_h|^2`` (m^2/N^2, each the variance of an averaged
   FRF). With the variances known, ``|d|^2 / (a + b) ~ Exp(1)`` (= F(2, inf)); with each estimated
   from ``nu_a``, ``nu_b`` real degrees of freedom (``2 (N - 1)`` for N periods, fewer after
-  removing shaft harmonics), ``|d|^2 / (a_hat + b_hat)`` is taken as F(2, nu) with Welch's
-  ``nu = (a + b)^2 / (a^2/nu_a + b^2/nu_b)`` (exact when one variance dominates; its coverage is
-  checked by Monte Carlo in the tests, 2 to 160 periods);
+  removing shaft harmonics), the tail of ``|d|^2 / (a_hat + b_hat)`` is exactly
+  ``(1 + 2tw/nu_a)^(-nu_a/2) (1 + 2t(1-w)/nu_b)^(-nu_b/2)`` with ``w = a/(a + b)`` the new sweep's
+  share of the variance (:func:`difference_log_sf`). ``w`` is unknown, so the p-value is the
+  largest over a 90 % interval for ``w`` (from the F(nu_a, nu_b) law of the variance ratio).
+  Welch's F(2, nu) plug-in measured 0.985 coverage at 4 periods for a stated 0.99; this rule
+  measures 0.997 / 0.995 / 0.992 / 0.991 at 2 / 4 / 8 / 64 periods (Monte Carlo, 262 points, 3000
+  draws each) and tends to the exact test as the periods grow;
 * the per-point miss probability is Sidak's ``1 - confidence^(1/n_tests)`` over all points (and
   channels, and the two tests below), so that a healthy repeat has no fault point anywhere with
   probability ``>= confidence``;
-* one output: fault iff ``|d| > r = sqrt((a + b) F^-1(1 - miss; 2, nu))``, exactly the certified
-  model-free comparison of two sweeps;
+* one output: fault iff ``|d| > r = sqrt((a_hat + b_hat) t_miss)`` (``t_miss`` where the tail above
+  equals the per-point miss probability): exactly the certified model-free comparison of two sweeps;
 * several outputs: per channel as above, plus the test along the direction a damage at the port
   can move the outputs (``e = E21``; whitened projection ``|e^H S^-1 d|^2 / (e^H S^-1 e)``,
   one complex degree of freedom, F(2, min nu)). The directional test collects the evidence of all
@@ -110,9 +114,9 @@ def combine_sweeps(estimates: Sequence[FrfEstimate]) -> FrfEstimate:
     if len(estimates) == 1:
         return estimates[0]
     k = len(estimates)
-    frf = sum(e.frf for e in estimates) / k
+    frf = np.sum([e.frf for e in estimates], axis=0) / k
     parts = [e.var / k**2 for e in estimates]
-    return FrfEstimate(np.asarray(frf), sum(parts), welch_dof(parts, [e.dof for e in estimates]))
+    return FrfEstimate(frf, np.sum(parts, axis=0), welch_dof(parts, [e.dof for e in estimates]))
 
 
 @dataclass
@@ -154,6 +158,64 @@ class MeasuredDetection:
         return 1.0 if pmin >= 1.0 else float(-np.expm1(self.n_tests * np.log1p(-pmin)))
 
 
+#: coverage of the interval for the new sweep's share of the difference's variance (see the module doc)
+SHARE_INTERVAL = 0.90
+
+
+def _log_chi2_mgf(x: np.ndarray, nu: np.ndarray) -> np.ndarray:
+    """``ln E[exp(-x chi2_nu / nu)] = -(nu/2) ln(1 + 2x/nu)`` (``nu = inf``: ``-x``)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(np.isinf(nu), -x, -0.5 * nu * np.log1p(2.0 * x / nu))
+
+
+def share_interval(a_hat: np.ndarray, b_hat: np.ndarray, nu_a: np.ndarray, nu_b: np.ndarray,
+                   coverage: float = SHARE_INTERVAL) -> tuple[np.ndarray, np.ndarray]:
+    """Interval for ``w = a / (a + b)`` from the estimates (``(a_hat/a)/(b_hat/b) ~ F(nu_a, nu_b)``)."""
+    from scipy.stats import f as f_dist
+
+    big = 1e12
+    na = np.where(np.isinf(nu_a), big, nu_a)
+    nb = np.where(np.isinf(nu_b), big, nu_b)
+    tail = 0.5 * (1.0 - coverage)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        rho = a_hat / b_hat
+        lo = rho / f_dist.isf(tail, na, nb)
+        hi = rho / f_dist.ppf(tail, na, nb)
+        w_lo = np.where(b_hat > 0, lo / (1.0 + lo), 1.0)
+        w_hi = np.where(b_hat > 0, np.where(np.isinf(hi), 1.0, hi / (1.0 + hi)), 1.0)
+    return w_lo, w_hi
+
+
+def difference_log_sf(t: np.ndarray, w_lo: np.ndarray, w_hi: np.ndarray, nu_a: np.ndarray,
+                      nu_b: np.ndarray) -> np.ndarray:
+    """``ln P(|d|^2 / (a_hat + b_hat) > t)``, the largest over the share ``w`` in ``[w_lo, w_hi]``.
+
+    With ``|d|^2/(a + b) ~ Exp(1)`` independent of ``a_hat = a chi2_a/nu_a``, ``b_hat = b chi2_b/nu_b``:
+    ``P = E[exp(-t (w chi2_a/nu_a + (1-w) chi2_b/nu_b))] = (1 + 2tw/nu_a)^(-nu_a/2) (1 + 2t(1-w)/nu_b)^(-nu_b/2)``
+    exactly; its logarithm is convex in ``w``, so the largest over an interval sits at an end.
+    """
+    def at(w: np.ndarray) -> np.ndarray:
+        return _log_chi2_mgf(t * w, nu_a) + _log_chi2_mgf(t * (1.0 - w), nu_b)
+
+    return np.maximum(at(w_lo), at(w_hi))
+
+
+def difference_quantile(miss: float, w_lo: np.ndarray, w_hi: np.ndarray, nu_a: np.ndarray,
+                        nu_b: np.ndarray) -> np.ndarray:
+    """``t`` with ``difference_log_sf(t) = ln(miss)`` (bisection in log t between the Exp(1) and
+    the F(2, min nu) quantiles, which bracket it)."""
+    target = np.log(miss)
+    shape = np.broadcast(w_lo, nu_a, nu_b).shape
+    lo = np.full(shape, -np.log(miss))
+    hi = np.maximum(_f_isf(miss, np.minimum(nu_a, nu_b)), lo) * 1.0000001
+    for _ in range(56):  # the bracket spans < 2^30 in ratio: 56 halvings of ln t reach rounding
+        mid = np.sqrt(lo * hi)
+        above = difference_log_sf(mid, w_lo, w_hi, nu_a, nu_b) > target
+        lo = np.where(above, mid, lo)
+        hi = np.where(above, hi, mid)
+    return np.sqrt(lo * hi)
+
+
 def _f_sf(x: np.ndarray, nu: np.ndarray) -> np.ndarray:
     """Survival function of F(2, nu) (``nu = inf``: Exp(1)); closed form ``(1 + 2x/nu)^(-nu/2)``."""
     x = np.asarray(x, dtype=float)
@@ -191,7 +253,8 @@ def measured_detect(new: FrfEstimate, healthy: FrfEstimate, confidence: float = 
     use_dir = e21 is not None and n_out > 1
     n_tests = int(np.count_nonzero(good)) * (n_out + (1 if use_dir else 0))
     miss = point_miss(confidence, max(n_tests, 1), "sidak")
-    q = _f_isf(miss, nu)
+    w_lo, w_hi = share_interval(new.var, healthy.var, new.dof, healthy.dof)
+    q = difference_quantile(miss, w_lo, w_hi, new.dof, healthy.dof)
     dist = np.abs(d)
     with np.errstate(invalid="ignore", divide="ignore"):
         radius = np.sqrt(s * q)
@@ -200,7 +263,8 @@ def measured_detect(new: FrfEstimate, healthy: FrfEstimate, confidence: float = 
         tiny = 1e-12 * np.maximum(np.abs(new.frf), np.abs(healthy.frf))
         stat_c = np.where(exact, np.where(dist > tiny, np.inf, 0.0), dist**2 / np.where(exact, 1.0, s))
         ratio_c = np.where(exact, np.where(dist > tiny, np.inf, 0.0), stat_c / q)
-        p_c = np.where(exact, np.where(dist > tiny, 0.0, 1.0), _f_sf(stat_c, nu))
+        p_c = np.where(exact, np.where(dist > tiny, 0.0, 1.0),
+                       np.exp(difference_log_sf(stat_c, w_lo, w_hi, new.dof, healthy.dof)))
     ratio = np.max(ratio_c, axis=1)
     p_point = np.min(p_c, axis=1)
     dir_stat = None

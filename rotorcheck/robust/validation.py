@@ -30,7 +30,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from rotorcheck.robust.closed_form import gamma_enclose_system_siso
-from rotorcheck.robust.gmu import (
+from rotorcheck.robust.lft import as_freq_matrix
+from rotorcheck.robust.mu import (
     DEFAULT_BACKEND,
     DEFAULT_TIME_LIMIT,
     STATUS_BAD_DATA,
@@ -43,7 +44,6 @@ from rotorcheck.robust.gmu import (
     check_noise_bound,
     required_gamma,
 )
-from rotorcheck.robust.lft import as_freq_matrix
 from rotorcheck.robust.noise import NoiseBound
 
 __all__ = [
@@ -114,7 +114,7 @@ def validate(me: np.ndarray, W: np.ndarray | Sequence[np.ndarray],
     ``(f, n_in)``/``(f, n_out)`` or ``(f,)``, or lists of them for several healthy sweeps (max over
     sweeps); ``noise_bound``: V (m) or a :class:`NoiseBound`; ``enclose``: 'data' | 'system';
     ``backend``/``time_limit``: LMI backend and per-point solver time limit (s) of
-    :func:`rotorcheck.robust.gmu.required_gamma`; ``fail_at``: testing hook (indices treated as
+    :func:`rotorcheck.robust.mu.required_gamma`; ``fail_at``: testing hook (indices treated as
     solver failures). ``ValueError`` if V is negative, NaN or infinite anywhere.
     """
     V = _v(noise_bound)
@@ -294,11 +294,11 @@ def verdict(fault: np.ndarray, status: np.ndarray, healthy_status: np.ndarray | 
     if healthy_status is not None:
         bad_healthy = int(np.count_nonzero(np.asarray(healthy_status) != STATUS_OK))
     if undecided or bad_healthy:
-        why = []
+        reasons: list[str] = []
         if undecided:
-            why.append(f"{undecided} points undecided (solver failure, bad data or no baseline)")
+            reasons.append(f"{undecided} points undecided (solver failure, bad data or no baseline)")
         if bad_healthy:
-            why.append(f"healthy data not enclosed at {bad_healthy} points")
-        return Verdict("inconclusive", "; ".join(why), n, n_fault, undecided, run, thr)
+            reasons.append(f"healthy data not enclosed at {bad_healthy} points")
+        return Verdict("inconclusive", "; ".join(reasons), n, n_fault, undecided, run, thr)
     return Verdict("healthy", f"{n_fault} fault points, below threshold {thr} and no run of "
                    f"{min_run}", n, n_fault, undecided, run, thr)

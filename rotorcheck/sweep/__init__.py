@@ -1,26 +1,25 @@
 """Stepped-sine sweeps: the HDF5 sweep format, importers/exporters, lock-in and a simulator.
 
-Public entry points:
+Public entry points (re-exported here: ``Channel``, ``Run``, ``Sweep``, ``SweepFormatError``,
+``compare_sweeps``, ``read_sweep``, ``sweep_sha256``, ``write_sweep``):
 
-- :mod:`rotorcheck.sweep.format`: ``Channel``, ``Run``, ``Sweep``, ``read_sweep``, ``write_sweep``,
-  ``sweep_sha256``, ``compare_sweeps``, ``SweepFormatError``.
+- :mod:`rotorcheck.sweep.format`: the data model: ``Channel``, ``Run``, ``Sweep``, ``FrfTable``,
+  ``SweepFormatError`` and the schema constants.
+- :mod:`rotorcheck.sweep.validation`: checks of a sweep's content (``validate_sweep``).
+- :mod:`rotorcheck.sweep.hdf5io`: ``read_sweep``, ``write_sweep`` (atomic), ``sweep_sha256``.
+- :mod:`rotorcheck.sweep.compare`: ``compare_sweeps``, ``compare_sweep_files`` (bit for bit).
 - :mod:`rotorcheck.sweep.uff`: Universal File Format dataset 58 export/import (pyuff).
 - :mod:`rotorcheck.sweep.tidy_csv`: tidy CSV export/import.
 - :mod:`rotorcheck.sweep.lockin`: per-period lock-in, averaging, closed-form multi-tone lock-in.
 - :mod:`rotorcheck.sweep.simulator`: stepped-sine simulator (fast tone path and time-domain path).
 - :mod:`rotorcheck.sweep.summary`: ``summarize`` for ``rotorcheck info``.
+
+Imports run downwards only: format <- validation <- hdf5io <- compare <- uff, tidy_csv.
 """
 
-from rotorcheck.sweep.format import (
-    Channel,
-    Run,
-    Sweep,
-    SweepFormatError,
-    compare_sweeps,
-    read_sweep,
-    sweep_sha256,
-    write_sweep,
-)
+from rotorcheck.sweep.compare import compare_sweeps
+from rotorcheck.sweep.format import Channel, Run, Sweep, SweepFormatError
+from rotorcheck.sweep.hdf5io import read_sweep, sweep_sha256, write_sweep
 
 __all__ = [
     "Channel",

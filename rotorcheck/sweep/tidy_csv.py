@@ -20,15 +20,9 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from rotorcheck.sweep.format import (
-    Channel,
-    FrfTable,
-    Run,
-    Sweep,
-    SweepFormatError,
-    atomic_target,
-    validate_sweep,
-)
+from rotorcheck.fileio import atomic_path
+from rotorcheck.sweep.format import Channel, FrfTable, Run, Sweep, SweepFormatError
+from rotorcheck.sweep.validation import validate_sweep
 
 __all__ = ["COLUMNS", "PHASOR_COLUMNS", "export_tidy_csv", "import_tidy_csv", "read_tidy_csv"]
 
@@ -58,7 +52,7 @@ def export_tidy_csv(
     validate_sweep(sweep, target)
     header = list(COLUMNS) + (list(PHASOR_COLUMNS) if include_phasors else [])
     ins, outs = sweep.inputs, sweep.outputs
-    with atomic_target(target, force=force, suffix=".csv") as tmp:
+    with atomic_path(target, overwrite=force) as tmp:
         with open(tmp, "w", newline="", encoding="utf-8") as fh:
             w = csv.writer(fh, lineterminator="\n")
             w.writerow(header)

@@ -30,15 +30,9 @@ from urllib.parse import quote, unquote
 import numpy as np
 import pyuff
 
-from rotorcheck.sweep.format import (
-    Channel,
-    FrfTable,
-    Run,
-    Sweep,
-    SweepFormatError,
-    atomic_target,
-    validate_sweep,
-)
+from rotorcheck.fileio import atomic_path
+from rotorcheck.sweep.format import Channel, FrfTable, Run, Sweep, SweepFormatError
+from rotorcheck.sweep.validation import validate_sweep
 
 __all__ = ["export_uff58", "import_uff58", "read_uff58_frf"]
 
@@ -186,15 +180,15 @@ def export_uff58(
     target = os.fspath(path)
     validate_sweep(sweep, target)
     recs = _records(sweep, include_phasors, binary)
-    with atomic_target(target, force=force, suffix=".uff") as tmp:
+    with atomic_path(target, overwrite=force) as tmp:
         try:
             # the temp file is empty; "add" because pyuff's binary "overwrite" truncates the
             # header it has just written (pyuff 2.5)
-            pyuff.UFF(tmp).write_sets(recs, mode="add")
+            pyuff.UFF(str(tmp)).write_sets(recs, mode="add")
         except Exception as exc:
             raise ValueError(f"{target}: pyuff could not write dataset 58: {exc}") from exc
         if binary:
-            back = _load_sets(tmp)
+            back = _load_sets(str(tmp))
             ok = len(back) == len(recs) and all(
                 np.array_equal(np.asarray(b["data"]), np.asarray(r["data"]))
                 and np.array_equal(np.asarray(b["x"]), np.asarray(r["x"]))

@@ -1,5 +1,5 @@
-"""Harmonic balance of the cracked rotor: against the full Hill matrix, an independent dense HB
-(the sweep simulator's), the healthy and open-crack limits, conjugate symmetry, convergence in H,
+"""Harmonic balance of the cracked rotor: against the full Hill matrix and an independent dense HB
+(tests/oracles/hb.py), the healthy and open-crack limits, conjugate symmetry, convergence in H,
 unbalance harmonics and critical speeds on the rig."""
 
 from __future__ import annotations
@@ -10,15 +10,10 @@ from faults_helpers import CONFIGS, HAVE_ASSEMBLY, RIG_CRACK, eq_5_24, small_rot
 
 from rotorcheck.config import Crack, UnbalanceMass, load_config
 from rotorcheck.faults.crack import crack_stiffness
-from rotorcheck.faults.harmonic_balance import (
-    Receptance,
-    convergence_table,
-    cracked_tones,
-    fold_tones,
-    hill_matrix,
-    solve_hb,
-)
+from rotorcheck.faults.harmonic_balance import convergence_table, cracked_tones, fold_tones, solve_hb
+from rotorcheck.fe.frf import Receptance
 from rotorcheck.fe.system import RPM_TO_RAD_S, MechanicalSystem
+from tests.oracles.hb import harmonic_balance_plant, hill_matrix
 
 needs_assembly = pytest.mark.skipif(not HAVE_ASSEMBLY, reason="rotorcheck.fe.assembly missing")
 
@@ -172,9 +167,9 @@ def test_harmonic_count_convergence(rig_system: MechanicalSystem) -> None:
 
 @needs_assembly
 def test_plant_matches_the_simulators_independent_dense_hb() -> None:
-    from rotorcheck.faults.analysis import dk_fourier, simulator_plant
     from rotorcheck.fe.assembly import build_system
-    from rotorcheck.sweep.simulator import StepSettings, harmonic_balance_plant, simulate_fast
+    from rotorcheck.sim.plants import dk_fourier, simulator_plant
+    from rotorcheck.sim.simulator import StepSettings, simulate_fast
 
     cfg = load_config(CONFIGS / "crack_rig_truth.yaml")
     sys_ = build_system(cfg)

@@ -11,14 +11,10 @@ from rotorcheck.config import UnbalanceMass
 from rotorcheck.faults.analysis import unbalance_orbit
 from rotorcheck.faults.crack import crack_stiffness
 from rotorcheck.faults.harmonic_balance import solve_hb, unbalance_force
-from rotorcheck.faults.time_sim import (
-    LTPIntegrator,
-    simulate_ivp,
-    steady_revolution,
-    steady_state_lockin,
-)
 from rotorcheck.fe.system import MechanicalSystem
-from rotorcheck.sweep.lockin import tone_lockin
+from rotorcheck.signal.lockin import tone_lockin
+from rotorcheck.sim.time_sim import LTPIntegrator, steady_revolution, steady_state_lockin
+from tests.oracles.time_domain import simulate_ivp
 
 U = 0.8 - 0.5j  # a complex input phasor: checks the conj(U) half of the real force
 

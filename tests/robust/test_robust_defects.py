@@ -25,8 +25,9 @@ import pytest
 from scipy.optimize import minimize, minimize_scalar
 
 from rotorcheck.robust import closed_form as cf
-from rotorcheck.robust import gmu, lft, validation
 from rotorcheck.robust import identify as idf
+from rotorcheck.robust import lft, mu, validation
+from rotorcheck.robust.mu.backends import project_scales
 
 
 def cplx(rng: np.random.Generator, *shape: int) -> np.ndarray:
@@ -104,7 +105,7 @@ def test_enclose_system_honours_block_weight(weight: float) -> None:
     W = cplx(rng, f) * 5
     Zt = me[:, 1, 1] * W * (1 + 0.4 * cplx(rng, f))
     V = 0.2 * np.abs(Zt - me[:, 1, 1] * W)
-    st = gmu.Structure((gmu.Block("scalar", (1, 1), weight=weight),))
+    st = mu.Structure((mu.Block("scalar", (1, 1), weight=weight),))
     v = validation.validate(me, W, Zt, V, enclose="system", structure=st)
     # by hand: |Delta| <= w gamma, Delta = w Delta' with |Delta'| <= gamma: Me's Delta row times w
     me_w = me.copy()
@@ -149,7 +150,7 @@ def test_negative_or_nan_noise_bound_is_rejected(bad: Any) -> None:
     with pytest.raises(ValueError, match="noise bound"):
         validation.detect(me, W, Zt, V, np.full(f, 1e-9))
     with pytest.raises(ValueError, match="noise bound"):
-        gmu.required_gamma(me, W, Zt, V)
+        mu.required_gamma(me, W, Zt, V)
 
 
 # --------------------------------------------------------------------------------------------------
@@ -301,7 +302,7 @@ def test_tall_full_block_per_output_noise_360_cases_no_failure_and_bracketing() 
     status = np.empty(len(cases), dtype=object)
     for nout in (2, 3):  # one call per shape (the per-point driver over many points)
         idx = [i for i, cs in enumerate(cases) if cs[3].size == nout]
-        r = gmu.required_gamma(np.stack([cases[i][1] for i in idx]), np.stack([cases[i][2] for i in idx]),
+        r = mu.required_gamma(np.stack([cases[i][1] for i in idx]), np.stack([cases[i][2] for i in idx]),
                                np.stack([cases[i][3] for i in idx]), np.array([cases[i][4] for i in idx]))
         lo[idx], up[idx], status[idx] = r.gamma_lower, r.gamma_upper, r.status
     failed = int(np.count_nonzero(status != "ok"))
@@ -323,10 +324,10 @@ def test_stalled_iterate_scales_are_projected_onto_their_cone() -> None:
     """The D-scales a stalled interior point iterate returns can be slightly negative; the
     S-procedure certifies nothing with a negative scale (the old code then 'certified' a lower
     bound above an explicit Delta and failed the point). Scalar and Hermitian scales."""
-    th = gmu._project_scales([np.array([-1e-7]), np.array([2.0])], [("full", 1), ("full", 1)])
+    th = project_scales([np.array([-1e-7]), np.array([2.0])], [("full", 1), ("full", 1)])
     assert th[0][0] == 0.0 and th[1][0] == 2.0
     # repeated 2x2: D = [[1, 2], [2, 1]] (eigenvalues 3, -1) -> its PSD part [[1.5, 1.5], [1.5, 1.5]]
-    (t,) = gmu._project_scales([np.array([1.0, 1.0, 2.0, 0.0])], [("repeated", 2)])
+    (t,) = project_scales([np.array([1.0, 1.0, 2.0, 0.0])], [("repeated", 2)])
     np.testing.assert_allclose(t, [1.5, 1.5, 1.5, 0.0], atol=1e-14)
 
 
@@ -348,7 +349,7 @@ def test_nan_in_data_marks_that_point_and_solves_the_others() -> None:
     good = np.ones(f, dtype=bool)
     good[[3, 7]] = False
     ref = np.maximum(0, np.abs(Zt - G * W) - V) / np.abs(W)  # additive closed form
-    r = gmu.required_gamma(me, W, Zt_bad, V)  # SISO: the batched path
+    r = mu.required_gamma(me, W, Zt_bad, V)  # SISO: the batched path
     assert list(r.status[[3, 7]]) == ["bad_data", "bad_data"] and "not finite" in r.reason[3]
     assert np.all(r.status[good] == "ok") and np.all(np.isnan(r.gamma_upper[~good]))
     np.testing.assert_allclose(r.gamma_lower[good], ref[good], rtol=1e-6)
@@ -356,7 +357,7 @@ def test_nan_in_data_marks_that_point_and_solves_the_others() -> None:
     me2 = lft.additive_me(np.stack([G, 2 * G], 1)[:, :, None]).copy()
     Zt2 = np.stack([Zt, 2 * Zt], 1)
     Zt2[5, 1] = np.nan
-    r2 = gmu.required_gamma(me2, W, Zt2, V)
+    r2 = mu.required_gamma(me2, W, Zt2, V)
     assert r2.status[5] == "bad_data"
     ref2 = np.sqrt(np.maximum(0, np.abs(Zt - G * W) - V) ** 2
                    + np.maximum(0, 2 * np.abs(Zt - G * W) - V) ** 2) / np.abs(W)
@@ -431,14 +432,14 @@ def test_solver_panic_fails_that_point_only_with_the_reason(monkeypatch: pytest.
     Zt = (G[:, :, 0] * W[:, None]) * (1 + 0.5 * cplx(rng, f, n_out))
     V = 0.2 * np.abs(Zt - G[:, :, 0] * W[:, None]).min(1)
     me = lft.additive_me(G)
-    clean = gmu.required_gamma(me, W, Zt, V)
+    clean = mu.required_gamma(me, W, Zt, V)
     assert np.all(clean.status == "ok")
     ref = np.sqrt(np.sum(np.maximum(0, np.abs(Zt - G[:, :, 0] * W[:, None]) - V[:, None]) ** 2, 1)) / np.abs(W)
     np.testing.assert_allclose(clean.gamma_lower, ref, rtol=1e-6)
-    target = _record_calls(monkeypatch, lambda: gmu.required_gamma(me[k:k + 1], W[k:k + 1], Zt[k:k + 1], V[k]))
+    target = _record_calls(monkeypatch, lambda: mu.required_gamma(me[k:k + 1], W[k:k + 1], Zt[k:k + 1], V[k]))
     assert target
     _faulty_solver(monkeypatch, target, FakePanic("called `Option::unwrap()` on a `None` value"))
-    r = gmu.required_gamma(me, W, Zt, V)
+    r = mu.required_gamma(me, W, Zt, V)
     assert r.status[k] == "solver_failed" and np.isnan(r.gamma_lower[k]) and np.isnan(r.gamma_upper[k])
     assert "FakePanic" in r.reason[k] and "unwrap" in r.reason[k]
     others = np.arange(f) != k
@@ -453,7 +454,7 @@ def test_solver_panic_fails_that_point_only_with_the_reason(monkeypatch: pytest.
     for stop in (KeyboardInterrupt(), SystemExit(3)):
         _faulty_solver(monkeypatch, target, stop)
         with pytest.raises(type(stop)):
-            gmu.required_gamma(me, W, Zt, V)
+            mu.required_gamma(me, W, Zt, V)
 
 
 def test_cvxpy_backend_panic_is_caught_per_point(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -464,10 +465,10 @@ def test_cvxpy_backend_panic_is_caught_per_point(monkeypatch: pytest.MonkeyPatch
     Zt = G * W * (1 + 0.5 * cplx(rng, f))
     V = 0.2 * np.abs(Zt - G * W)
     me = lft.additive_me(G)
-    target = _record_calls(monkeypatch, lambda: gmu.required_gamma(me[k:k + 1], W[k:k + 1], Zt[k:k + 1], V[k],
+    target = _record_calls(monkeypatch, lambda: mu.required_gamma(me[k:k + 1], W[k:k + 1], Zt[k:k + 1], V[k],
                                                                    backend="cvxpy"))
     _faulty_solver(monkeypatch, target, FakePanic("index out of bounds"))
-    r = gmu.required_gamma(me, W, Zt, V, backend="cvxpy")
+    r = mu.required_gamma(me, W, Zt, V, backend="cvxpy")
     assert r.status[k] == "solver_failed" and "FakePanic" in r.reason[k]
     others = np.arange(f) != k
     assert np.all(r.status[others] == "ok")
@@ -486,19 +487,19 @@ def test_time_limit_bounds_each_point(monkeypatch: pytest.MonkeyPatch) -> None:
     # every Clarabel call gets the point's remaining budget as its time_limit
     limits: list[float] = []
     _faulty_solver(monkeypatch, [], None, limits=limits)
-    assert np.all(gmu.required_gamma(me, W, Zt, V, time_limit=3.0).status == "ok")
+    assert np.all(mu.required_gamma(me, W, Zt, V, time_limit=3.0).status == "ok")
     assert limits and max(limits) <= 3.0 and min(limits) > 0
     limits.clear()
-    gmu.required_gamma(me, W, Zt, V)
-    assert max(limits) <= gmu.DEFAULT_TIME_LIMIT == 10.0
+    mu.required_gamma(me, W, Zt, V)
+    assert max(limits) <= mu.DEFAULT_TIME_LIMIT == 10.0
     monkeypatch.undo()
     # a point whose solve outlasts its budget fails with the reason; the others are solved
-    target = _record_calls(monkeypatch, lambda: gmu.required_gamma(me[k:k + 1], W[k:k + 1], Zt[k:k + 1], V[k]))
+    target = _record_calls(monkeypatch, lambda: mu.required_gamma(me[k:k + 1], W[k:k + 1], Zt[k:k + 1], V[k]))
     _faulty_solver(monkeypatch, target, None, sleep=0.6)
     t0 = time.perf_counter()
-    r = gmu.required_gamma(me, W, Zt, V, time_limit=0.5)
+    r = mu.required_gamma(me, W, Zt, V, time_limit=0.5)
     assert time.perf_counter() - t0 < 5.0
     assert r.status[k] == "solver_failed" and "time limit" in r.reason[k]
     assert np.all(r.status[np.arange(f) != k] == "ok")
     with pytest.raises(ValueError, match="time_limit"):
-        gmu.required_gamma(me, W, Zt, V, time_limit=0.0)
+        mu.required_gamma(me, W, Zt, V, time_limit=0.0)

@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 from sweep_helpers import make_sweep
 
-from rotorcheck.sweep.format import Sweep, write_sweep
+from rotorcheck.sweep import Sweep, write_sweep
 
 
 @pytest.fixture

@@ -11,7 +11,7 @@ import pytest
 from rotorcheck.config import RigConfig, load_config
 from rotorcheck.errors import InputError
 from rotorcheck.resources import configs_dir
-from rotorcheck.sweep.rig_sim import shaft_angle_from, simulate_rig, step_settings
+from rotorcheck.sim.rig_sim import shaft_angle_from, simulate_rig, step_settings
 
 
 def _turned(cfg: RigConfig, theta0: float) -> RigConfig:

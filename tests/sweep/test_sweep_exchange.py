@@ -11,7 +11,7 @@ import pytest
 import pyuff
 from sweep_helpers import CHANNELS, make_sweep
 
-from rotorcheck.sweep.format import SweepFormatError, compare_sweeps
+from rotorcheck.sweep import SweepFormatError, compare_sweeps
 from rotorcheck.sweep.summary import sidak_noise_bound, summarize
 from rotorcheck.sweep.tidy_csv import COLUMNS, export_tidy_csv, import_tidy_csv, read_tidy_csv
 from rotorcheck.sweep.uff import export_uff58, import_uff58, read_uff58_frf

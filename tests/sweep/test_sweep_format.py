@@ -12,8 +12,7 @@ import numpy as np
 import pytest
 from sweep_helpers import make_sweep
 
-from rotorcheck.sweep.format import (
-    PHASOR_CONVENTION,
+from rotorcheck.sweep import (
     Sweep,
     SweepFormatError,
     compare_sweeps,
@@ -21,6 +20,7 @@ from rotorcheck.sweep.format import (
     sweep_sha256,
     write_sweep,
 )
+from rotorcheck.sweep.format import PHASOR_CONVENTION
 
 # --------------------------------------------------------------------------------------------
 # round trip

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy.integrate import quad
 
-from rotorcheck.sweep.lockin import (
+from rotorcheck.signal.lockin import (
     average_periods,
     lockin_periods,
     tone_lockin,

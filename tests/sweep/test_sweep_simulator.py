@@ -1,4 +1,4 @@
-"""Stepped-sine simulator: exact FRF, noise statistics, fast path vs. time domain, 2X leak."""
+"""Stepped-sine simulator: exact FRF, noise statistics, fast path vs. time domain (oracle), 2X leak."""
 
 from __future__ import annotations
 
@@ -7,17 +7,11 @@ import pytest
 from scipy import stats
 from sweep_helpers import CHANNELS, state_space_frf, three_mass
 
-from rotorcheck.sweep.format import Sweep, read_sweep, write_sweep
-from rotorcheck.sweep.lockin import white_noise_phasor_var
-from rotorcheck.sweep.simulator import (
-    StepSettings,
-    Tone,
-    harmonic_balance_plant,
-    matrix_plant,
-    response_tones,
-    simulate_fast,
-    simulate_time_domain,
-)
+from rotorcheck.signal.lockin import white_noise_phasor_var
+from rotorcheck.sim.simulator import StepSettings, Tone, matrix_plant, response_tones, simulate_fast
+from rotorcheck.sweep import Sweep, read_sweep, write_sweep
+from tests.oracles.hb import harmonic_balance_plant
+from tests.oracles.time_domain import simulate_time_domain
 
 B1 = np.array([1.0, 0.0, 0.0])  # force at mass 1
 C13 = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])  # displacement of masses 1 and 3

@@ -8,7 +8,7 @@ import pytest
 from robust_helpers import gamma_methodmd_exact
 from scipy.optimize import minimize
 
-from rotorcheck.robust import gmu, lft
+from rotorcheck.robust import lft, mu
 
 
 def cplx(rng: np.random.Generator, *shape: int) -> np.ndarray:
@@ -76,7 +76,7 @@ def cases() -> dict[str, np.ndarray]:
 @pytest.mark.parametrize("backend", ["cvxpy", "clarabel"])
 def test_lmi_matches_closed_form_on_500_siso_cases(cases: dict[str, np.ndarray], backend: str
                                                    ) -> None:
-    per_point = [gmu.required_gamma(cases["me"][i:i + 1], cases["W"][i:i + 1],
+    per_point = [mu.required_gamma(cases["me"][i:i + 1], cases["W"][i:i + 1],
                                     cases["Zt"][i:i + 1], cases["V"][i], backend=backend)
                  for i in range(500)]
     lo = np.array([r.gamma_lower[0] for r in per_point])
@@ -107,7 +107,7 @@ def test_vectorized_call_equals_per_point_and_counts_solver_calls(cases: dict[st
     sel = np.flatnonzero(np.char.startswith(cases["kind"], "generic"))[:30]
     sel = np.concatenate([sel, np.flatnonzero(cases["kind"] == "gamma_zero")[:5]])
     V = cases["V"][sel]
-    r = gmu.required_gamma(cases["me"][sel], cases["W"][sel], cases["Zt"][sel], V)
+    r = mu.required_gamma(cases["me"][sel], cases["W"][sel], cases["Zt"][sel], V)
     ref = cases["ref"][sel]
     np.testing.assert_allclose(r.gamma_lower, ref, rtol=1e-6, atol=0)
     assert np.all(r.method[-5:] == "precheck")
@@ -121,8 +121,8 @@ def test_large_unit_rescaling_gives_the_same_answer() -> None:
     W = cplx(rng, 20) * 30
     Zt = G * W * (1 + 0.2 * cplx(rng, 20))
     V = 0.5 * np.abs(Zt - G * W)
-    a = gmu.required_gamma(lft.additive_me(G), W, Zt, V)
-    b = gmu.required_gamma(lft.additive_me(G * 1e9), W, Zt * 1e9, V * 1e9)
+    a = mu.required_gamma(lft.additive_me(G), W, Zt, V)
+    b = mu.required_gamma(lft.additive_me(G * 1e9), W, Zt * 1e9, V * 1e9)
     np.testing.assert_allclose(b.gamma_lower, a.gamma_lower * 1e9, rtol=1e-8)
 
 
@@ -182,8 +182,8 @@ def test_two_outputs_tall_kernel_against_brute_force(noise: str) -> None:
     Z = lft.lft_upper(me, 0.5 * cplx(rng, f)[:, None, None])[:, :, 0] * W[:, None]
     Zt = Z + 0.25 * cplx(rng, f, 2)
     V = 0.4
-    st = gmu.Structure(noise=noise)
-    r = gmu.required_gamma(me, W, Zt, V, st)
+    st = mu.Structure(noise=noise)
+    r = mu.required_gamma(me, W, Zt, V, st)
     n_checked = 0
     for i in range(f):
         ref = _brute_two_output(me[i], W[i], Zt[i], V, noise, rng)
@@ -202,7 +202,7 @@ def test_two_outputs_tall_kernel_against_brute_force(noise: str) -> None:
     assert n_checked >= 6
     # the second output matters: with the first output only the answer is smaller somewhere
     if noise == "per_output":
-        r1 = gmu.required_gamma(me[:, :2, :], W, Zt[:, :1], V)
+        r1 = mu.required_gamma(me[:, :2, :], W, Zt[:, :1], V)
         ok = (r.status == "ok") & (r1.status == "ok")
         assert np.any(r1.gamma_upper[ok] < r.gamma_lower[ok] * (1 - 1e-3))
 
@@ -219,7 +219,7 @@ def test_repeated_scalar_block_against_polynomial_roots() -> None:
     W = cplx(rng, f)
     dtrue = 0.3 * cplx(rng, f)
     Zt = lft.lft_upper(me, dtrue[:, None, None] * np.eye(2))[:, :, 0] * W[:, None]
-    r = gmu.required_gamma(me, W, Zt, 0.0, gmu.Structure.repeated(2))
+    r = mu.required_gamma(me, W, Zt, 0.0, mu.Structure.repeated(2))
     assert np.all(r.status == "ok") and np.all(r.method == "bisection")
     for i in range(f):
         T = Zt[i, 0] / W[i]
@@ -248,8 +248,8 @@ def test_two_scalar_blocks_sharing_gamma_against_brute_force() -> None:
     W = cplx(rng, f)
     d = 0.4 * cplx(rng, f, 2)
     Zt = np.array([lft.lft_upper(me[i], np.diag(d[i]))[0, 0, 0] * W[i] for i in range(f)])
-    st = gmu.Structure((gmu.Block("scalar"), gmu.Block("scalar")))
-    r = gmu.required_gamma(me, W, Zt, 0.0, st)
+    st = mu.Structure((mu.Block("scalar"), mu.Block("scalar")))
+    r = mu.required_gamma(me, W, Zt, 0.0, st)
     assert np.all(r.status == "ok")
     for i in range(f):
         def out(a: complex, b: complex, i: int = i) -> complex:
@@ -287,26 +287,26 @@ def test_prechecks_and_failure_injection() -> None:
     V = np.full(f, 0.3 * float(np.median(np.abs(Zt - G * W))))
     inside = np.abs(Zt - G * W) <= V
     me = lft.additive_me(G)
-    base = gmu.required_gamma(me, W, Zt, V)
+    base = mu.required_gamma(me, W, Zt, V)
     assert np.all(base.gamma_upper[inside] == 0) and np.all(base.method[inside] == "precheck")
     assert base.n_solver_calls >= np.count_nonzero(~inside)
     # injected failure at one point only
     k = int(np.flatnonzero(~inside)[0])
-    inj = gmu.required_gamma(me, W, Zt, V, fail_at=[k])
+    inj = mu.required_gamma(me, W, Zt, V, fail_at=[k])
     assert inj.status[k] == "solver_failed"
     assert np.isnan(inj.gamma_lower[k]) and np.isnan(inj.gamma_upper[k])
     others = np.arange(f) != k
     assert np.all(inj.status[others] == base.status[others])
     np.testing.assert_array_equal(inj.gamma_upper[others], base.gamma_upper[others])
-    with gmu.inject_solver_failure([2]):
-        ctx = gmu.required_gamma(me, W, Zt, V)
+    with mu.inject_solver_failure([2]):
+        ctx = mu.required_gamma(me, W, Zt, V)
     assert ctx.status[2] == "solver_failed" and np.isnan(ctx.gamma_upper[2])
     assert np.all(ctx.status[np.arange(f) != 2] != "solver_failed")
-    assert np.all(gmu.required_gamma(me, W, Zt, V).status != "solver_failed")  # hook cleared
+    assert np.all(mu.required_gamma(me, W, Zt, V).status != "solver_failed")  # hook cleared
     # the uncertainty cannot reach the output: flagged, never a number
     me0 = me.copy()
     me0[:, 1, 0] = 0.0
-    r0 = gmu.required_gamma(me0, W, Zt, V)
+    r0 = mu.required_gamma(me0, W, Zt, V)
     assert np.all(r0.status[~inside] == "unexplainable")
     assert np.all(np.isinf(r0.gamma_upper[~inside]))
     assert np.all(r0.gamma_upper[inside] == 0)
@@ -320,9 +320,9 @@ def test_bisection_variant_and_backends_agree() -> None:
     Zt = G * W * (1 + 0.3 * cplx(rng, f))
     V = 0.4 * np.abs(Zt - G * W)
     me = lft.additive_me(G)
-    a = gmu.required_gamma(me, W, Zt, V, backend="cvxpy")
-    b = gmu.required_gamma(me, W, Zt, V, backend="clarabel")
-    c = gmu.required_gamma_bisection(me, W, Zt, V)
+    a = mu.required_gamma(me, W, Zt, V, backend="cvxpy")
+    b = mu.required_gamma(me, W, Zt, V, backend="clarabel")
+    c = mu.required_gamma_bisection(me, W, Zt, V)
     ref = np.maximum(0, (np.abs(Zt - G * W) - V) / np.abs(W))
     for r in (a, b, c):
         assert np.all(r.status == "ok")
@@ -338,7 +338,7 @@ def test_implicit_lmi_bound_on_a_hand_built_lft() -> None:
     A = [np.array([[0, 0, W]]), np.array([[0, 0, 1.0]])]
     B = [np.array([[1.0, 0, 0]]), np.array([[0, 1.0, 0]])]
     for backend in ("cvxpy", "clarabel"):
-        res = gmu.implicit_lmi_bound(N, A, B, ["scalar", "scalar"], [True, False],
+        res = mu.implicit_lmi_bound(N, A, B, ["scalar", "scalar"], [True, False],
                                      backend=backend)
         ref = (abs(Zt - G * W) - V) / abs(W)
         assert res.status == "ok" and res.n_solver_calls == 1
@@ -349,23 +349,27 @@ def test_implicit_lmi_bound_on_a_hand_built_lft() -> None:
 
 
 @pytest.mark.parametrize("backend", ["cvxpy", "clarabel"])
-def test_batched_siso_path_matches_closed_form_and_per_point_path(
-        cases: dict[str, np.ndarray], backend: str, monkeypatch: pytest.MonkeyPatch) -> None:
-    """All 500 SISO cases in ONE call (the per-point numpy batched over the frequencies; every
-    point needing a second pass, a near-cancellation basis or the SQP goes through the per-point
-    path): same tolerances against the closed form as the per-point test, same statuses, methods
-    and solver calls as the per-point path, bounds equal to rounding of the solver's iterates."""
+def test_stacked_call_matches_closed_form_and_point_by_point_calls(
+        cases: dict[str, np.ndarray], backend: str) -> None:
+    """All 500 SISO cases in ONE call (the first SDP pass of all points evaluated as one stack,
+    then the per-point driver) against 500 calls of one point each: same tolerances against the
+    closed form, same statuses, methods and solver calls, bounds equal to rounding of the solver's
+    iterates."""
     args = (cases["me"], cases["W"], cases["Zt"], cases["V"])
-    r = gmu.required_gamma(*args, backend=backend)
-    monkeypatch.setattr(gmu, "_SISO_BATCH", False)
-    p = gmu.required_gamma(*args, backend=backend)
+    r = mu.required_gamma(*args, backend=backend)
+    per_point = [mu.required_gamma(cases["me"][i:i + 1], cases["W"][i:i + 1], cases["Zt"][i:i + 1],
+                                   cases["V"][i], backend=backend) for i in range(500)]
+    p_status = np.array([q.status[0] for q in per_point])
+    p_method = np.array([q.method[0] for q in per_point])
+    p_lower = np.array([q.gamma_lower[0] for q in per_point])
+    p_upper = np.array([q.gamma_upper[0] for q in per_point])
     ref = cases["ref"]
     unexpl = ~np.isfinite(ref)
     assert np.all(r.status[unexpl] == "unexplainable") and np.all(np.isinf(r.gamma_lower[unexpl]))
     assert np.all(r.status[~unexpl] == "ok")
-    np.testing.assert_array_equal(r.status, p.status)
-    np.testing.assert_array_equal(r.method, p.method)
-    assert r.n_solver_calls == p.n_solver_calls
+    np.testing.assert_array_equal(r.status, p_status)
+    np.testing.assert_array_equal(r.method, p_method)
+    assert r.n_solver_calls == sum(q.n_solver_calls for q in per_point)
     zero = ref == 0
     assert np.all(r.gamma_lower[zero] == 0) and np.all(r.gamma_upper[zero] == 0)
     pos = np.isfinite(ref) & ~zero
@@ -378,7 +382,7 @@ def test_batched_siso_path_matches_closed_form_and_per_point_path(
     far = pos & ~np.char.startswith(cases["kind"], "near")
     assert np.all(r.gamma_lower[far] <= ref[far] * (1 + 1e-9))
     assert np.all(r.gamma_upper[far] >= ref[far] * (1 - 1e-9))
-    for a, b in ((r.gamma_lower, p.gamma_lower), (r.gamma_upper, p.gamma_upper)):
+    for a, b in ((r.gamma_lower, p_lower), (r.gamma_upper, p_upper)):
         assert np.max(np.abs(a[pos] - b[pos]) / ref[pos]) < 1e-7
     # the explicit Deltas reproduce the data within the noise bound
     for i in np.flatnonzero(pos):
@@ -397,9 +401,9 @@ def test_default_backend_is_clarabel_and_matches_cvxpy() -> None:
     Zt = G * W * (1 + 0.3 * cplx(rng, f))
     V = 0.3 * np.abs(Zt - G * W)
     me = lft.additive_me(G)
-    assert gmu.DEFAULT_BACKEND == "clarabel"
-    a = gmu.required_gamma(me, W, Zt, V)
-    b = gmu.required_gamma(me, W, Zt, V, backend="cvxpy")
+    assert mu.DEFAULT_BACKEND == "clarabel"
+    a = mu.required_gamma(me, W, Zt, V)
+    b = mu.required_gamma(me, W, Zt, V, backend="cvxpy")
     np.testing.assert_array_equal(a.status, b.status)
     assert a.n_solver_calls == b.n_solver_calls
     np.testing.assert_allclose(a.gamma_lower, b.gamma_lower, rtol=1e-8)

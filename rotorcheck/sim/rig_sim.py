@@ -5,7 +5,10 @@ misalignment. A fault named in the rig's ``faults`` section changes the plant:
 
 - ``crack`` with ``model: open`` and ``spring_change``: a time-invariant changed model;
 - ``crack`` with a breathing model: the linear time-periodic cracked rotor by harmonic balance
-  (tones at f + k * speed), see :mod:`rotorcheck.faults`.
+  (tones at f + k * speed), see :mod:`rotorcheck.faults` and :mod:`rotorcheck.sim.plants`.
+
+A time-invariant plant is the FE engine's receptance (:mod:`rotorcheck.fe.frf`) from the actuator to
+the sensor.
 
 Synchronous disturbances (absolute time t, shaft angle Omega t): unbalance ``m e Omega^2`` rotating
 forward at 1X at its station, phase from +x towards +y; misalignment a forward-rotating 2X force of
@@ -22,16 +25,20 @@ import numpy as np
 from rotorcheck import __version__
 from rotorcheck.config import Crack, RigConfig, SpringChange
 from rotorcheck.errors import InputError
+from rotorcheck.faults.harmonic_balance import misalignment_force, unbalance_force
+from rotorcheck.fe.assembly import build_system
+from rotorcheck.fe.frf import system_receptance
 from rotorcheck.fe.system import RPM_TO_RAD_S, MechanicalSystem
-from rotorcheck.sweep.format import Channel, Sweep
-from rotorcheck.sweep.simulator import (
+from rotorcheck.sim.plants import simulator_disturbances, simulator_plant
+from rotorcheck.sim.simulator import (
     Plant,
     StepSettings,
     Tone,
-    matrix_plant,
+    receptance_plant,
     response_tones,
     simulate_fast,
 )
+from rotorcheck.sweep.format import Channel, Sweep
 
 
 @dataclass(frozen=True)
@@ -64,8 +71,6 @@ def rig_channels(config: RigConfig) -> list[Channel]:
 
 def synchronous_forces(config: RigConfig, system: MechanicalSystem, speed_rpm: float) -> list[Tone]:
     """Unbalance (1X) and misalignment (2X) force tones, vectors of length n_dof (N)."""
-    from rotorcheck.faults.harmonic_balance import misalignment_force, unbalance_force
-
     if config.kind != "rotor" or speed_rpm == 0.0:
         return []
     f1 = speed_rpm / 60.0
@@ -78,11 +83,14 @@ def synchronous_forces(config: RigConfig, system: MechanicalSystem, speed_rpm: f
 
 
 def rig_plant(
-    config: RigConfig, speed_rpm: float, fault: str | None = None, n_harmonics: int = 8
+    config: RigConfig,
+    speed_rpm: float,
+    fault: str | None = None,
+    n_harmonics: int = 8,
+    band_hz: float | None = None,
 ) -> RigPlant:
-    """The rig (optionally with a named fault) as a simulator plant at ``speed_rpm``."""
-    from rotorcheck.fe.assembly import build_system
-
+    """The rig (optionally with a named fault) as a simulator plant at ``speed_rpm``; ``band_hz``:
+    the highest excitation frequency that will be asked (lets a large mesh reduce once)."""
     spec = None
     if fault is not None:
         if fault not in config.faults:
@@ -99,26 +107,23 @@ def rig_plant(
         system = build_system(config)
     in_dof = system.port_dof(config.ports.actuator)
     out_dof = system.port_dof(config.ports.sensor)
-    M, C, G, K = system.matrices(speed_rpm)
-    Ceff = C + speed_rpm * RPM_TO_RAD_S * G
-    b = np.zeros(system.n_dof)
-    b[in_dof] = 1.0
-    c_out = np.zeros((1, system.n_dof))
-    c_out[0, out_dof] = 1.0
     breathing = spec if isinstance(spec, Crack) and spec.model != "open" else None
     if breathing is not None:
-        from rotorcheck.faults.analysis import simulator_plant
-
         plant = simulator_plant(system, breathing, speed_rpm, in_dof, [out_dof], n_harmonics)
     else:
-        plant = matrix_plant(M, Ceff, K, b, c_out)
+        plant = receptance_plant(system_receptance(system, speed_rpm, [out_dof], [in_dof], band_hz=band_hz),
+                                 name="matrix")
     if config.kind == "rotor" and speed_rpm != 0.0:
-        from rotorcheck.faults.analysis import simulator_disturbances
-
         disturbances = simulator_disturbances(system, breathing, speed_rpm, [out_dof], config.measurement.unbalance,
                                               config.measurement.misalignment, n_harmonics)
     else:
-        disturbances = response_tones(M, Ceff, K, c_out, synchronous_forces(config, system, speed_rpm))
+        forces = synchronous_forces(config, system, speed_rpm)
+        disturbances = []
+        if forces:
+            M, C, G, K = system.matrices(speed_rpm)
+            c_out = np.zeros((1, system.n_dof))
+            c_out[0, out_dof] = 1.0
+            disturbances = response_tones(M, C + speed_rpm * RPM_TO_RAD_S * G, K, c_out, forces)
     return RigPlant(plant, disturbances, system, in_dof, out_dof)
 
 
@@ -198,9 +203,11 @@ def simulate_rig(
     a free-running start, see :func:`at_shaft_angle`). Per-period phasors are stored when
     ``settings.keep_periods``.
     """
-    rp = at_shaft_angle(rig_plant(config, speed_rpm, fault, n_harmonics), speed_rpm, shaft_angle_rad)
+    f = np.asarray(freq_hz, dtype=float)
+    band = float(np.max(f)) if f.size else None
+    rp = at_shaft_angle(rig_plant(config, speed_rpm, fault, n_harmonics, band), speed_rpm, shaft_angle_rad)
     st = settings if settings is not None else step_settings(config)
-    res = simulate_fast(rp.plant, np.asarray(freq_hz, dtype=float), st, rp.disturbances, rng=seed)
+    res = simulate_fast(rp.plant, f, st, rp.disturbances, rng=seed)
     rid = run_id or f"{speed_rpm:g}rpm"
     what = f"fault {fault!r}" if fault else "healthy"
     n_per = st.n_periods if isinstance(st.n_periods, int) else f"{min(st.n_periods)}-{max(st.n_periods)}"

@@ -18,8 +18,8 @@ variation of ``K_c``, so a few hundred steps per revolution suffice (convergence
 tests). ``A(t)`` is periodic with the revolution ``T = 2 pi / Omega``, so with N steps per
 revolution the N step propagators are computed once and reused every revolution; settling is
 done by whole revolutions with their product (exactly the same steps). Samples between grid points
-use a partial Magnus step. :func:`simulate_ivp` (scipy ``solve_ivp``, DOP853/Radau) is the
-independent reference used in the tests on short spans.
+use a partial Magnus step. The independent reference on short spans (scipy ``solve_ivp``,
+DOP853/Radau) is a test oracle (tests/oracles/time_domain.py).
 """
 
 from __future__ import annotations
@@ -29,18 +29,17 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from scipy.integrate import solve_ivp
 from scipy.linalg import expm
 
 from rotorcheck.config import Crack
-from rotorcheck.faults._blas import single_thread_blas
 from rotorcheck.faults.crack import CrackStiffness, crack_stiffness
+from rotorcheck.fe.blas import one_blas_thread
 from rotorcheck.fe.system import RPM_TO_RAD_S, MechanicalSystem
+from rotorcheck.signal.lockin import average_periods, lockin_periods
 
 __all__ = [
     "LTPIntegrator",
     "SteadyLockin",
-    "simulate_ivp",
     "steady_revolution",
     "steady_state_lockin",
 ]
@@ -109,7 +108,7 @@ class LTPIntegrator:
         self.steps_per_rev = int(steps_per_rev)
         self.h = self.period / self.steps_per_rev
         t0 = np.arange(self.steps_per_rev) * self.h
-        with single_thread_blas():
+        with one_blas_thread():
             self.step_maps = self._propagators(t0, np.full(t0.shape, self.h))
             rev = np.eye(2 * n + 2)
             for phi_j in self.step_maps:
@@ -172,7 +171,7 @@ class LTPIntegrator:
 
     def settle(self, x: np.ndarray, n_rev: int) -> np.ndarray:
         """Advance ``n_rev`` whole revolutions (from a grid time that is a multiple of T)."""
-        with single_thread_blas():
+        with one_blas_thread():
             for _ in range(int(n_rev)):
                 x = self.rev_map @ x
         return x
@@ -182,7 +181,7 @@ class LTPIntegrator:
         ``step0`` (time ``step0 h``, only its phase in the revolution matters)."""
         out = np.empty((n_steps + 1, x.size))
         out[0] = x
-        with single_thread_blas():
+        with one_blas_thread():
             for i in range(n_steps):
                 x = self.step_maps[(step0 + i) % self.steps_per_rev] @ x
                 out[i + 1] = x
@@ -199,7 +198,7 @@ class LTPIntegrator:
         tg = t_start + idx * self.h
         part = ts - tg
         out = np.empty((ts.size, x_start.size))
-        with single_thread_blas():
+        with one_blas_thread():
             for s in range(0, ts.size, chunk):
                 sl = slice(s, s + chunk)
                 maps = self._propagators(tg[sl], part[sl])
@@ -240,10 +239,8 @@ def steady_state_lockin(
     ``force``: input DOF (unit force) or complex force vector (n,); the applied force is
     ``Re{phasor * force * e^{j 2 pi f t}}``. Settling runs whole revolutions until the transient
     has decayed by ``settle_tol`` (from the Floquet radius). Lock-in as the simulator's
-    (:func:`rotorcheck.sweep.lockin.lockin_periods`, ``samples_per_period`` samples per period).
+    (:func:`rotorcheck.signal.lockin.lockin_periods`, ``samples_per_period`` samples per period).
     """
-    from rotorcheck.sweep.lockin import average_periods, lockin_periods
-
     n = system.n_dof
     if isinstance(force, (int, np.integer)):
         b = np.zeros(n, dtype=complex)
@@ -295,61 +292,3 @@ def steady_revolution(
     states = integ.march(x, integ.steps_per_rev)
     t = n_rev * integ.period + np.arange(integ.steps_per_rev + 1) * integ.h
     return t, integ.displacements(states, outs)
-
-
-def simulate_ivp(
-    system: MechanicalSystem,
-    crack: Crack | CrackStiffness | None,
-    speed_rpm: float,
-    force: np.ndarray,
-    f_force_hz: float,
-    t_eval: np.ndarray,
-    method: str = "DOP853",
-    rtol: float = 1e-10,
-    atol: float = 1e-16,
-    **crack_kw: Any,
-) -> np.ndarray:
-    """Reference integration with ``scipy.integrate.solve_ivp`` from rest; states (T, 2n) at
-    ``t_eval`` (s). Force ``Re{force e^{j 2 pi f t}}`` (N). Slow: short spans / small models only.
-    """
-    if crack is not None and not isinstance(crack, CrackStiffness):
-        crack = crack_stiffness(system, crack, **crack_kw)
-    M, C, G, K = system.matrices(speed_rpm)
-    n = system.n_dof
-    om = float(speed_rpm) * RPM_TO_RAD_S
-    minv = np.linalg.inv(M)
-    mk, md = minv @ K, minv @ (C + om * G)
-    b = np.asarray(force, dtype=complex)
-    fr, fi = minv @ b.real, minv @ b.imag
-    w = TWO_PI * f_force_hz
-    dofs = crack.dofs if crack is not None else None
-    minv_s = minv[:, dofs] if dofs is not None else None
-
-    def rhs(t: float, x: np.ndarray) -> np.ndarray:
-        q, v = x[:n], x[n:]
-        acc = -mk @ q - md @ v + fr * np.cos(w * t) - fi * np.sin(w * t)
-        if crack is not None:
-            assert minv_s is not None and dofs is not None
-            acc += minv_s @ (crack.at_rotation(om * t)[0] @ q[dofs])
-        return np.concatenate([v, acc])
-
-    a_lin = np.zeros((2 * n, 2 * n))
-    a_lin[:n, n:] = np.eye(n)
-    a_lin[n:, :n] = -mk
-    a_lin[n:, n:] = -md
-    kw: dict[str, Any] = {}
-    if method in ("Radau", "BDF", "LSODA"):
-        kw["jac"] = a_lin
-    sol = solve_ivp(
-        rhs,
-        (0.0, float(t_eval[-1])),
-        np.zeros(2 * n),
-        method=method,
-        t_eval=t_eval,
-        rtol=rtol,
-        atol=atol,
-        **kw,
-    )
-    if not sol.success:
-        raise RuntimeError(sol.message)
-    return sol.y.T

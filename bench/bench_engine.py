@@ -1,0 +1,262 @@
+"""Benchmark of the receptance engine (rotorcheck.fe.frf) and of the commands on a refined mesh.
+
+(a) ``frf_*``: the crack rig's nominal plant at 262 points (30-600 Hz, 1000 rpm; receptances at
+    [damage port, sensor] for [damage port, actuator]) as the product computes it
+    (:func:`rotorcheck.nominal.nominal_model`), against a per-frequency dense solve of the same
+    columns in the same run; median times (s), the ratio and the largest relative difference.
+(b) ``scaling``: the same engine call (factorisation + 262 points) on the rig with every element
+    split into 1, 2, 4, ... 64 (9 ... 576 elements), with its peak traced memory, fitted as a power
+    law ``t = a N^p`` in the element count N; the dense per-frequency baseline where affordable; and
+    the nominal plant of the 576-element mesh on 262 and on 3,081 points (time, peak traced memory).
+(c) ``cli_*``: ``rotorcheck model --speed 1000`` and ``rotorcheck validate`` (after ``fit-noise``)
+    of the bundled healthy 1000 rpm sweep on the 576-element mesh (and the 9-element rig in the
+    same run), each a fresh process as a user runs it: wall time and peak RSS (``os.wait4``).
+(d) ``hb_sweep_*``, ``modal_factor_*``: the harmonic-balance sweep of the cracked rig (262 points,
+    H = 8) and the engine's modal factorisation of the 18-element rig with BLAS limited to one thread
+    (as the product runs them) and with the BLAS default, in the same run, with the load average
+    (the difference depends on what else runs on the machine).
+
+``python -m bench.bench_engine`` prints the dict as JSON.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+import tracemalloc
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import yaml
+
+from rotorcheck.config import RigConfig, load_config
+from rotorcheck.faults.crack import crack_stiffness
+from rotorcheck.faults.harmonic_balance import HBSolver
+from rotorcheck.fe.assembly import build_system
+from rotorcheck.fe.blas import one_blas_thread
+from rotorcheck.fe.frf import _scaled_modal_factors, system_receptance
+from rotorcheck.fe.system import RPM_TO_RAD_S, MechanicalSystem
+from rotorcheck.nominal import nominal_model
+
+ROOT = Path(__file__).resolve().parents[1]
+RIG = ROOT / "configs" / "crack_rig.yaml"
+TRUTH = ROOT / "configs" / "crack_rig_truth.yaml"
+SWEEP = ROOT / "data_samples" / "crack_rig" / "healthy_1000rpm.h5"
+SPEED_RPM = 1000.0
+FREQ_HZ = np.linspace(30.0, 600.0, 262)
+REFINE = (1, 2, 4, 8, 16, 32, 64)
+
+
+def _median(fn: Callable[[], Any], repeat: int) -> float:
+    fn()  # warm-up
+    times = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return float(np.median(times))
+
+
+def refined(config: RigConfig, refine: int) -> RigConfig:
+    """The rig with every shaft element split into ``refine`` (the config's own ``refine`` option)."""
+    shaft = [e.model_copy(update={"refine": refine}) for e in config.shaft]
+    return config.model_copy(update={"shaft": shaft})
+
+
+def _ports(config: RigConfig, system: MechanicalSystem) -> tuple[list[int], list[int]]:
+    assert config.damage is not None
+    d = system.port_dof(config.damage.port)
+    return [d, system.port_dof(config.ports.sensor)], [d, system.port_dof(config.ports.actuator)]
+
+
+def dense_per_frequency(system: MechanicalSystem, freq_hz: np.ndarray, speed_rpm: float,
+                        outs: list[int], ins: list[int]) -> np.ndarray:
+    """Baseline: at each frequency build Z(w) and solve it densely for the input columns."""
+    M, C, G, K = system.matrices(speed_rpm)
+    D = C + speed_rpm * RPM_TO_RAD_S * G
+    B = np.zeros((system.n_dof, len(ins)))
+    B[ins, np.arange(len(ins))] = 1.0
+    out = np.empty((freq_hz.size, len(outs), len(ins)), dtype=complex)
+    for k, f in enumerate(freq_hz):
+        w = 2.0 * np.pi * f
+        out[k] = np.linalg.solve(K - w**2 * M + 1j * w * D, B)[outs]
+    return out
+
+
+def _engine(system: MechanicalSystem, outs: list[int], ins: list[int]) -> np.ndarray:
+    return system_receptance(system, SPEED_RPM, outs, ins, band_hz=float(FREQ_HZ.max())).at_hz(FREQ_HZ)
+
+
+def frf_ratio(repeat: int) -> dict[str, Any]:
+    """(a) the product's nominal plant vs per-frequency dense solves: the rig as published (9
+    elements) and refined 8x (72 elements, whose dense (f, n, n) stack was 357 MB)."""
+    out: dict[str, Any] = {}
+    for r in (1, 8):
+        config = refined(load_config(RIG), r)
+        system = build_system(config)
+        system.matrices(SPEED_RPM)  # both timings without the assembly
+        outs, ins = _ports(config, system)
+        tag = f"{9 * r}el"
+        t_prod = _median(lambda c=config, s=system: nominal_model(c, FREQ_HZ, SPEED_RPM, system=s), repeat)
+        t_dense = _median(lambda s=system, o=outs, i=ins: dense_per_frequency(s, FREQ_HZ, SPEED_RPM, o, i),
+                          repeat if r == 1 else 2)
+        got = nominal_model(config, FREQ_HZ, SPEED_RPM, system=system).P[:, 1:, 1:]
+        ref = dense_per_frequency(system, FREQ_HZ, SPEED_RPM, outs, ins)
+        out.update({
+            f"frf_{tag}_n_dof": system.n_dof,
+            f"frf_{tag}_product_s": t_prod,
+            f"frf_{tag}_dense_per_frequency_s": t_dense,
+            f"frf_{tag}_ratio_dense_over_product": t_dense / t_prod,
+            f"frf_{tag}_max_rel_diff": float(np.max(np.abs(got - ref).max(axis=(1, 2))
+                                                    / np.abs(ref).max(axis=(1, 2)))),
+        })
+    return out
+
+
+def scaling(dense_up_to: int = 144) -> dict[str, Any]:
+    """(b) engine time and peak traced memory against the element count; power-law fit."""
+    base = load_config(RIG)
+    rows = []
+    for r in REFINE:
+        config = refined(base, r)
+        t0 = time.perf_counter()
+        system = build_system(config)
+        system.matrices(SPEED_RPM)
+        t_asm = time.perf_counter() - t0
+        outs, ins = _ports(config, system)
+        t0 = time.perf_counter()
+        tracemalloc.start()
+        H = _engine(system, outs, ins)
+        peak = tracemalloc.get_traced_memory()[1]
+        tracemalloc.stop()
+        t_frf = time.perf_counter() - t0
+        t_frf = min(t_frf, _median(lambda s=system, o=outs, i=ins: _engine(s, o, i), 2))
+        row: dict[str, Any] = {"elements": 9 * r, "n_dof": system.n_dof, "assembly_s": t_asm, "frf_s": t_frf,
+                               "frf_peak_traced_mb": peak / 2**20,
+                               "dense_stack_would_be_mb": FREQ_HZ.size * system.n_dof**2 * 16 / 2**20}
+        if 9 * r <= dense_up_to:
+            t0 = time.perf_counter()
+            ref = dense_per_frequency(system, FREQ_HZ, SPEED_RPM, outs, ins)
+            row["dense_per_frequency_s"] = time.perf_counter() - t0
+            row["max_rel_diff_vs_dense"] = float(np.max(np.abs(H - ref).max(axis=(1, 2))
+                                                        / np.abs(ref).max(axis=(1, 2))))
+        rows.append(row)
+    # the nominal plant of the finest mesh on 262 and on 3,081 points: same peak memory
+    config = refined(base, REFINE[-1])
+    system = build_system(config)
+    system.matrices(SPEED_RPM)
+    points: dict[str, Any] = {}
+    for npts in (262, 3081):
+        f = np.linspace(30.0, 600.0, npts)
+        tracemalloc.start()
+        t0 = time.perf_counter()
+        nominal_model(config, f, SPEED_RPM, system=system)
+        points[f"nominal_{9 * REFINE[-1]}el_{npts}pts_s"] = time.perf_counter() - t0
+        points[f"nominal_{9 * REFINE[-1]}el_{npts}pts_peak_traced_mb"] = tracemalloc.get_traced_memory()[1] / 2**20
+        tracemalloc.stop()
+    n = np.array([row["elements"] for row in rows], dtype=float)
+    t = np.array([row["frf_s"] for row in rows])
+    big = n >= 72  # the reduced path (above rotorcheck.fe.frf.N_FULL DOF)
+    p_all, _ = np.polyfit(np.log(n), np.log(t), 1)
+    p_big, _ = np.polyfit(np.log(n[big]), np.log(t[big]), 1)
+    return {"scaling": rows, "frf_power_law_exponent_all": float(p_all),
+            "frf_power_law_exponent_72_to_576": float(p_big), **points}
+
+
+#: runs ``python -m rotorcheck`` and, at exit, writes the process's peak RSS (``VmHWM`` of
+#: /proc/self/status: the peak of this program's own address space; ``getrusage`` of a child would
+#: also count the benchmark's memory the child had before ``exec``)
+_WRAPPER = """
+import atexit, runpy, sys
+def _peak(path=sys.argv[1]):
+    with open('/proc/self/status') as fh, open(path, 'w') as out:
+        out.write(next(l for l in fh if l.startswith('VmHWM')).split()[1])
+atexit.register(_peak)
+sys.argv = ['rotorcheck', *sys.argv[2:]]
+runpy.run_module('rotorcheck', run_name='__main__')
+"""
+
+
+def _cli(args: list[str], cwd: Path) -> tuple[int, float, float]:
+    """(exit code, wall s, peak RSS MB) of ``python -m rotorcheck args`` in a fresh process."""
+    env = dict(os.environ, MPLBACKEND="Agg")
+    peak = cwd / "peak_rss_kb"
+    t0 = time.perf_counter()
+    proc = subprocess.run([sys.executable, "-c", _WRAPPER, str(peak), *args], cwd=cwd, env=env, check=False,
+                          stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    wall = time.perf_counter() - t0
+    return proc.returncode, wall, float(peak.read_text()) / 1024.0
+
+
+def commands() -> dict[str, Any]:
+    """(c) ``model`` and ``validate`` on the 9- and 576-element meshes, fresh processes."""
+    out: dict[str, Any] = {}
+    raw = yaml.safe_load(RIG.read_text())
+    with tempfile.TemporaryDirectory() as tmp:
+        work = Path(tmp)
+        for r in (1, 64):
+            doc = dict(raw, shaft=[dict(e, refine=r) for e in raw["shaft"]])
+            rig = work / f"crack_rig_{9 * r}.yaml"
+            rig.write_text(yaml.safe_dump(doc))
+            tag = f"{9 * r}el"
+            rc, wall, rss = _cli(["model", str(rig), "--speed", "1000", "--out", str(work / tag), "--force"], work)
+            out[f"cli_model_{tag}_s"], out[f"cli_model_{tag}_peak_rss_mb"], out[f"cli_model_{tag}_rc"] = wall, rss, rc
+            rc, wall, rss = _cli(["fit-noise", str(SWEEP), "--rig", str(rig), "--out", str(work / tag), "--force"],
+                                 work)
+            out[f"cli_fit_noise_{tag}_rc"] = rc
+            for plots in (True, False):
+                args = ["validate", str(SWEEP), "--rig", str(rig), "--out", str(work / tag), "--force"]
+                key = f"cli_validate_{tag}" + ("" if plots else "_no_plots")
+                rc, wall, rss = _cli(args + ([] if plots else ["--no-plots"]), work)
+                out[f"{key}_s"], out[f"{key}_peak_rss_mb"], out[f"{key}_rc"] = wall, rss, rc
+    return out
+
+
+def blas_threads(repeat: int) -> dict[str, Any]:
+    """(d) with one BLAS thread (as the product runs them) and with the BLAS default, same run: the
+    HB sweep of the cracked rig and the engine's modal factorisation of the 18-element rig."""
+    cfg = load_config(TRUTH)
+    system = build_system(cfg)
+    crack = crack_stiffness(system, cfg.faults["breathing_crack"])
+    ind, out = system.port_dof(cfg.ports.actuator), system.port_dof(cfg.ports.sensor)
+    solver = HBSolver(system, crack, SPEED_RPM, ind, [out], 8)
+    fine = build_system(refined(load_config(RIG), 2))
+    M, C, G, K = fine.matrices(SPEED_RPM)
+    D = C + SPEED_RPM * RPM_TO_RAD_S * G
+    cols = np.eye(fine.n_dof)[:, :2]
+
+    def factor() -> Any:
+        return _scaled_modal_factors(M, D, K, cols)
+
+    def factor_one() -> Any:
+        with one_blas_thread():
+            return factor()
+
+    return {
+        "hb_sweep_one_thread_s": _median(lambda: solver.solve(FREQ_HZ), repeat),
+        "hb_sweep_default_threads_s": _median(lambda: solver._solve(FREQ_HZ, 64), repeat),
+        "modal_factor_18el_one_thread_s": _median(factor_one, 5 * repeat),
+        "modal_factor_18el_default_threads_s": _median(factor, 5 * repeat),
+        "load_average_1min": os.getloadavg()[0],
+        "cpu_count": os.cpu_count(),
+    }
+
+
+def run(repeat: int = 15) -> dict[str, Any]:
+    """Everything above; see the module docstring."""
+    res: dict[str, Any] = {"openblas_num_threads": os.environ.get("OPENBLAS_NUM_THREADS", "default")}
+    res.update(frf_ratio(repeat))
+    res.update(scaling())
+    res.update(commands())
+    res.update(blas_threads(max(repeat // 3, 3)))
+    return res
+
+
+if __name__ == "__main__":
+    print(json.dumps(run(), indent=2))

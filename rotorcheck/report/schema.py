@@ -1,0 +1,136 @@
+"""The documents other tools read, as typed classes: ``report.json`` (detect) and the ``--json``
+outputs of ``fit-noise`` and ``validate``. Each key comes from one field here (cli.md's contract
+keys plus context); ``to_dict`` gives the JSON document (optional groups left out when absent).
+
+Units: frequencies Hz, receptances m/N, damage dynamics N/m, noise bounds m, angles deg.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, fields
+from typing import Any
+
+import numpy as np
+
+__all__ = ["CONTRACT_KEYS", "DetectionReport", "NoiseReport", "ValidationReport"]
+
+#: report.json keys other tools rely on (../shared/spec/cli.md)
+CONTRACT_KEYS = (
+    "verdict", "n_points", "n_fault_points", "fault_frequencies_hz", "frequency_hz", "gamma_healthy",
+    "gamma_required", "fault", "damage_dynamics_re", "damage_dynamics_im", "damage_bound_min_abs",
+    "damage_bound_max_abs",
+)
+
+FloatArray = np.ndarray
+
+
+def _as_dict(obj: Any) -> dict[str, Any]:
+    """Fields in order; an optional field (default None) left at None is left out."""
+    out: dict[str, Any] = {}
+    for f in fields(obj):
+        value = getattr(obj, f.name)
+        if value is None and f.default is None:
+            continue
+        out[f.name] = value
+    return out
+
+
+@dataclass
+class DetectionReport:
+    """``report.json`` of ``rotorcheck detect``: verdict, context, per-point arrays (f,)."""
+
+    verdict: str  # "damage" | "healthy" | "inconclusive"
+    verdict_reason: str
+    verdict_rule: str
+    n_points: int
+    n_fault_points: int
+    fault_frequencies_hz: list[float]
+    rig_id: str
+    rig_sha256: str
+    sweep: str
+    sweep_sha256: str
+    run_id: str
+    speed_rpm: float
+    band_hz: list[float]
+    noise_bound_m: float
+    noise_method: str
+    uncertainty: str
+    parameter: str
+    enclose: str  # detection mode: "measured" | "system" | "data"
+    damage_port: str
+    shaft_orders_removed: int
+    notes: list[str]
+    frequency_hz: FloatArray
+    gamma_healthy: FloatArray  # measured: the noise allowance of |T_new - T_h| (m/N); else gamma_h
+    gamma_required: FloatArray  # measured: |T_new - T_h| (m/N); else the certified lower bound
+    gamma_required_upper: FloatArray
+    fault: FloatArray
+    status: list[str]
+    damage_dynamics_re: FloatArray  # eq. 3.11 with the nominal E22 (N/m)
+    damage_dynamics_im: FloatArray
+    damage_bound_kind: list[str]
+    damage_bound_min_abs: FloatArray
+    damage_bound_max_abs: FloatArray
+    damage_bound_phase_min_deg: FloatArray
+    damage_bound_phase_max_deg: FloatArray
+    # measured detection
+    confidence: float | None = None  # family-wise
+    n_tests: int | None = None
+    point_miss_probability: float | None = None
+    p_value: float | None = None  # the sweep's Sidak-adjusted p-value for "any change"
+    gamma_meaning: str | None = None
+    point_p_value: FloatArray | None = None
+    variance_dof: FloatArray | None = None
+    # anchored identification (E22 := the measured healthy FRF)
+    damage_dynamics_anchored_re: FloatArray | None = None
+    damage_dynamics_anchored_im: FloatArray | None = None
+    damage_anchored_bound_kind: list[str] | None = None
+    damage_anchored_bound_min_abs: FloatArray | None = None
+    damage_anchored_bound_max_abs: FloatArray | None = None
+    damage_anchored_bound_phase_min_deg: FloatArray | None = None
+    damage_anchored_bound_phase_max_deg: FloatArray | None = None
+    damage_anchored_bound_confidence: float | None = None
+    damage_anchored_channel_error: FloatArray | None = None
+    damage_anchored_noise_min_abs: FloatArray | None = None
+    damage_anchored_noise_max_abs: FloatArray | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        """The report.json document (arrays as numpy; :func:`rotorcheck.report.reports.render_json`)."""
+        return _as_dict(self)
+
+
+@dataclass
+class NoiseReport:
+    """``rotorcheck fit-noise --json``."""
+
+    noise_bound_m: float
+    method: str
+    confidence: float | None
+    sweep: str
+    baseline: str
+    details: dict[str, Any]
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON document."""
+        return _as_dict(self)
+
+
+@dataclass
+class ValidationReport:
+    """``rotorcheck validate --json``: gamma_h per point and how it was made."""
+
+    frequency_hz: FloatArray
+    gamma: FloatArray
+    gamma_lower: FloatArray
+    status: list[str]
+    noise_bound_m: float
+    noise_method: str
+    enclose: str
+    uncertainty: str
+    n_points: int
+    n_not_enclosed: int
+    baseline: str
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON document."""
+        return _as_dict(self)

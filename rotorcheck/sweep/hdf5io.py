@@ -1,0 +1,308 @@
+"""Reader and writer of the HDF5 sweep file (``rotorcheck.sweep`` version 1) and its SHA-256.
+
+The reader validates everything on open and raises :class:`SweepFormatError` naming the file, the
+path inside it and the reason; it never guesses (no dtype coercion, no reordering, no repair).
+The writer is atomic (:func:`rotorcheck.fileio.atomic_path`) and refuses to overwrite unless
+``force=True``.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+from typing import Any
+
+import h5py
+import numpy as np
+
+from rotorcheck.fileio import atomic_path
+from rotorcheck.sweep.format import (
+    CHANNEL_FIELDS,
+    EXCITATION,
+    PHASOR_CONVENTION,
+    RUN_DATASETS,
+    SCHEMA,
+    SCHEMA_VERSION,
+    Channel,
+    Run,
+    Sweep,
+    SweepFormatError,
+)
+from rotorcheck.sweep.validation import (
+    FRF_RTOL,
+    PERIOD_RTOL,
+    check_text,
+    dtype_name,
+    validate_channels,
+    validate_header,
+    validate_run,
+    validate_sweep,
+)
+
+# --------------------------------------------------------------------------------------------
+# reader
+# --------------------------------------------------------------------------------------------
+
+
+def _attr(file: str, obj: h5py.HLObject, name: str, where: str) -> Any:
+    if name not in obj.attrs:
+        raise SweepFormatError(file, f"{where}@{name}", "missing attribute")
+    try:
+        return obj.attrs[name]
+    except Exception as exc:  # unreadable attribute: report, do not guess
+        raise SweepFormatError(file, f"{where}@{name}", f"unreadable attribute: {exc}") from exc
+
+
+def _read_ds(file: str, grp: h5py.Group, name: str, where: str) -> np.ndarray:
+    path = f"{where}/{name}"
+    if name not in grp:
+        raise SweepFormatError(file, path, "missing dataset")
+    obj = grp.get(name)
+    if not isinstance(obj, h5py.Dataset):
+        raise SweepFormatError(file, path, f"expected a dataset, found {type(obj).__name__}")
+    try:
+        if obj.dtype.kind in "OS" or h5py.check_string_dtype(obj.dtype) is not None:
+            return np.asarray(obj.asstr()[()], dtype=object)
+        return np.asarray(obj[()])
+    except Exception as exc:
+        raise SweepFormatError(file, path, f"unreadable dataset (truncated or corrupt?): {exc}") from exc
+
+
+def _as_text_array(file: str, path: str, a: np.ndarray, n: int) -> list[str]:
+    if a.ndim != 1 or a.shape[0] != n:
+        raise SweepFormatError(file, path, f"wrong shape {a.shape}, expected ({n},)")
+    return [check_text(file, path, v, "value") for v in a.tolist()]
+
+
+def _read_channels(file: str, h5: h5py.File) -> list[Channel]:
+    if "channels" not in h5:
+        raise SweepFormatError(file, "/channels", "missing dataset")
+    obj = h5["channels"]
+    cols: dict[str, np.ndarray] = {}
+    if isinstance(obj, h5py.Group):
+        for fld in CHANNEL_FIELDS:
+            cols[fld] = _read_ds(file, obj, fld, "/channels")
+        n = cols["name"].shape[0] if cols["name"].ndim == 1 else -1
+        if n < 0:
+            raise SweepFormatError(file, "/channels/name", f"wrong shape {cols['name'].shape}")
+        paths = {fld: f"/channels/{fld}" for fld in CHANNEL_FIELDS}
+    elif isinstance(obj, h5py.Dataset) and obj.dtype.names is not None:
+        missing = [fld for fld in CHANNEL_FIELDS if fld not in obj.dtype.names]
+        if missing:
+            raise SweepFormatError(file, "/channels", f"compound table lacks fields {missing}")
+        try:
+            table = obj[()]
+        except Exception as exc:
+            raise SweepFormatError(file, "/channels", f"unreadable: {exc}") from exc
+        if table.ndim != 1:
+            raise SweepFormatError(file, "/channels", f"wrong shape {table.shape}, expected (n,)")
+        n = table.shape[0]
+        cols = {fld: np.asarray(table[fld]) for fld in CHANNEL_FIELDS}
+        paths = {fld: f"/channels[{fld}]" for fld in CHANNEL_FIELDS}
+    else:
+        raise SweepFormatError(file, "/channels", "expected a group of 1-D datasets or a compound dataset")
+    text = {fld: _as_text_array(file, paths[fld], cols[fld], n) for fld in CHANNEL_FIELDS if fld != "node"}
+    node = cols["node"]
+    if node.ndim != 1 or node.shape[0] != n:
+        raise SweepFormatError(file, paths["node"], f"wrong shape {node.shape}, expected ({n},)")
+    if node.dtype.kind not in "iu":
+        raise SweepFormatError(
+            file, paths["node"], f"wrong dtype {dtype_name(node)}, expected an integer type"
+        )
+    chans = [
+        Channel(
+            name=text["name"][i],
+            role=text["role"][i],
+            node=int(node[i]),
+            direction=text["direction"][i],
+            quantity=text["quantity"][i],
+            unit=text["unit"][i],
+        )
+        for i in range(n)
+    ]
+    validate_channels(file, "/channels", chans)
+    return chans
+
+
+def read_sweep(
+    path: str | os.PathLike[str],
+    *,
+    frf_rtol: float = FRF_RTOL,
+    period_rtol: float = PERIOD_RTOL,
+) -> Sweep:
+    """Open, validate and load a sweep file; raise :class:`SweepFormatError` if it is not valid."""
+    file = str(path)
+    if not os.path.exists(file):
+        raise SweepFormatError(file, "/", "no such file")
+    if os.path.isdir(file):
+        raise SweepFormatError(file, "/", "is a directory, not a sweep file")
+    try:
+        is_h5 = h5py.is_hdf5(file)
+    except Exception as exc:
+        raise SweepFormatError(file, "/", f"cannot read file: {exc}") from exc
+    if not is_h5:
+        raise SweepFormatError(file, "/", "not an HDF5 file (no HDF5 signature)")
+    try:
+        h5 = h5py.File(file, "r")
+    except Exception as exc:
+        raise SweepFormatError(file, "/", f"cannot open as HDF5 (truncated or corrupt file): {exc}") from exc
+    with h5:
+        schema = check_text(file, "/@schema", _attr(file, h5, "schema", ""), "schema")
+        if schema != SCHEMA:
+            raise SweepFormatError(file, "/@schema", f"schema {schema!r}, expected {SCHEMA!r}")
+        ver = _attr(file, h5, "schema_version", "")
+        if isinstance(ver, np.ndarray) and ver.shape in ((), (1,)):
+            ver = ver.reshape(()).item() if ver.dtype.kind in "iu" else ver
+        if isinstance(ver, bool) or not isinstance(ver, int | np.integer):
+            raise SweepFormatError(file, "/@schema_version", f"schema_version {ver!r} is not an integer")
+        if int(ver) != SCHEMA_VERSION:
+            raise SweepFormatError(
+                file,
+                "/@schema_version",
+                f"unknown schema_version {int(ver)} (this reader knows {SCHEMA_VERSION})",
+            )
+        exc_attr = check_text(file, "/@excitation", _attr(file, h5, "excitation", ""), "excitation")
+        if exc_attr != EXCITATION:
+            raise SweepFormatError(file, "/@excitation", f"excitation {exc_attr!r}, expected {EXCITATION!r}")
+        conv = check_text(
+            file, "/@phasor_convention", _attr(file, h5, "phasor_convention", ""), "convention"
+        )
+        if conv != PHASOR_CONVENTION:
+            raise SweepFormatError(
+                file,
+                "/@phasor_convention",
+                f"phasor_convention {conv!r}, expected {PHASOR_CONVENTION!r}",
+            )
+        rig_id = check_text(file, "/@rig_id", _attr(file, h5, "rig_id", ""), "rig_id")
+        source = check_text(file, "/@source", _attr(file, h5, "source", ""), "source")
+        generator = check_text(file, "/@generator", _attr(file, h5, "generator", ""), "generator")
+        created = check_text(file, "/@created_utc", _attr(file, h5, "created_utc", ""), "created_utc")
+        validate_header(file, rig_id, source, generator, created)
+        channels = _read_channels(file, h5)
+
+        if "runs" not in h5:
+            raise SweepFormatError(file, "/runs", "missing group")
+        runs_grp = h5["runs"]
+        if not isinstance(runs_grp, h5py.Group):
+            raise SweepFormatError(file, "/runs", "expected a group")
+        if len(runs_grp) == 0:
+            raise SweepFormatError(file, "/runs", "no runs")
+        runs: dict[str, Run] = {}
+        for run_id in runs_grp:
+            where = f"/runs/{run_id}"
+            g = runs_grp.get(run_id)
+            if not isinstance(g, h5py.Group):
+                raise SweepFormatError(file, where, "expected a group (one per run)")
+            speed = _attr(file, g, "speed_rpm", where)
+            if isinstance(speed, np.ndarray) and speed.shape in ((), (1,)):
+                speed = speed.reshape(()).item()
+            if isinstance(speed, np.generic):
+                speed = speed.item()
+            notes = ""
+            if "notes" in g.attrs:
+                notes = check_text(file, f"{where}@notes", _attr(file, g, "notes", where), "notes")
+            data = {name: _read_ds(file, g, name, where) for name in RUN_DATASETS}
+            pp = _read_ds(file, g, "period_phasor", where) if "period_phasor" in g else None
+            run = Run(
+                run_id=run_id,
+                speed_rpm=speed,
+                frequency=data["frequency"],
+                input_phasor=data["input_phasor"],
+                output_phasor=data["output_phasor"],
+                output_var=data["output_var"],
+                n_periods=data["n_periods"],
+                frf=data["frf"],
+                period_phasor=pp,
+                notes=notes,
+            )
+            validate_run(
+                file,
+                run,
+                channels,
+                frf_rtol=frf_rtol,
+                period_rtol=period_rtol,
+                exact_dtypes=True,
+            )
+            run.speed_rpm = float(speed)
+            runs[run_id] = run
+    return Sweep(
+        rig_id=rig_id,
+        source=source,
+        generator=generator,
+        created_utc=created,
+        channels=channels,
+        runs=runs,
+    )
+
+
+# --------------------------------------------------------------------------------------------
+# writer
+# --------------------------------------------------------------------------------------------
+
+
+def _new_group(parent: h5py.Group, name: str) -> h5py.Group:
+    """Create a group with link/attribute creation order tracked and no object timestamps."""
+    gcpl = h5py.h5p.create(h5py.h5p.GROUP_CREATE)
+    gcpl.set_link_creation_order(h5py.h5p.CRT_ORDER_TRACKED | h5py.h5p.CRT_ORDER_INDEXED)
+    gcpl.set_attr_creation_order(h5py.h5p.CRT_ORDER_TRACKED | h5py.h5p.CRT_ORDER_INDEXED)
+    gcpl.set_obj_track_times(False)
+    gid = h5py.h5g.create(parent.id, name.encode("utf-8"), gcpl=gcpl)
+    return h5py.Group(gid)
+
+
+def _put(grp: h5py.Group, name: str, data: np.ndarray) -> None:
+    grp.create_dataset(name, data=data, track_times=False)
+
+
+def write_sweep(sweep: Sweep, path: str | os.PathLike[str], force: bool = False) -> None:
+    """Validate and write ``sweep`` atomically (temp file in the same folder, fsync, rename).
+
+    Deterministic: the content depends only on ``sweep`` (``created_utc`` comes from the caller),
+    no object timestamps are stored, so two writes of the same sweep are byte-identical.
+    Raises ``FileExistsError`` if ``path`` exists and ``force`` is false.
+    """
+    target = os.fspath(path)
+    validate_sweep(sweep, target)
+    str_dt = h5py.string_dtype("utf-8")
+    with atomic_path(target, overwrite=force) as tmp:
+        with h5py.File(tmp, "w", track_order=True, libver=("earliest", "v110")) as h5:
+            h5.attrs["schema"] = SCHEMA
+            h5.attrs["schema_version"] = np.int32(SCHEMA_VERSION)
+            h5.attrs["rig_id"] = sweep.rig_id
+            h5.attrs["created_utc"] = sweep.created_utc
+            h5.attrs["excitation"] = EXCITATION
+            h5.attrs["phasor_convention"] = PHASOR_CONVENTION
+            h5.attrs["source"] = sweep.source
+            h5.attrs["generator"] = sweep.generator
+            ch = _new_group(h5, "channels")
+            for fld in CHANNEL_FIELDS:
+                vals = [getattr(c, fld) for c in sweep.channels]
+                if fld == "node":
+                    _put(ch, fld, np.asarray(vals, dtype=np.int32))
+                else:
+                    _put(ch, fld, np.asarray(vals, dtype=str_dt))
+            runs = _new_group(h5, "runs")
+            for run_id, run in sweep.runs.items():
+                g = _new_group(runs, run_id)
+                g.attrs["speed_rpm"] = np.float64(run.speed_rpm)
+                if run.notes:
+                    g.attrs["notes"] = run.notes
+                _put(g, "frequency", np.asarray(run.frequency, dtype=np.float64))
+                _put(g, "input_phasor", np.asarray(run.input_phasor, dtype=np.complex128))
+                _put(g, "output_phasor", np.asarray(run.output_phasor, dtype=np.complex128))
+                _put(g, "output_var", np.asarray(run.output_var, dtype=np.float64))
+                _put(g, "n_periods", np.asarray(run.n_periods, dtype=np.int32))
+                _put(g, "frf", np.asarray(run.frf, dtype=np.complex128))
+                if run.period_phasor is not None:
+                    _put(g, "period_phasor", np.asarray(run.period_phasor, dtype=np.complex128))
+
+
+def sweep_sha256(path: str | os.PathLike[str]) -> str:
+    """SHA-256 hex digest of the file bytes."""
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for chunk in iter(lambda: fh.read(1 << 20), b""):
+            h.update(chunk)
+    return h.hexdigest()
+
+__all__ = ["read_sweep", "sweep_sha256", "write_sweep"]

@@ -1,0 +1,69 @@
+"""The one atomic writer (rotorcheck.fileio): modes as open() gives, no umask flips, no clobbering."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import pytest
+
+from rotorcheck import fileio
+
+
+def _proc_umask() -> int:
+    """The process umask as the kernel reports it (Linux >= 4.7), read without changing it."""
+    try:
+        with open("/proc/self/status", encoding="ascii") as fh:
+            for line in fh:
+                if line.startswith("Umask:"):
+                    return int(line.split()[1], 8)
+    except OSError:
+        pass
+    pytest.skip("no 'Umask:' line in /proc/self/status")
+
+
+def _refuse_umask(mask: int) -> int:
+    raise AssertionError(f"os.umask({mask:#o}) called: a process-wide side effect")
+
+
+def test_output_mode_is_open_mode_and_umask_unchanged(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(os, "umask", _refuse_umask)  # os.umask can only read by setting
+    before = _proc_umask()
+    out = tmp_path / "out.txt"
+    fileio.atomic_write_text(out, "x\n")
+    assert _proc_umask() == before
+    assert out.stat().st_mode & 0o777 == 0o666 & ~before
+    plain = tmp_path / "plain"
+    plain.write_text("x")  # a default ACL on the folder would show here as well
+    assert out.stat().st_mode & 0o777 == plain.stat().st_mode & 0o777
+
+
+def test_refuses_before_work_and_leaves_target(tmp_path: Path) -> None:
+    p = tmp_path / "a.txt"
+    p.write_text("old")
+    ran = False
+    with pytest.raises(FileExistsError, match="refusing to overwrite"):
+        with fileio.atomic_path(p, overwrite=False):
+            ran = True
+    assert not ran and p.read_text() == "old"
+    fileio.atomic_write_text(p, "new")  # overwrite=True is the default (callers check first)
+    assert p.read_text() == "new" and [x.name for x in tmp_path.iterdir()] == ["a.txt"]
+
+
+def test_file_appearing_meanwhile_is_not_clobbered(tmp_path: Path) -> None:
+    p = tmp_path / "a.txt"
+    with pytest.raises(FileExistsError, match="refusing to overwrite"):
+        with fileio.atomic_path(p, overwrite=False) as tmp:
+            tmp.write_text("ours")
+            p.write_text("theirs")
+    assert p.read_text() == "theirs" and [x.name for x in tmp_path.iterdir()] == ["a.txt"]
+
+
+def test_failure_leaves_no_trace(tmp_path: Path) -> None:
+    p = tmp_path / "sub" / "a.txt"
+    with pytest.raises(RuntimeError):
+        with fileio.atomic_path(p) as tmp:
+            assert tmp.parent == p.parent and tmp.exists()
+            tmp.write_text("half")
+            raise RuntimeError("boom")
+    assert list(p.parent.iterdir()) == []

@@ -1,0 +1,107 @@
+"""The import graph: no module imports a module of a layer above it (issue 13).
+
+Every import is counted, at module level or inside a function, so a function-level import cannot
+hide a cycle. Within one package (``rotorcheck.fe``, ``rotorcheck.robust.mu``, ...) modules may
+import each other; across packages only strictly lower layers.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1] / "rotorcheck"
+
+#: lowest first; a module's layer is that of its longest matching prefix
+LAYERS: tuple[tuple[str, ...], ...] = (
+    ("rotorcheck", "rotorcheck.errors", "rotorcheck.units"),
+    ("rotorcheck.fileio", "rotorcheck.resources"),
+    ("rotorcheck.config",),
+    ("rotorcheck.fe", "rotorcheck.signal", "rotorcheck.robust"),  # numerics: FE, signal processing, robust
+    ("rotorcheck.faults", "rotorcheck.sweep"),
+    ("rotorcheck.sim",),  # simulators: above fe, faults and sweep
+    ("rotorcheck.nominal",),
+    ("rotorcheck.baseline", "rotorcheck.report"),
+    ("rotorcheck.workflow",),
+    ("rotorcheck.cli",),
+    ("rotorcheck.__main__",),
+)
+
+
+def _module_name(path: Path) -> str:
+    rel = path.relative_to(ROOT.parent).with_suffix("")
+    parts = list(rel.parts)
+    if parts[-1] == "__init__":
+        parts = parts[:-1]
+    return ".".join(parts)
+
+
+def layer_of(module: str) -> tuple[int, str]:
+    """``(layer index, matching prefix)`` of a rotorcheck module."""
+    best = (-1, "")
+    for i, prefixes in enumerate(LAYERS):
+        for p in prefixes:
+            if (module == p or module.startswith(p + ".")) and len(p) > len(best[1]):
+                best = (i, p)
+    if best[0] < 0:
+        raise AssertionError(f"{module} is in no layer: add it to LAYERS")
+    return best
+
+
+def _imports(path: Path, module: str) -> list[tuple[int, str]]:
+    tree = ast.parse(path.read_text())
+    out = []
+    pkg = module if path.name == "__init__.py" else module.rsplit(".", 1)[0]
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            out += [(node.lineno, a.name) for a in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = pkg.split(".")
+                base = base[: len(base) - (node.level - 1)]
+                name = ".".join(base + ([node.module] if node.module else []))
+            else:
+                name = node.module or ""
+            out.append((node.lineno, name))
+            for a in node.names:  # "from rotorcheck import workflow" imports a module
+                out.append((node.lineno, f"{name}.{a.name}"))
+    return [(ln, n) for ln, n in out if n == "rotorcheck" or n.startswith("rotorcheck.")]
+
+
+def _modules() -> list[Path]:
+    return sorted(ROOT.rglob("*.py"))
+
+
+def _exists(name: str) -> bool:
+    p = ROOT.parent / Path(*name.split("."))
+    return p.with_suffix(".py").exists() or (p / "__init__.py").exists()
+
+
+def test_every_module_has_a_layer() -> None:
+    for path in _modules():
+        layer_of(_module_name(path))
+
+
+@pytest.mark.parametrize("path", _modules(), ids=lambda p: str(p.relative_to(ROOT.parent)))
+def test_imports_go_only_downwards(path: Path) -> None:
+    module = _module_name(path)
+    mine, my_pkg = layer_of(module)
+    bad = []
+    for lineno, name in _imports(path, module):
+        if not _exists(name):  # "from rotorcheck.x import name": the name is not a module
+            continue
+        theirs, their_pkg = layer_of(name)
+        same_package = their_pkg == my_pkg and my_pkg != "rotorcheck"
+        if theirs > mine or (theirs == mine and not same_package and name != "rotorcheck"):
+            bad.append(f"line {lineno}: {name} (layer {theirs} {their_pkg}) from layer {mine} {my_pkg}")
+    assert not bad, f"{module} imports upwards or sideways:\n" + "\n".join(bad)
+
+
+def test_the_check_catches_an_upward_import(tmp_path: Path) -> None:
+    """The rule itself: fe importing sweep, or sweep importing faults, would be reported."""
+    assert layer_of("rotorcheck.fe.frf")[0] < layer_of("rotorcheck.sweep.format")[0]
+    assert layer_of("rotorcheck.sweep.format")[0] == layer_of("rotorcheck.faults.crack")[0]
+    assert layer_of("rotorcheck.sweep.format")[1] != layer_of("rotorcheck.faults.crack")[1]
+    assert layer_of("rotorcheck.workflow")[0] < layer_of("rotorcheck.cli")[0]
