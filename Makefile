@@ -18,11 +18,13 @@ demo: $(STAMP)
 	MPLBACKEND=Agg $(BIN)/python -m tools.demo
 
 test: $(STAMP)
-	$(BIN)/ruff check rotorcheck tests bench
-	MPLBACKEND=Agg $(BIN)/python -m pytest -q
+	$(BIN)/ruff check rotorcheck tests bench tools
+	$(BIN)/python -m mypy rotorcheck
+	MPLBACKEND=Agg $(BIN)/python -m pytest -q -n 2 --dist loadfile
 
 lint: $(STAMP)
-	$(BIN)/ruff check rotorcheck tests bench
+	$(BIN)/ruff check rotorcheck tests bench tools
+	$(BIN)/python -m mypy rotorcheck
 
 samples: $(STAMP)
 	$(BIN)/python -m tools.samples data_samples

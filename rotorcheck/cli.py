@@ -19,7 +19,7 @@ from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
 
-from rotorcheck.errors import InputError
+from rotorcheck.errors import InputError, UserInputError
 
 EXIT_OK, EXIT_DAMAGE, EXIT_INPUT, EXIT_INCONCLUSIVE = 0, 1, 2, 3
 
@@ -190,8 +190,7 @@ def fit_noise(
         raise InputError(None, "--confidence", f"must be in (0, 1), got {confidence}")
     target = out / "baseline.h5"
     check_writable([target], force)
-    cfg = workflow.load_rig(workflow.resolve_rig(rig, sweep_path))
-    mrun = workflow.load_run(sweep_path, cfg, run)
+    cfg, mrun = workflow.load_rig_and_run(sweep_path, rig, run)
     nb = workflow.fit_noise(mrun, method=method, confidence=confidence, manual_m=value)
     write_baseline(workflow.noise_baseline(cfg, mrun, nb), target)
     conf = f", {nb.confidence:.0%} family-wise over {mrun.frequency_hz.size} points" if nb.confidence else ""
@@ -229,8 +228,8 @@ def validate(
     from rotorcheck.fileio import check_writable
 
     formats = workflow.plot_formats(plot_format)
-    cfg = workflow.load_rig(workflow.resolve_rig(rig, sweeps[0]))
-    runs = [workflow.load_run(p, cfg, run) for p in sweeps]
+    cfg, first = workflow.load_rig_and_run(sweeps[0], rig, run)
+    runs = [first] + [workflow.load_run(p, cfg, run) for p in sweeps[1:]]
     target = out / "baseline.h5"
     noise = workflow.prior_noise(target, cfg, force)
     if noise is not None:
@@ -287,8 +286,7 @@ def detect(
     check_writable([out / f for f in REPORT_FILES]
                    + (workflow.plot_paths(out, workflow.PLOT_STEMS_DETECT, formats) if plots else []), force)
     base = read_baseline(base_path)
-    cfg = workflow.load_rig(workflow.resolve_rig(rig, sweep))
-    mrun = workflow.load_run(sweep, cfg, run)
+    cfg, mrun = workflow.load_rig_and_run(sweep, rig, run)
     workflow.check_baseline(base, cfg, mrun, base_path)
     outcome = workflow.detect(cfg, base, mrun, fail_at=_fail_at(fail_at), confidence=confidence)
     report = outcome.report()
@@ -402,7 +400,7 @@ def main(argv: list[str] | None = None) -> int:
     command = typer.main.get_command(app)
     try:
         rc = command.main(args=argv, prog_name="rotorcheck", standalone_mode=False)
-    except (InputError, FileExistsError) as exc:
+    except (UserInputError, FileExistsError) as exc:  # InputError, ConfigError, SweepFormatError
         err.print(f"[bold red]error:[/] {escape(str(exc))}")
         return EXIT_INPUT
     except typer.Exit as exc:
@@ -411,9 +409,6 @@ def main(argv: list[str] | None = None) -> int:
         err.print("aborted")
         return EXIT_INPUT
     except Exception as exc:  # the contract: an unexpected exception is 2, never 1
-        if type(exc).__name__ == "SweepFormatError":  # names the file, the path inside and the reason
-            err.print(f"[bold red]error:[/] {escape(str(exc))}")
-            return EXIT_INPUT
         if hasattr(exc, "show") and hasattr(exc, "exit_code"):  # click/typer usage errors
             exc.show(file=sys.stderr)
             return EXIT_INPUT if exc.exit_code else EXIT_OK

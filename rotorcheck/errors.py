@@ -5,7 +5,11 @@ from __future__ import annotations
 from pathlib import Path
 
 
-class InputError(ValueError):
+class UserInputError(ValueError):
+    """Any error caused by what the user gave (a file, a field, an option): exit code 2 with its message."""
+
+
+class InputError(UserInputError):
     """Unusable input: ``str()`` is ``"<file>: <field>: <message>"`` (parts omitted when empty)."""
 
     def __init__(self, file: str | Path | None, field: str, message: str):

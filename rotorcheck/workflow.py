@@ -140,6 +140,18 @@ def resolve_rig(rig_path: str | Path | None, sweep_path: str | Path) -> Path:
     return default_rig_path(read_sweep(sweep_path).rig_id)
 
 
+def load_rig_and_run(sweep_path: str | Path, rig_path: str | Path | None = None, run_id: str | None = None
+                     ) -> tuple[RigConfig, MeasuredRun]:
+    """Read a sweep file once: its rig (``rig_path``, or the bundled rig named by its ``rig_id``) and
+    the run, checked against that rig (:func:`load_run`)."""
+    from rotorcheck.sweep.hdf5io import read_sweep, sweep_sha256
+
+    p = Path(sweep_path)
+    sweep = read_sweep(p)
+    config = load_config(rig_path if rig_path is not None else default_rig_path(sweep.rig_id))
+    return config, measured_run(sweep, config, run_id, p, sweep_sha256(p))
+
+
 def load_run(path: str | Path, config: RigConfig, run_id: str | None = None,
              shaft_orders: int = SHAFT_ORDERS) -> MeasuredRun:
     """Read a sweep file, check it belongs to ``config`` (rig id, channels) and cut the band.

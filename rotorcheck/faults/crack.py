@@ -243,6 +243,15 @@ def _steer(fun: Callable[[np.ndarray], np.ndarray], th: np.ndarray) -> np.ndarra
     return np.broadcast_to(np.asarray(fun(th), dtype=float), th.shape)
 
 
+def _steered(fun: Callable[[np.ndarray], np.ndarray], mat: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
+    """``theta (N,) -> fun(theta)[:, None, None] * mat`` (N, 2, 2), ``mat`` bound now."""
+
+    def rotating(th: np.ndarray) -> np.ndarray:
+        return _steer(fun, th)[:, None, None] * mat
+
+    return rotating
+
+
 def _elements_of(system: MechanicalSystem, element: int) -> list[BeamElementInfo]:
     els = [e for e in system.elements if e.segment == element]
     if not els:
@@ -332,7 +341,7 @@ def crack_stiffness(
             dmat = np.diag([d_xi, d_eta])
             terms.append(
                 _Term(
-                    lambda th, d=dmat: _steer(steer, th)[:, None, None] * d,
+                    _steered(steer, dmat),
                     {k: c * dmat for k, c in coef.items()},
                     basis_for(eb()),
                 )
@@ -344,7 +353,7 @@ def crack_stiffness(
                 bm = [b0 - b1 for b0, b1 in zip(timo(), timo(1.0 - d))]
                 terms.append(
                     _Term(
-                        lambda th, p=proj: _steer(steer, th)[:, None, None] * p,
+                        _steered(steer, proj),
                         {k: c * proj for k, c in coef.items()},
                         basis_for(bm),
                     )

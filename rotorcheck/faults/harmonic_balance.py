@@ -37,7 +37,7 @@ import numpy as np
 from rotorcheck.config import Crack, Misalignment, UnbalanceMass
 from rotorcheck.faults.crack import CrackStiffness, crack_stiffness
 from rotorcheck.fe.blas import one_blas_thread
-from rotorcheck.fe.frf import Receptance
+from rotorcheck.fe.frf import Method, Receptance
 from rotorcheck.fe.system import RPM_TO_RAD_S, MechanicalSystem
 
 __all__ = [
@@ -134,9 +134,9 @@ class HBSolver:
         crack: Crack | CrackStiffness | None,
         speed_rpm: float,
         inputs: Any,
-        out_dofs: Sequence[int] | int,
+        out_dofs: Sequence[int] | int | np.ndarray,
         n_harmonics: int = 8,
-        method: str = "auto",
+        method: Method = "auto",
         **crack_kw: Any,
     ):
         self.crack = _as_crack(system, crack, **crack_kw)
@@ -217,10 +217,10 @@ def solve_hb(
     speed_rpm: float,
     freq_hz: np.ndarray | float,
     inputs: Any,
-    out_dofs: Sequence[int] | int,
+    out_dofs: Sequence[int] | int | np.ndarray,
     n_harmonics: int = 8,
     chunk: int = 64,
-    method: str = "auto",
+    method: Method = "auto",
     **crack_kw: Any,
 ) -> HBResult:
     """Steady-state tones of the cracked rotor for complex forcing ``b exp(j 2 pi f t)``.
@@ -338,7 +338,7 @@ def cracked_disturbance_tones(
     system: MechanicalSystem,
     crack: Crack | CrackStiffness | None,
     speed_rpm: float,
-    out_dofs: Sequence[int] | int,
+    out_dofs: Sequence[int] | int | np.ndarray,
     unbalance: Sequence[UnbalanceMass] = (),
     misalignment: Misalignment | None = None,
     n_harmonics: int = 8,
@@ -384,7 +384,7 @@ class CrackedPlant:
         crack: Crack | CrackStiffness | None,
         speed_rpm: float,
         in_dof: int,
-        out_dof: Sequence[int] | int,
+        out_dof: Sequence[int] | int | np.ndarray,
         n_harmonics: int = 8,
         **crack_kw: Any,
     ):
@@ -428,7 +428,7 @@ def cracked_tones(
     crack: Crack | CrackStiffness | None,
     speed_rpm: float,
     in_dof: int,
-    out_dof: Sequence[int] | int,
+    out_dof: Sequence[int] | int | np.ndarray,
     n_harmonics: int = 8,
     **crack_kw: Any,
 ) -> CrackedPlant:

@@ -184,7 +184,8 @@ def build_rotor(config: RigConfig, modulus_factors: Mapping[int, float] | None =
                 cache.popitem(last=False)
         else:
             cache.move_to_end(k)
-        return tuple(a.copy() for a in hit)  # type: ignore[return-value]
+        M, C, G, K = hit
+        return M.copy(), C.copy(), G.copy(), K.copy()
 
     labels = tuple(
         f"n{node}.{d}" if node not in station_node else f"s{station_node.index(node) + 1}.{d}"

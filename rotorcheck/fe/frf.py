@@ -100,7 +100,15 @@ def state_matrix(M: np.ndarray, D: np.ndarray, K: np.ndarray) -> np.ndarray:
 
 
 def _sparse(A: np.ndarray | sp.spmatrix) -> sp.csc_matrix:
-    return A.tocsc() if sp.issparse(A) else sp.csc_matrix(np.asarray(A))
+    if isinstance(A, np.ndarray) or not sp.issparse(A):  # isinstance narrows the union for type checkers
+        return sp.csc_matrix(np.asarray(A))
+    return A.tocsc()
+
+
+def _dense(A: np.ndarray | sp.spmatrix) -> np.ndarray:
+    if isinstance(A, np.ndarray) or not sp.issparse(A):
+        return np.asarray(A)
+    return A.toarray()
 
 
 def lowest_undamped_modes(
@@ -115,8 +123,7 @@ def lowest_undamped_modes(
     n = M.shape[0]
     w_max2 = (TWO_PI * f_max_hz) ** 2
     if n <= N_FULL:
-        Md = M.toarray() if sp.issparse(M) else np.asarray(M)
-        Kd = K.toarray() if sp.issparse(K) else np.asarray(K)
+        Md, Kd = _dense(M), _dense(K)
         lam, phi = sla.eigh(0.5 * (Kd + Kd.T), Md)
     else:
         Ms, Ks = _sparse(M), _sparse(K)

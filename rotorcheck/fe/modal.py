@@ -307,12 +307,12 @@ def _track(
     Returns (lam (s, p), whirl ratio (s, p), min MAC per branch (p,), shapes per speed [(n, p)]).
     """
     large = system.n_dof > N_FULL
-    window = None
+    window: float | None = None
     if large:
         band = max_hz if max_hz is not None else _band_hz(system, speeds[0], None, None)
         window = _TRACK_WINDOW * band
     first = modes(system, speeds[0], max_hz=window)
-    p = len(first) if not large else int(np.count_nonzero(first.frequency_hz <= window / _TRACK_WINDOW))
+    p = len(first) if window is None else int(np.count_nonzero(first.frequency_hz <= window / _TRACK_WINDOW))
     lam = np.full((speeds.size, p), np.nan + 0j)
     ratio = np.full((speeds.size, p), np.nan)
     lam[0], ratio[0] = first.eigenvalues[:p], first.whirl_ratio[:p]

@@ -3,16 +3,26 @@
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import TypedDict
 
 import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
+from matplotlib.typing import ColorType, LineStyleType
 
 from rotorcheck.fe.elements import TimoshenkoBeam, beam_shape_functions
 from rotorcheck.fe.modal import CampbellResult, modes
 from rotorcheck.fe.system import MechanicalSystem
 
-WHIRL_STYLE = {
+
+class WhirlStyle(TypedDict):
+    """Line keyword arguments of one whirl direction."""
+
+    color: ColorType
+    linestyle: LineStyleType
+
+
+WHIRL_STYLE: dict[str, WhirlStyle] = {
     "forward": {"color": "tab:red", "linestyle": "-"},
     "backward": {"color": "tab:green", "linestyle": "--"},
     "planar": {"color": "tab:gray", "linestyle": ":"},

@@ -154,12 +154,12 @@ class LTPIntegrator:
         x[2 * self.n] = 1.0
         return x
 
-    def displacements(self, states: np.ndarray, dofs: Sequence[int] | None = None) -> np.ndarray:
+    def displacements(self, states: np.ndarray, dofs: Sequence[int] | np.ndarray | None = None) -> np.ndarray:
         """Physical displacements q (..., n) or q[dofs] from augmented states (..., 2n+2)."""
         phi = self.phi if dofs is None else self.phi[np.asarray(dofs, dtype=int)]
         return (states[..., : self.n] / self.wn) @ phi.T
 
-    def velocities(self, states: np.ndarray, dofs: Sequence[int] | None = None) -> np.ndarray:
+    def velocities(self, states: np.ndarray, dofs: Sequence[int] | np.ndarray | None = None) -> np.ndarray:
         """Physical velocities q' (..., n) or q'[dofs] from augmented states."""
         phi = self.phi if dofs is None else self.phi[np.asarray(dofs, dtype=int)]
         return states[..., self.n : 2 * self.n] @ phi.T

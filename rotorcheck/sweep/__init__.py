@@ -1,4 +1,5 @@
-"""Stepped-sine sweeps: the HDF5 sweep format, importers/exporters, lock-in and a simulator.
+"""Stepped-sine sweeps: the HDF5 sweep format and its importers/exporters (the lock-in lives in
+:mod:`rotorcheck.signal`, the simulators in :mod:`rotorcheck.sim`).
 
 Public entry points (re-exported here: ``Channel``, ``Run``, ``Sweep``, ``SweepFormatError``,
 ``compare_sweeps``, ``read_sweep``, ``sweep_sha256``, ``write_sweep``):
@@ -10,8 +11,6 @@ Public entry points (re-exported here: ``Channel``, ``Run``, ``Sweep``, ``SweepF
 - :mod:`rotorcheck.sweep.compare`: ``compare_sweeps``, ``compare_sweep_files`` (bit for bit).
 - :mod:`rotorcheck.sweep.uff`: Universal File Format dataset 58 export/import (pyuff).
 - :mod:`rotorcheck.sweep.tidy_csv`: tidy CSV export/import.
-- :mod:`rotorcheck.sweep.lockin`: per-period lock-in, averaging, closed-form multi-tone lock-in.
-- :mod:`rotorcheck.sweep.simulator`: stepped-sine simulator (fast tone path and time-domain path).
 - :mod:`rotorcheck.sweep.summary`: ``summarize`` for ``rotorcheck info``.
 
 Imports run downwards only: format <- validation <- hdf5io <- compare <- uff, tidy_csv.

@@ -11,8 +11,9 @@ from rotorcheck.sweep.format import RUN_DATASETS, Sweep
 from rotorcheck.sweep.hdf5io import read_sweep
 
 
-def _bits_equal(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Element-wise bit-for-bit equality (NaN == NaN with equal payload, 0.0 != -0.0)."""
+def _bits_equal(a: np.ndarray, b: np.ndarray) -> np.ndarray | np.bool_:
+    """Element-wise bit-for-bit equality (NaN == NaN with equal payload, 0.0 != -0.0); a NumPy
+    bool scalar for 0-d inputs."""
     a = np.ascontiguousarray(a)
     b = np.ascontiguousarray(b)
     if a.dtype.kind == "c":

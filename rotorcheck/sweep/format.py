@@ -31,6 +31,8 @@ from typing import Any
 
 import numpy as np
 
+from rotorcheck.errors import UserInputError
+
 SCHEMA = "rotorcheck.sweep"
 SCHEMA_VERSION = 1
 EXCITATION = "stepped_sine"
@@ -44,7 +46,7 @@ CHANNEL_FIELDS = ("name", "role", "node", "direction", "quantity", "unit")
 RUN_DATASETS = ("frequency", "input_phasor", "output_phasor", "output_var", "n_periods", "frf")
 
 
-class SweepFormatError(ValueError):
+class SweepFormatError(UserInputError):
     """A sweep file (or an in-memory sweep about to be written) breaks the format contract.
 
     ``str(err)`` is ``"<file>: <path inside>: <reason>"``.

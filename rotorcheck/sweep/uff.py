@@ -299,14 +299,14 @@ def import_uff58(
                     raise SweepFormatError(file, f"{where}/{line}", f"{k} differs between records")
         if kind == "frf":
             continue
-        rid = _parse(s.get("id2", "")).get("run")
-        if rid is None or rid not in frfs:
-            raise SweepFormatError(file, f"{where}/id2", f"run {rid!r} has no FRF records")
+        run_ref = _parse(s.get("id2", "")).get("run")
+        if run_ref is None or run_ref not in frfs:
+            raise SweepFormatError(file, f"{where}/id2", f"run {run_ref!r} has no FRF records")
         chan = _parse(s.get("id5", "")).get("chan", "")
         x = np.asarray(s["x"], dtype=np.float64)
-        if not np.array_equal(x, frfs[rid].frequency):
+        if not np.array_equal(x, frfs[run_ref].frequency):
             raise SweepFormatError(file, f"{where}/abscissa", "frequency grid differs within run")
-        per_run.setdefault(rid, {}).setdefault(kind, {})[chan] = np.asarray(s["data"])
+        per_run.setdefault(run_ref, {}).setdefault(kind, {})[chan] = np.asarray(s["data"])
     first = next(iter(frfs.values()))
     chans = list(channels) if channels is not None else [*first.inputs, *first.outputs]
     ins = [c for c in chans if c.role == "input"]

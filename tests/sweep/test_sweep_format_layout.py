@@ -13,7 +13,7 @@ SWEEP_DIR = Path(pkg.__file__).parent
 
 #: module -> the rotorcheck modules it may import (lower layers only)
 ALLOWED = {
-    "format": set(),
+    "format": {"rotorcheck.errors"},  # SweepFormatError is a UserInputError (exit 2 by class, not by name)
     "validation": {"rotorcheck.sweep.format"},
     "hdf5io": {"rotorcheck.fileio", "rotorcheck.sweep.format", "rotorcheck.sweep.validation"},
     "compare": {"rotorcheck.sweep.format", "rotorcheck.sweep.hdf5io"},

@@ -258,7 +258,7 @@ class CvxpyLmi:
         if kind == "feas":
             cons.append(cast(cp.Constraint, sum(traces) == 1 if normalize else self.var >= -1))
         self.lmi = expr << 0
-        obj = cp.Maximize(self.var) if kind == "maxs" else cp.Minimize(self.var)
+        obj: cp.Maximize | cp.Minimize = cp.Maximize(self.var) if kind == "maxs" else cp.Minimize(self.var)
         self.problem = cp.Problem(obj, [*cons, self.lmi])
 
     def solve(self, G0: np.ndarray, Gs: np.ndarray | None, terms: Sequence[Sequence[np.ndarray]],
