@@ -651,9 +651,10 @@ def _healthy_frf(baseline: Any) -> np.ndarray | None:
 
 MEASURED_RULE = (
     "damage if at least one point is a certified fault point: the new FRF differs from the measured healthy "
-    "FRF by more than the noise of both sweeps allows (per point F(2, Welch dof) test on the stored variances, "
-    "Sidak over all points and channels at the stated family-wise confidence: a healthy repeat is called damage "
-    "with probability at most 1 - confidence); otherwise inconclusive if some point could not be tested; "
+    "FRF by more than the noise of both sweeps allows (per point: the exact tail of |d|^2 / (var_new + var_healthy) "
+    "with both variances estimated, taken at the least favourable variance share in a 90 % interval; Sidak over "
+    "all points and channels at the stated family-wise confidence: a healthy repeat is called damage with "
+    "probability at most 1 - confidence); otherwise inconclusive if some point could not be tested; "
     "otherwise healthy"
 )
 
@@ -768,8 +769,17 @@ def detection_plots(outcome: DetectionOutcome, out_dir: str | Path, at_hz: float
     files += save_figure(fig, out / "detection_complex_plane", formats)
     ds = outcome.damage_set
     title = f"{outcome.rig.rig_id}: damage dynamics at {_port_name(outcome.rig)}"
-    fig = damage_dynamics_figure(run.frequency_hz, outcome.damage, ds.min_abs, ds.max_abs, np.degrees(ds.phase_min),
-                                 np.degrees(ds.phase_max), fault=fault, title=title, anchored=outcome.anchored)
+    if outcome.anchored is not None and outcome.anchored_set is not None:  # lead with the anchored estimate
+        a = outcome.anchored_set
+        conf = f", {outcome.measured.confidence:.0%}" if outcome.measured is not None else ""
+        fig = damage_dynamics_figure(run.frequency_hz, outcome.anchored, a.min_abs, a.max_abs,
+                                     np.degrees(a.phase_min), np.degrees(a.phase_max), fault=fault, title=title,
+                                     anchored=outcome.damage, label="D_u anchored at the healthy data",
+                                     bound_label=f"its bound (noise of both sweeps + channel error{conf})",
+                                     anchored_label="D_u with the nominal E22 (eq. 3.11; carries the model error)")
+    else:
+        fig = damage_dynamics_figure(run.frequency_hz, outcome.damage, ds.min_abs, ds.max_abs,
+                                     np.degrees(ds.phase_min), np.degrees(ds.phase_max), fault=fault, title=title)
     files += save_figure(fig, out / "damage_dynamics", formats)
     return [str(p) for p in files]
 
