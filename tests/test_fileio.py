@@ -8,30 +8,15 @@ from pathlib import Path
 import pytest
 
 from rotorcheck import fileio
-
-
-def _proc_umask() -> int:
-    """The process umask as the kernel reports it (Linux >= 4.7), read without changing it."""
-    try:
-        with open("/proc/self/status", encoding="ascii") as fh:
-            for line in fh:
-                if line.startswith("Umask:"):
-                    return int(line.split()[1], 8)
-    except OSError:
-        pass
-    pytest.skip("no 'Umask:' line in /proc/self/status")
-
-
-def _refuse_umask(mask: int) -> int:
-    raise AssertionError(f"os.umask({mask:#o}) called: a process-wide side effect")
+from tests.umask_helpers import proc_umask, refuse_umask
 
 
 def test_output_mode_is_open_mode_and_umask_unchanged(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(os, "umask", _refuse_umask)  # os.umask can only read by setting
-    before = _proc_umask()
+    monkeypatch.setattr(os, "umask", refuse_umask)  # os.umask can only read by setting
+    before = proc_umask()
     out = tmp_path / "out.txt"
     fileio.atomic_write_text(out, "x\n")
-    assert _proc_umask() == before
+    assert proc_umask() == before
     assert out.stat().st_mode & 0o777 == 0o666 & ~before
     plain = tmp_path / "plain"
     plain.write_text("x")  # a default ACL on the folder would show here as well
