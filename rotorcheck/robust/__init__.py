@@ -1,51 +1,33 @@
 """Robust-control numerics: LFTs, the generalized-mu LMI, closed forms, noise bound, validation,
-detection and identification. Pure numerics on complex arrays with a leading frequency axis."""
+detection and identification. Pure numerics on complex arrays with a leading frequency axis.
 
-from rotorcheck.robust.identify import DamageSet, damage_dynamics, damage_set, damage_set_io
-from rotorcheck.robust.mu import (
-    Block,
-    GammaResult,
-    Structure,
-    inject_solver_failure,
-    required_gamma,
-    required_gamma_bisection,
-)
-from rotorcheck.robust.noise import (
-    NoiseBound,
-    noise_bound_from_floor,
-    noise_bound_from_periods,
-    noise_bound_from_variance,
-    noise_bound_manual,
-)
-from rotorcheck.robust.validation import (
-    DetectionResult,
-    ValidationResult,
-    Verdict,
-    detect,
-    validate,
-    verdict,
-)
+The names below are loaded on first use (PEP 562), so that importing one submodule (e.g. the
+measured detection) does not load the LMI machinery and its solvers.
+"""
 
-__all__ = [
-    "Block",
-    "DamageSet",
-    "DetectionResult",
-    "GammaResult",
-    "NoiseBound",
-    "Structure",
-    "ValidationResult",
-    "Verdict",
-    "damage_dynamics",
-    "damage_set",
-    "damage_set_io",
-    "detect",
-    "inject_solver_failure",
-    "noise_bound_from_floor",
-    "noise_bound_from_periods",
-    "noise_bound_from_variance",
-    "noise_bound_manual",
-    "required_gamma",
-    "required_gamma_bisection",
-    "validate",
-    "verdict",
-]
+from __future__ import annotations
+
+import importlib
+from typing import Any
+
+_HOME = {
+    "DamageSet": "identify", "damage_dynamics": "identify", "damage_set": "identify", "damage_set_io": "identify",
+    "Block": "mu", "GammaResult": "mu", "Structure": "mu", "inject_solver_failure": "mu",
+    "required_gamma": "mu", "required_gamma_bisection": "mu",
+    "NoiseBound": "noise", "noise_bound_from_floor": "noise", "noise_bound_from_periods": "noise",
+    "noise_bound_from_variance": "noise", "noise_bound_manual": "noise",
+    "DetectionResult": "validation", "ValidationResult": "validation", "Verdict": "validation",
+    "detect": "validation", "validate": "validation", "verdict": "validation",
+}
+
+__all__ = sorted(_HOME)
+
+
+def __getattr__(name: str) -> Any:
+    if name in _HOME:
+        return getattr(importlib.import_module(f"rotorcheck.robust.{_HOME[name]}"), name)
+    raise AttributeError(f"module 'rotorcheck.robust' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted([*globals(), *_HOME])

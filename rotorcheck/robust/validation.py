@@ -31,7 +31,7 @@ import numpy as np
 
 from rotorcheck.robust.closed_form import gamma_enclose_system_siso
 from rotorcheck.robust.lft import as_freq_matrix
-from rotorcheck.robust.mu import (
+from rotorcheck.robust.mu.structure import (
     DEFAULT_BACKEND,
     DEFAULT_TIME_LIMIT,
     STATUS_BAD_DATA,
@@ -42,7 +42,6 @@ from rotorcheck.robust.mu import (
     GammaResult,
     Structure,
     check_noise_bound,
-    required_gamma,
 )
 from rotorcheck.robust.noise import NoiseBound
 
@@ -132,6 +131,8 @@ def validate(me: np.ndarray, W: np.ndarray | Sequence[np.ndarray],
     per: list[GammaResult] = []
     for Wk, Zk in zip(Ws, Zs, strict=True):
         if enclose == "data":
+            from rotorcheck.robust.mu.driver import required_gamma  # the LMI solvers load only when used
+
             res = required_gamma(me, Wk, Zk, V, structure, fail_at=fail_at, backend=backend,
                                  time_limit=time_limit)
             per.append(res)
@@ -225,6 +226,8 @@ def detect(me: np.ndarray, W: np.ndarray, Zt_new: np.ndarray,
     """
     V = _v(noise_bound)
     gh = np.asarray(gamma_h, dtype=float).reshape(-1)
+    from rotorcheck.robust.mu.driver import required_gamma  # the LMI solvers load only when used
+
     res = required_gamma(me, W, Zt_new, V, structure, fail_at=fail_at, backend=backend,
                          time_limit=time_limit)
     f = gh.size

@@ -8,6 +8,7 @@ from scipy.optimize import minimize_scalar
 
 from rotorcheck.robust import closed_form as cf
 from rotorcheck.robust import lft
+from tests.oracles.enclose_bisect import gamma_enclose_system_siso_bisect
 
 
 def random_siso(rng: np.random.Generator, n: int) -> tuple[np.ndarray, ...]:
@@ -74,7 +75,7 @@ def test_enclose_system_matches_forward_brentq_and_geometry() -> None:
     me, W, Zt, V = random_siso(rng, 120)
     V = np.where(V == 0, 0.3 * np.abs(Zt - me[:, 1, 1] * W), V)
     g = cf.gamma_enclose_system_siso(me, W, Zt, V)
-    g_bisect = cf.gamma_enclose_system_siso_bisect(me, W, Zt, V)
+    g_bisect = gamma_enclose_system_siso_bisect(me, W, Zt, V)
     finite = np.isfinite(g)
     assert np.array_equal(finite, np.isfinite(g_bisect))
     assert finite.sum() > 60

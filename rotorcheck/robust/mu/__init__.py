@@ -82,45 +82,30 @@ Units: gamma in the units of Delta_u (m/N for additive receptance uncertainty, k
 parameter, dimensionless for multiplicative); V in m (output displacement).
 """
 
-from rotorcheck.robust.mu.backends import BACKENDS, DEFAULT_BACKEND, LmiCache
-from rotorcheck.robust.mu.certificates import ImplicitBound, implicit_lmi_bound
-from rotorcheck.robust.mu.driver import (
-    inject_solver_failure,
-    required_gamma,
-    required_gamma_bisection,
-)
-from rotorcheck.robust.mu.structure import (
-    DEFAULT_TIME_LIMIT,
-    STATUS_BAD_DATA,
-    STATUS_FAILED,
-    STATUS_LOWER_ONLY,
-    STATUS_OK,
-    STATUS_UNEXPLAINABLE,
-    Block,
-    GammaResult,
-    Structure,
-    blocks_for,
-    check_noise_bound,
-)
+from __future__ import annotations
 
-__all__ = [
-    "BACKENDS",
-    "DEFAULT_BACKEND",
-    "DEFAULT_TIME_LIMIT",
-    "STATUS_BAD_DATA",
-    "STATUS_FAILED",
-    "STATUS_LOWER_ONLY",
-    "STATUS_OK",
-    "STATUS_UNEXPLAINABLE",
-    "Block",
-    "GammaResult",
-    "ImplicitBound",
-    "LmiCache",
-    "Structure",
-    "blocks_for",
-    "check_noise_bound",
-    "implicit_lmi_bound",
-    "inject_solver_failure",
-    "required_gamma",
-    "required_gamma_bisection",
-]
+import importlib
+from typing import Any
+
+_HOME = {
+    "BACKENDS": "backends", "LmiCache": "backends",
+    "ImplicitBound": "certificates", "implicit_lmi_bound": "certificates",
+    "inject_solver_failure": "driver", "required_gamma": "driver", "required_gamma_bisection": "driver",
+    "DEFAULT_BACKEND": "structure", "DEFAULT_TIME_LIMIT": "structure", "STATUS_BAD_DATA": "structure",
+    "STATUS_FAILED": "structure", "STATUS_LOWER_ONLY": "structure", "STATUS_OK": "structure",
+    "STATUS_UNEXPLAINABLE": "structure", "Block": "structure", "GammaResult": "structure",
+    "Structure": "structure", "blocks_for": "structure", "check_noise_bound": "structure",
+}
+
+__all__ = sorted(_HOME)
+
+
+def __getattr__(name: str) -> Any:
+    """The public names, loaded on first use (PEP 562): the solvers load only when a bound is asked for."""
+    if name in _HOME:
+        return getattr(importlib.import_module(f"rotorcheck.robust.mu.{_HOME[name]}"), name)
+    raise AttributeError(f"module 'rotorcheck.robust.mu' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted([*globals(), *_HOME])

@@ -25,13 +25,12 @@ import clarabel
 import numpy as np
 import scipy.sparse as sp
 
-from rotorcheck.robust.mu.structure import DEFAULT_TIME_LIMIT
+from rotorcheck.robust.mu.structure import DEFAULT_BACKEND, DEFAULT_TIME_LIMIT
 
 if TYPE_CHECKING:  # cvxpy costs ~0.8 s to import: only the 'cvxpy' backend loads it
     import cvxpy as cp
 
 BACKENDS = ("cvxpy", "clarabel")
-DEFAULT_BACKEND = "clarabel"
 SOLVER_OPTS: Mapping[str, object] = MappingProxyType(
     {"chordal_decomposition_enable": False, "max_threads": 1})
 # Clarabel's 'InsufficientProgress' still returns its last iterate; every bound is verified

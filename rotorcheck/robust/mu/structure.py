@@ -20,6 +20,7 @@ STATUS_BAD_DATA = "bad_data"
 # seconds of solver time per frequency point (every Clarabel call gets the point's remaining budget
 # as its ``time_limit``); a point that exhausts it is 'solver_failed' with the reason
 DEFAULT_TIME_LIMIT = 10.0
+DEFAULT_BACKEND = "clarabel"  # the Clarabel-direct backend (no cvxpy); "cvxpy" builds the LMI with cvxpy
 
 
 @dataclass(frozen=True)
