@@ -114,3 +114,14 @@ def test_json_schema_exports() -> None:
     assert schema["title"] == "rotorcheck rig"
     assert "bearings" in schema["properties"] and "ports" in schema["required"]
     assert schema["additionalProperties"] is False
+
+
+def test_damage_element_must_touch_the_damage_port(rig: dict) -> None:
+    """damage.element is checked against the damage port (element e joins stations e and e + 1)."""
+    ok = copy.deepcopy(rig)
+    ok["damage"]["element"] = ok["damage"]["port"]["station"] - 1  # the element on the other side: fine
+    parse_config(ok, "ok.yaml")
+    bad = copy.deepcopy(rig)
+    bad["damage"]["element"] = bad["damage"]["port"]["station"] + 2
+    with pytest.raises(ConfigError, match=r"damage\.element: element .* the damage port is at station"):
+        parse_config(bad, "bad.yaml")
