@@ -455,11 +455,11 @@ class RigConfig(Strict):
             p = self.damage.port
             if p.station is None or p.station > n:
                 raise ValueError(f"damage.port.station: must be a station in 1..{n}")
-            e = self.damage.element
-            if e is not None and e > n - 1:
-                raise ValueError(f"damage.element: {e} out of range 1..{n - 1}")
-            if e is not None and p.station is not None and p.station not in (e, e + 1):
-                raise ValueError(f"damage.element: element {e} joins stations {e} and {e + 1}; the damage port "
+            de = self.damage.element
+            if de is not None and de > n - 1:
+                raise ValueError(f"damage.element: {de} out of range 1..{n - 1}")
+            if de is not None and p.station is not None and p.station not in (de, de + 1):
+                raise ValueError(f"damage.element: element {de} joins stations {de} and {de + 1}; the damage port "
                                  f"is at station {p.station}")
         for key, f in self.faults.items():
             if isinstance(f, Crack) and f.element > n - 1:
