@@ -106,20 +106,19 @@ def info(
     err.print(f"{sweep}: valid rotorcheck.sweep v1, rig_id {sw.rig_id!r}, source {sw.source}, {sw.generator}")
     chans = ", ".join(f"{c.name} ({c.role} s{c.node}.{c.direction} {c.unit})" for c in sw.channels)
     err.print(f"channels: {chans}")
-    from rotorcheck.robust.noise import noise_bound_pooled
-
     for run in doc["runs"]:
-        r = sw.runs[run["run_id"]]
-        pooled = noise_bound_pooled(r.output_var, confidence, n_periods=int(np.min(r.n_periods)))
-        run["noise"]["pooled_bound_m"] = pooled.value_m
-        run["noise"]["excess_scatter_points"] = len(pooled.details["excess_scatter_index"])
-        g, nz = run["grid"], run["noise"]["all_outputs"]
+        g, nz, noise = run["grid"], run["noise"]["all_outputs"], run["noise"]
+        cleaned = ""
+        if "pooled_bound_harmonics_removed_m" in noise:
+            cleaned = (f"; with shaft harmonics 1X-4X removed: {noise['pooled_bound_harmonics_removed_m']:.3g} m "
+                       f"pooled ({noise['excess_scatter_points_harmonics_removed']} points with excess scatter)")
         err.print(
             f"run {run['run_id']}: {run['speed_rpm']:g} rpm, {g['n']} points "
             f"{g['min_hz']:g}-{g['max_hz']:g} Hz, {run['n_periods_min']}-{run['n_periods_max']} periods; "
             f"noise std median {nz['median_std_m']:.3g} m, "
             f"family-wise {confidence:.0%} bound {nz['sidak_bound_m']:.3g} m (max over points), "
-            f"{pooled.value_m:.3g} m pooled ({run['noise']['excess_scatter_points']} points with excess scatter)"
+            f"{noise['pooled_bound_m']:.3g} m pooled ({noise['excess_scatter_points']} points with excess scatter)"
+            + cleaned
         )
     if as_json:
         _emit_json(doc)

@@ -199,6 +199,8 @@ def measured_run(sweep: Any, config: RigConfig, run_id: str | None = None, path:
     if run.period_phasor is not None and run.speed_rpm != 0.0 and shaft_orders > 0:
         in_col = next(i for i, c in enumerate(sweep.channels) if c.role == "input")
         out_col = next(i for i, c in enumerate(sweep.channels) if c.role == "output")
+        from rotorcheck.signal.lockin import remove_shaft_harmonics
+
         W, Z, var, dof = remove_shaft_harmonics(run.period_phasor, run.n_periods, f, abs(run.speed_rpm) / 60.0,
                                                 in_col, out_col, shaft_orders)
         removed = shaft_orders
@@ -208,27 +210,6 @@ def measured_run(sweep: Any, config: RigConfig, run_id: str | None = None, path:
         output_var=var[keep], n_periods=run.n_periods[keep], band_hz=(lo, hi),
         n_dropped=int(np.count_nonzero(~keep)), dof=dof[keep], harmonics_removed=removed,
     )
-
-
-def remove_shaft_harmonics(
-    period_phasor: np.ndarray, n_periods: np.ndarray, frequency_hz: np.ndarray, shaft_hz: float,
-    in_col: int, out_col: int, orders: int = SHAFT_ORDERS,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Input and output phasors (N, m), output variance of the mean (m^2) and its real dof per
-    point, with the shaft-speed harmonics 1X..``orders``X fitted out of the per-period phasors
-    (:func:`rotorcheck.sweep.lockin.shaft_harmonic_fit`; a free-running start angle leaves no leak)."""
-    from rotorcheck.signal.lockin import shaft_harmonic_fit
-
-    nf = frequency_hz.size
-    W = np.empty(nf, complex)
-    Z = np.empty(nf, complex)
-    var = np.empty(nf)
-    dof = np.empty(nf)
-    for j in range(nf):
-        per = period_phasor[j, : int(n_periods[j]), :]
-        W[j], _, _ = shaft_harmonic_fit(per[:, in_col], float(frequency_hz[j]), shaft_hz, orders)
-        Z[j], var[j], dof[j] = shaft_harmonic_fit(per[:, out_col], float(frequency_hz[j]), shaft_hz, orders)
-    return W, Z, var, dof
 
 
 # --------------------------------------------------------------------------------------------

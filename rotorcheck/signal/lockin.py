@@ -28,6 +28,7 @@ import numpy as np
 __all__ = [
     "average_periods",
     "lockin_periods",
+    "remove_shaft_harmonics",
     "samples_per_period",
     "shaft_harmonic_fit",
     "tone_lockin",
@@ -243,3 +244,23 @@ def shaft_harmonic_fit(
     mean = coef[0].reshape(x.shape[1:])
     var = (s2 * g00).reshape(x.shape[1:])
     return mean, var, 2 * (n - q)
+
+
+def remove_shaft_harmonics(
+    period_phasor: np.ndarray, n_periods: np.ndarray, frequency_hz: np.ndarray, shaft_hz: float,
+    in_col: int, out_col: int, orders: int = 4,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Input and output phasors (N, m), output variance of the mean (m^2) and its real dof per
+    point of a sweep's ``period_phasor`` (f, p, n_chan; columns ``in_col``/``out_col``), with the
+    shaft-speed harmonics 1X..``orders``X fitted out (:func:`shaft_harmonic_fit`; a free-running
+    start angle then leaves no leak)."""
+    nf = frequency_hz.size
+    W = np.empty(nf, complex)
+    Z = np.empty(nf, complex)
+    var = np.empty(nf)
+    dof = np.empty(nf)
+    for j in range(nf):
+        per = period_phasor[j, : int(n_periods[j]), :]
+        W[j], _, _ = shaft_harmonic_fit(per[:, in_col], float(frequency_hz[j]), shaft_hz, orders)
+        Z[j], var[j], dof[j] = shaft_harmonic_fit(per[:, out_col], float(frequency_hz[j]), shaft_hz, orders)
+    return W, Z, var, dof

@@ -14,7 +14,8 @@ from typing import Any
 
 import numpy as np
 
-from rotorcheck.robust.noise import noise_bound_from_variance
+from rotorcheck.robust.noise import noise_bound_from_variance, noise_bound_pooled
+from rotorcheck.signal.lockin import remove_shaft_harmonics
 from rotorcheck.sweep.format import SCHEMA_VERSION, Sweep
 
 __all__ = ["sidak_noise_bound", "summarize"]
@@ -36,6 +37,25 @@ def _noise(var: np.ndarray, confidence: float) -> dict[str, Any]:
         "sidak_bound_m": sidak_noise_bound(var, confidence),
         "n_points": int(s.size),
     }
+
+
+def _pooled(sweep: Sweep, run: Any, var: np.ndarray, confidence: float) -> dict[str, Any]:
+    """The pooled bound (``fit-noise``'s default) of the stored variances and, for a rotating run
+    with per-period phasors, after fitting the shaft harmonics 1X..4X out of each output channel."""
+    n_min = int(np.min(run.n_periods))
+    pooled = noise_bound_pooled(var, confidence, n_periods=n_min)
+    out: dict[str, Any] = {"pooled_bound_m": pooled.value_m,
+                           "excess_scatter_points": len(pooled.details["excess_scatter_index"])}
+    if run.period_phasor is not None and run.speed_rpm != 0.0:
+        in_col = next(i for i, c in enumerate(sweep.channels) if c.role == "input")
+        cleaned = np.empty_like(var)
+        for o, col in enumerate(i for i, c in enumerate(sweep.channels) if c.role == "output"):
+            _, _, cleaned[:, o], _ = remove_shaft_harmonics(run.period_phasor, run.n_periods, run.frequency,
+                                                            abs(run.speed_rpm) / 60.0, in_col, col)
+        clean = noise_bound_pooled(cleaned, confidence, n_periods=n_min)
+        out["pooled_bound_harmonics_removed_m"] = clean.value_m
+        out["excess_scatter_points_harmonics_removed"] = len(clean.details["excess_scatter_index"])
+    return out
 
 
 def summarize(sweep: Sweep, confidence: float = 0.99) -> dict[str, Any]:
@@ -66,6 +86,7 @@ def summarize(sweep: Sweep, confidence: float = 0.99) -> dict[str, Any]:
                     "confidence": confidence,
                     "all_outputs": _noise(var, confidence),
                     "per_output": per_chan,
+                    **_pooled(sweep, run, var, confidence),
                 },
             }
         )

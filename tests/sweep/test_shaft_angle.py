@@ -80,3 +80,18 @@ def test_bundled_free_running_pair_leaks_without_removal_and_is_healthy_with_it(
     rc = main(["detect", str(cr / "healthy_2000rpm_repeat.h5"), "--out", out, "--no-plots", "--json"])
     rep = json.loads(capsys.readouterr().out)
     assert rc == 0 and rep["verdict"] == "healthy" and rep["shaft_orders_removed"] == 4
+
+
+def test_info_reports_the_noise_with_shaft_harmonics_removed() -> None:
+    """On the free-running 2000 rpm sample the stored scatter is leak-inflated; with the harmonics
+    fitted out the pooled bound is the white-noise value: V = (sigma/32) sqrt(-ln(1 - 0.99^(1/262)))
+    = 0.0997 sigma for sigma = 0.2 um per sample, 64 x 64 samples (the truth rig's measurement)."""
+    from rotorcheck.resources import samples_dir
+    from rotorcheck.sweep import read_sweep
+    from rotorcheck.sweep.summary import summarize
+
+    doc = summarize(read_sweep(samples_dir() / "crack_rig" / "healthy_2000rpm.h5"))
+    noise = doc["runs"][0]["noise"]
+    expected = 2e-7 / 32 * np.sqrt(-np.log(-np.expm1(np.log(0.99) / 262)))
+    assert noise["pooled_bound_harmonics_removed_m"] == pytest.approx(expected, rel=0.1)
+    assert noise["pooled_bound_m"] > 3 * noise["pooled_bound_harmonics_removed_m"]
