@@ -110,7 +110,8 @@ def info(
         g, nz, noise = run["grid"], run["noise"]["all_outputs"], run["noise"]
         cleaned = ""
         if "pooled_bound_harmonics_removed_m" in noise:
-            cleaned = (f"; with shaft harmonics 1X-4X removed: {noise['pooled_bound_harmonics_removed_m']:.3g} m "
+            cleaned = (f"; with shaft harmonics 1X-{noise['shaft_orders_removed']}X removed: "
+                       f"{noise['pooled_bound_harmonics_removed_m']:.3g} m "
                        f"pooled ({noise['excess_scatter_points_harmonics_removed']} points with excess scatter)")
         err.print(
             f"run {run['run_id']}: {run['speed_rpm']:g} rpm, {g['n']} points "

@@ -16,6 +16,7 @@ import numpy as np
 from rotorcheck.config import RigConfig, load_config
 from rotorcheck.errors import InputError
 from rotorcheck.resources import default_rig_path
+from rotorcheck.signal.lockin import SHAFT_ORDERS
 
 VERDICT_RULE = (
     "damage if the number of fault points is at least max(3, 2 % of the points) or at least 2 "
@@ -24,8 +25,6 @@ VERDICT_RULE = (
 )
 
 
-#: Shaft-speed orders removed from the per-period phasors of a rotating run (1X .. 4X).
-SHAFT_ORDERS = 4
 
 
 def load_rig(path: str | Path) -> RigConfig:
@@ -399,10 +398,15 @@ def noise_values(noise_bound: Any, run: MeasuredRun | None = None) -> float | np
         return float(noise_bound.value_m)
     if run is None:
         return np.asarray(per, dtype=float)
+    return _own_v(run, float(noise_bound.confidence))
+
+
+def _own_v(run: MeasuredRun, confidence: float) -> np.ndarray:
+    """The run's own per-point noise bound V(w) (m) at ``confidence`` family-wise."""
     from rotorcheck.robust.noise import noise_bound_per_point
 
-    return np.asarray(noise_bound_per_point(run.output_var, _dof(run), float(noise_bound.confidence)).details[
-        "per_point_m"], dtype=float)
+    return np.asarray(noise_bound_per_point(run.output_var, _dof(run), confidence).details["per_point_m"],
+                      dtype=float)
 
 
 def frf_estimate(run: MeasuredRun) -> Any:
@@ -452,6 +456,7 @@ class DetectionOutcome:
     def typed_report(self) -> Any:
         """The report as a :class:`rotorcheck.report.schema.DetectionReport`."""
         from rotorcheck.report.schema import DetectionReport
+        from rotorcheck.robust.measured import MEASURED_RULE
 
         f = self.run.frequency_hz
         fault = np.asarray(self.detection.fault, dtype=bool)
@@ -538,7 +543,7 @@ def detect(
     notes: list[str] = []
     measured = None
     if baseline.enclose == "measured":
-        from rotorcheck.robust.measured import FrfEstimate, measured_detect
+        from rotorcheck.robust.measured import FrfEstimate, measured_detect, measured_verdict
 
         if not 0.0 < confidence < 1.0:
             raise InputError(None, "--confidence", f"must be in (0, 1), got {confidence}")
@@ -616,10 +621,7 @@ def _baseline_v(baseline: Any, run: MeasuredRun) -> float | np.ndarray:
     """The noise bound for new data against ``baseline``: uniform, or the new run's own V(w)."""
     if baseline.noise_bound_per_point_m is None:
         return float(baseline.noise_bound_m)
-    from rotorcheck.robust.noise import NoiseBound
-
-    nb = NoiseBound(baseline.noise_bound_m, "per-point", baseline.noise_confidence, {"per_point_m": []})
-    return noise_values(nb, run)
+    return _own_v(run, float(baseline.noise_confidence))
 
 
 def _healthy_frf(baseline: Any) -> np.ndarray | None:
@@ -628,40 +630,6 @@ def _healthy_frf(baseline: Any) -> np.ndarray | None:
     if baseline.input_phasor is not None and baseline.output_phasor is not None:
         return np.asarray(baseline.output_phasor[:, 0] / baseline.input_phasor[:, 0])
     return None
-
-
-MEASURED_RULE = (
-    "damage if at least one point is a certified fault point: the new FRF differs from the measured healthy "
-    "FRF by more than the noise of both sweeps allows (per point: the exact tail of |d|^2 / (var_new + var_healthy) "
-    "with both variances estimated, taken at the least favourable variance share in a 90 % interval; Sidak over "
-    "all points and channels at the stated family-wise confidence: a healthy repeat is called damage with "
-    "probability at most 1 - confidence); otherwise inconclusive if some point could not be tested; "
-    "otherwise healthy"
-)
-
-
-def measured_verdict(fault: np.ndarray, status: np.ndarray, confidence: float, n_tests: int) -> Any:
-    """Sweep verdict of measured detection (:data:`MEASURED_RULE`)."""
-    from rotorcheck.robust.validation import Verdict
-
-    fault = np.asarray(fault, dtype=bool)
-    n = fault.size
-    n_fault = int(np.count_nonzero(fault))
-    undecided = int(np.count_nonzero(~np.isin(np.asarray(status), ["ok", "fault"])))
-    run = 0
-    best = 0
-    for m in fault:
-        run = run + 1 if m else 0
-        best = max(best, run)
-    if n_fault:
-        why = (f"{n_fault} certified fault points at {confidence:.0%} family-wise confidence "
-               f"(Sidak over {n_tests} tests)")
-        return Verdict("damage", why, n, n_fault, undecided, best, 1)
-    if undecided:
-        return Verdict("inconclusive", f"no fault point, {undecided} points could not be tested", n, 0,
-                       undecided, 0, 1)
-    return Verdict("healthy", f"no point differs beyond the noise of both sweeps at {confidence:.0%} "
-                   f"family-wise confidence ({n_tests} tests)", n, 0, 0, 0, 1)
 
 
 # --------------------------------------------------------------------------------------------

@@ -7,8 +7,7 @@ measured detection) does not load the LMI machinery and its solvers.
 
 from __future__ import annotations
 
-import importlib
-from typing import Any
+from rotorcheck.lazy import lazy_exports
 
 _HOME = {
     "DamageSet": "identify", "damage_dynamics": "identify", "damage_set": "identify", "damage_set_io": "identify",
@@ -20,14 +19,4 @@ _HOME = {
     "detect": "validation", "validate": "validation", "verdict": "validation",
 }
 
-__all__ = sorted(_HOME)
-
-
-def __getattr__(name: str) -> Any:
-    if name in _HOME:
-        return getattr(importlib.import_module(f"rotorcheck.robust.{_HOME[name]}"), name)
-    raise AttributeError(f"module 'rotorcheck.robust' has no attribute {name!r}")
-
-
-def __dir__() -> list[str]:
-    return sorted([*globals(), *_HOME])
+__all__, __getattr__, __dir__ = lazy_exports(__name__, _HOME)

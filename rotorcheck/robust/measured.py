@@ -45,13 +45,16 @@ from dataclasses import dataclass
 import numpy as np
 
 from rotorcheck.robust.noise import point_miss
+from rotorcheck.robust.validation import Verdict, longest_run
 
 __all__ = [
+    "MEASURED_RULE",
     "FrfEstimate",
     "MeasuredDetection",
     "combine_sweeps",
     "frf_estimate",
     "measured_detect",
+    "measured_verdict",
     "welch_dof",
 ]
 
@@ -369,5 +372,32 @@ def io_model_error(model_frf: np.ndarray, healthy_frf: np.ndarray, halfwidth: in
     with np.errstate(divide="ignore", invalid="ignore"):
         e = np.abs(np.asarray(healthy_frf, dtype=complex).reshape(-1) - G) / np.abs(G)
     e = np.where(np.isfinite(e), e, np.inf)
-    n = e.size
-    return np.array([e[max(0, i - halfwidth): i + halfwidth + 1].max() for i in range(n)])
+    padded = np.pad(e, halfwidth, constant_values=-np.inf)
+    return np.lib.stride_tricks.sliding_window_view(padded, 2 * halfwidth + 1).max(axis=1)
+
+
+MEASURED_RULE = (
+    "damage if at least one point is a certified fault point: the new FRF differs from the measured healthy "
+    "FRF by more than the noise of both sweeps allows (per point: the exact tail of |d|^2 / (var_new + var_healthy) "
+    "with both variances estimated, taken at the least favourable variance share in a 90 % interval; Sidak over "
+    "all points and channels at the stated family-wise confidence: a healthy repeat is called damage with "
+    "probability at most 1 - confidence); otherwise inconclusive if some point could not be tested; "
+    "otherwise healthy"
+)
+
+
+def measured_verdict(fault: np.ndarray, status: np.ndarray, confidence: float, n_tests: int) -> Verdict:
+    """Sweep verdict of measured detection (:data:`MEASURED_RULE`)."""
+    fault = np.asarray(fault, dtype=bool)
+    n = fault.size
+    n_fault = int(np.count_nonzero(fault))
+    undecided = int(np.count_nonzero(~np.isin(np.asarray(status), [STATUS_OK, STATUS_FAULT])))
+    if n_fault:
+        why = (f"{n_fault} certified fault points at {confidence:.0%} family-wise confidence "
+               f"(Sidak over {n_tests} tests)")
+        return Verdict("damage", why, n, n_fault, undecided, longest_run(fault), 1)
+    if undecided:
+        return Verdict("inconclusive", f"no fault point, {undecided} points could not be tested", n, 0,
+                       undecided, 0, 1)
+    return Verdict("healthy", f"no point differs beyond the noise of both sweeps at {confidence:.0%} "
+                   f"family-wise confidence ({n_tests} tests)", n, 0, 0, 0, 1)

@@ -50,6 +50,7 @@ __all__ = [
     "ValidationResult",
     "Verdict",
     "detect",
+    "longest_run",
     "validate",
     "verdict",
 ]
@@ -264,7 +265,8 @@ class Verdict:
     threshold: int
 
 
-def _longest_run(mask: np.ndarray) -> int:
+def longest_run(mask: np.ndarray) -> int:
+    """Length of the longest run of adjacent True values."""
     best = cur = 0
     for m in mask:
         cur = cur + 1 if m else 0
@@ -287,7 +289,7 @@ def verdict(fault: np.ndarray, status: np.ndarray, healthy_status: np.ndarray | 
     n = fault.size
     thr = max(min_points, int(np.ceil(min_fraction * n)))
     n_fault = int(np.count_nonzero(fault))
-    run = _longest_run(fault)
+    run = longest_run(fault)
     undecided = int(np.count_nonzero(np.isin(status, _UNDECIDED)))
     if n_fault >= thr or run >= min_run:
         why = (f"{n_fault} fault points (threshold {thr})" if n_fault >= thr

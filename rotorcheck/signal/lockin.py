@@ -26,6 +26,7 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = [
+    "SHAFT_ORDERS",
     "average_periods",
     "lockin_periods",
     "remove_shaft_harmonics",
@@ -34,6 +35,9 @@ __all__ = [
     "tone_lockin",
     "white_noise_phasor_var",
 ]
+
+#: Shaft-speed orders fitted out of the per-period phasors of a rotating run (1X .. 4X).
+SHAFT_ORDERS = 4
 
 
 def samples_per_period(fs_hz: float, f_exc_hz: float, rtol: float = 1e-9) -> int:
@@ -248,7 +252,7 @@ def shaft_harmonic_fit(
 
 def remove_shaft_harmonics(
     period_phasor: np.ndarray, n_periods: np.ndarray, frequency_hz: np.ndarray, shaft_hz: float,
-    in_col: int, out_col: int, orders: int = 4,
+    in_col: int, out_col: int, orders: int = SHAFT_ORDERS,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Input and output phasors (N, m), output variance of the mean (m^2) and its real dof per
     point of a sweep's ``period_phasor`` (f, p, n_chan; columns ``in_col``/``out_col``), with the

@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from rotorcheck.robust.noise import noise_bound_from_variance, noise_bound_pooled
-from rotorcheck.signal.lockin import remove_shaft_harmonics
+from rotorcheck.signal.lockin import SHAFT_ORDERS, remove_shaft_harmonics
 from rotorcheck.sweep.format import SCHEMA_VERSION, Sweep
 
 __all__ = ["sidak_noise_bound", "summarize"]
@@ -55,6 +55,7 @@ def _pooled(sweep: Sweep, run: Any, var: np.ndarray, confidence: float) -> dict[
         clean = noise_bound_pooled(cleaned, confidence, n_periods=n_min)
         out["pooled_bound_harmonics_removed_m"] = clean.value_m
         out["excess_scatter_points_harmonics_removed"] = len(clean.details["excess_scatter_index"])
+        out["shaft_orders_removed"] = SHAFT_ORDERS
     return out
 
 

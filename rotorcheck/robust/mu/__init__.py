@@ -84,8 +84,7 @@ parameter, dimensionless for multiplicative); V in m (output displacement).
 
 from __future__ import annotations
 
-import importlib
-from typing import Any
+from rotorcheck.lazy import lazy_exports
 
 _HOME = {
     "BACKENDS": "backends", "LmiCache": "backends",
@@ -97,15 +96,4 @@ _HOME = {
     "Structure": "structure", "blocks_for": "structure", "check_noise_bound": "structure",
 }
 
-__all__ = sorted(_HOME)
-
-
-def __getattr__(name: str) -> Any:
-    """The public names, loaded on first use (PEP 562): the solvers load only when a bound is asked for."""
-    if name in _HOME:
-        return getattr(importlib.import_module(f"rotorcheck.robust.mu.{_HOME[name]}"), name)
-    raise AttributeError(f"module 'rotorcheck.robust.mu' has no attribute {name!r}")
-
-
-def __dir__() -> list[str]:
-    return sorted([*globals(), *_HOME])
+__all__, __getattr__, __dir__ = lazy_exports(__name__, _HOME)
