@@ -127,8 +127,10 @@ def _what_changed(report: dict[str, Any], f: np.ndarray, fault: np.ndarray, d: n
         conf = report.get("damage_anchored_bound_confidence")
         where = "at the fault points" if np.any(fault) else "over the band"
         sel = fault if np.any(fault) else np.ones_like(fault)
+        extra = (" and with the damage-port channels in error as much as the io channel is on the healthy data"
+                 if "damage_anchored_channel_error" in report else "")
         lines.append(f"Anchored estimate (E22 := the measured healthy FRF; bound: every D consistent with both "
-                     f"sweeps' noise{f' at {conf:.0%} family-wise confidence' if conf else ''}), {where}: "
+                     f"sweeps' noise{f' at {conf:.0%} family-wise confidence' if conf else ''}{extra}), {where}: "
                      f"median Re D_u = {np.median(a[sel].real):.4g} N/m (positive: a stiffness loss).")
         lines.append("")
         idx = np.flatnonzero(sel)[:8]
