@@ -170,6 +170,9 @@ def _enclose_system(me: np.ndarray, W: np.ndarray, Zt: np.ndarray, V: float | np
             "enclose='system' is implemented for SISO data with one complex scalar "
             "uncertainty (Me of shape (f, 2, 2))")
     block = (structure or Structure()).resolve(1, 1)[0]
+    if block.is_real:
+        raise NotImplementedError("enclose='system' has a closed form for a complex scalar only; "
+                                  "a real parameter block needs enclose='data'")
     Wv = np.asarray(W, dtype=complex).reshape(f, -1)
     Zv = np.asarray(Zt, dtype=complex).reshape(f, -1)
     if Wv.shape[1] != 1 or Zv.shape[1] != 1:

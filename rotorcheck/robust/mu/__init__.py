@@ -21,6 +21,28 @@ gamma, or a repeated-scalar uncertainty block, give a generalized eigenvalue pro
 bisection on ``s`` with an LMI feasibility problem (minimize lambda) at each step (documented
 exception to the one-SDP rule).
 
+Real scalar blocks (mixed mu): ``Block('real', (k, k))`` (:meth:`Structure.real`) is ``delta I_k``
+with delta REAL, ``|delta| <= w gamma`` (k = 1 a real parameter, k > 1 one entering with rank k).
+For ``u = delta v``, ``v^* G u - u^* G v = 0`` for every Hermitian G, so such a block adds the free
+term ``j (B_i^* G_i A_i - A_i^* G_i B_i)`` to the certificate (G a real scalar for k = 1, Hermitian
+for k > 1, either sign): the D-G scaling bound of mixed mu (Fan, Tits and Doyle, IEEE TAC 36(1),
+1991). With G = 0 it is the complex certificate, so a real block's ``gamma_lower`` is never below the
+complex one. One real scalar (k = 1) keeps ONE SDP per point (D fixed to 1, G free); a repeated real
+block or several blocks use the bisection. The clarabel backend solves these LMIs (and those with
+Hermitian D-scales) directly (:class:`~.backends.ClarabelGeneralLmi`), the cvxpy backend with cvxpy.
+The explicit Delta of a real block is real: the real fit ``Re(v^* u) / |v|^2`` of the kernel vector,
+a Gauss-Newton polish and the SQP refinement in real unknowns; when the only block is real the
+smallest feasible delta is found exactly (:func:`~.witness.exact_single_real`: the residual times
+``det(I - delta Me11)`` is a polynomial of degree k, so each ``|r_j|^2 <= V^2`` is a polynomial
+inequality of degree 2k in delta whose real roots and 0 are the only candidates), verified by direct
+evaluation. Measured (tests/robust/test_mixed_mu.py): D-G is exact for one real parameter with SISO
+data (gap < 1e-7); one real + one complex block keeps a true relaxation gap on a few cases (up to
+7 %). V = 0 with a real block is ill-posed in floating point (the data pin delta, real only to
+rounding): such points use the noise bound ``REAL_V0_FLOOR * max|Zt|`` (1e-6 relative); data far
+from every real delta relative to that floor make the unexplainability certificate ill-conditioned
+(a G-scale of about 1/V) and Clarabel stalls at some points, reported 'lower_only' or
+'solver_failed'. Give V > 0 with a real block.
+
 Bounds, per frequency (what each number certifies):
 
 * ``gamma_lower``: every gamma below it is *proven* invalidated. It is recomputed from the solver's
@@ -94,6 +116,7 @@ _HOME = {
     "STATUS_FAILED": "structure", "STATUS_LOWER_ONLY": "structure", "STATUS_OK": "structure",
     "STATUS_UNEXPLAINABLE": "structure", "Block": "structure", "GammaResult": "structure",
     "Structure": "structure", "blocks_for": "structure", "check_noise_bound": "structure",
+    "REAL_V0_FLOOR": "structure",
 }
 
 __all__, __getattr__, __dir__ = lazy_exports(__name__, _HOME)

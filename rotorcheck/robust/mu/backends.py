@@ -4,7 +4,8 @@ The LMI ``opt s.t. s Gs + G0 + sum_l theta_l G_l <= 0`` (kind 'maxs': maximize s
 minimize lambda) in its real embedding, solved by 'cvxpy' (built once per shape with cvxpy
 Parameters, re-solved per point) or 'clarabel' (the default: the identical conic data -- Clarabel's
 scaled upper-triangle PSD vectorization, a fixed sparsity pattern -- filled directly and Clarabel
-called without cvxpy's per-solve canonicalization; Hermitian D-scales fall back to cvxpy). Both
+called without cvxpy's per-solve canonicalization; Hermitian D-scales and the G-scales of real
+blocks: :class:`ClarabelGeneralLmi`, the same LMI with its own PSD cones, also without cvxpy). Both
 return D-scales projected onto their cones (:func:`project_scales`).
 
 No module state: the built problems live in an :class:`LmiCache` object and the per-call state
@@ -81,7 +82,8 @@ def complexify(Xm: np.ndarray, m: int) -> np.ndarray:
 def project_scales(theta: Sequence[np.ndarray], blocks: Sequence[tuple[str, int]]
                    ) -> list[np.ndarray]:
     """D-scale coordinates projected onto their cones (``d >= 0``; Hermitian ``D >= 0`` for a
-    repeated block, coordinates in the :func:`herm_basis` order).
+    repeated block, coordinates in the :func:`herm_basis` order; a 'free' block -- the G-scale of a
+    real block, any Hermitian matrix -- is returned as is).
 
     An interior point iterate that stopped early ('InsufficientProgress', 'AlmostSolved') can sit
     slightly outside the cone (``d ~ -1e-7`` for a noise block that is inactive at the optimum).
@@ -90,6 +92,9 @@ def project_scales(theta: Sequence[np.ndarray], blocks: Sequence[tuple[str, int]
     out = []
     for th, (kind, k) in zip(theta, blocks, strict=True):
         th = np.asarray(th, dtype=float).reshape(-1)
+        if kind == "free":  # a G-scale (real block): Hermitian, no cone
+            out.append(th.copy())
+            continue
         if kind == "full" or k == 1:
             out.append(np.maximum(th, 0.0))
             continue
@@ -205,7 +210,8 @@ class SolveSession:
         out.seconds = time.perf_counter() - t0
         return out
 
-    def lmi(self, kind: str, m: int, blocks: BlockSig, normalize: bool) -> CvxpyLmi | ClarabelLmi:
+    def lmi(self, kind: str, m: int, blocks: BlockSig, normalize: bool
+            ) -> CvxpyLmi | ClarabelLmi | ClarabelGeneralLmi:
         """The (cached) LMI of this shape for the session's backend."""
         return self.cache.get(self.backend, kind, m, blocks, normalize)
 
@@ -245,7 +251,9 @@ class CvxpyLmi:
             ps = [cp.Parameter((dim, dim), symmetric=True) for _ in range(nb)]
             for j in range(nb):
                 expr = expr + th[j] * ps[j]
-            if bkind == "full":
+            if bkind == "free":  # G-scale of a real block: free, not in the normalization
+                pass
+            elif bkind == "full":
                 cons.append(th >= 0)
                 traces.append(th[0])
             else:
@@ -256,6 +264,10 @@ class CvxpyLmi:
             self.params.append(ps)
         if kind == "feas":
             cons.append(cast(cp.Constraint, sum(traces) == 1 if normalize else self.var >= -1))
+            if normalize and any(bk == "free" for bk, _ in blocks):
+                # free G-scales can drive lambda to -inf (a certificate for every s): keep it
+                # bounded; only its sign is used
+                cons.append(self.var >= -1)
         self.lmi = expr << 0
         obj: cp.Maximize | cp.Minimize = cp.Maximize(self.var) if kind == "maxs" else cp.Minimize(self.var)
         self.problem = cp.Problem(obj, [*cons, self.lmi])
@@ -523,24 +535,180 @@ class ClarabelLmi:
         return out
 
 
+def _svec_index(dim: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Row / column indices and weights of Clarabel's svec (column-wise upper triangle,
+    off-diagonal entries times sqrt 2) of a dim x dim symmetric matrix."""
+    iu, ju = np.triu_indices(dim)
+    order = np.lexsort((iu, ju))
+    iu, ju = iu[order], ju[order]
+    return iu, ju, np.where(iu == ju, 1.0, np.sqrt(2.0))
+
+
+class ClarabelGeneralLmi:
+    """The LMI of :class:`CvxpyLmi` with any variable blocks, conic data built directly (no
+    cvxpy): 'full' (``d >= 0``), 'repeated' (Hermitian ``D >= 0``, its own PSD cone of size 2k)
+    and 'free' (the Hermitian G-scale of a real block, k^2 free coordinates, no cone).
+
+    Variables ``z = (var, coordinates of block 1, ..., block B)``; cones: nonnegative (scalar
+    D-scales), [feas: zero (normalization ``sum trace D = 1``) and/or nonnegative
+    (``lambda >= -1``)], one PSD cone per Hermitian D-scale, the PSD cone of ``-(LMI)``."""
+
+    def __init__(self, kind: str, m: int, blocks: BlockSig, normalize: bool):
+        self.kind, self.m, self.blocks, self.normalize = kind, m, blocks, normalize
+        has_free = any(bk == "free" for bk, _ in blocks)
+        cols: list[list[int]] = []
+        nz = 1
+        for bk, k in blocks:
+            nb = 1 if bk == "full" else k * k
+            cols.append(list(range(nz, nz + nb)))
+            nz += nb
+        self.cols, self.nz = cols, nz
+        dim = 2 * m
+        self.iu, self.ju, self.wsv = _svec_index(dim)
+        rows_A: list[np.ndarray] = []
+        rows_b: list[np.ndarray] = []
+        cones: list[Any] = []
+        scal = [c[0] for (bk, _), c in zip(blocks, cols, strict=True) if bk == "full"]
+        if scal:
+            A = np.zeros((len(scal), nz))
+            A[np.arange(len(scal)), scal] = -1.0
+            rows_A.append(A)
+            rows_b.append(np.zeros(len(scal)))
+            cones.append(clarabel.NonnegativeConeT(len(scal)))
+        if kind == "feas":
+            if normalize:
+                A = np.zeros((1, nz))
+                for (bk, k), c in zip(blocks, cols, strict=True):
+                    if bk != "free":
+                        A[0, c[:1] if bk == "full" else c[:k]] = 1.0
+                rows_A.append(A)
+                rows_b.append(np.ones(1))
+                cones.append(clarabel.ZeroConeT(1))
+            if not normalize or has_free:  # lambda >= -1
+                A = np.zeros((1, nz))
+                A[0, 0] = -1.0
+                rows_A.append(A)
+                rows_b.append(np.ones(1))
+                cones.append(clarabel.NonnegativeConeT(1))
+        for (bk, k), c in zip(blocks, cols, strict=True):
+            if bk != "repeated":
+                continue
+            iu, ju, w = _svec_index(2 * k)
+            A = np.zeros((iu.size, nz))
+            for j, H in zip(c, herm_basis(k), strict=True):
+                A[:, j] = -emb(H)[iu, ju] * w
+            rows_A.append(A)
+            rows_b.append(np.zeros(iu.size))
+            cones.append(clarabel.PSDTriangleConeT(2 * k))
+        self.A_top = np.concatenate(rows_A) if rows_A else np.zeros((0, nz))
+        self.b_top = np.concatenate(rows_b) if rows_b else np.zeros(0)
+        cones.append(clarabel.PSDTriangleConeT(dim))
+        self.cones = cones
+        self.r0 = self.A_top.shape[0]
+        self.q = np.zeros(nz)
+        self.q[0] = -1.0 if kind == "maxs" else 1.0
+        self.P = sp.csc_matrix((nz, nz))
+        st = clarabel.DefaultSettings()
+        st.verbose = False
+        for key, val in SOLVER_OPTS.items():
+            setattr(st, key, val)
+        self.settings = st
+
+    def _svec_emb(self, H: np.ndarray) -> np.ndarray:
+        return emb(0.5 * (H + H.conj().T))[self.iu, self.ju] * self.wsv
+
+    def solve(self, G0: np.ndarray, Gs: np.ndarray | None, terms: Sequence[Sequence[np.ndarray]],
+              session: SolveSession) -> LmiOut:
+        """One point: ``G0``, ``Gs`` (m, m), ``terms[block][basis element]`` (m, m)."""
+        dim = 2 * self.m
+        nsv = self.iu.size
+        A = np.zeros((self.r0 + nsv, self.nz))
+        A[: self.r0] = self.A_top
+        if self.kind == "maxs":
+            assert Gs is not None
+            A[self.r0:, 0] = self._svec_emb(Gs)
+        else:
+            A[self.r0:, 0] = -(np.eye(dim)[self.iu, self.ju] * self.wsv)
+        for c, ts in zip(self.cols, terms, strict=True):
+            for j, T in zip(c, ts, strict=True):
+                A[self.r0:, j] = self._svec_emb(T)
+        b = np.concatenate([self.b_top, -self._svec_emb(G0)])
+        Acsc = sp.csc_matrix(A)
+        t0 = time.perf_counter()
+
+        def run(limit: float) -> object:
+            self.settings.time_limit = float(limit)
+            return clarabel.DefaultSolver(self.P, self.q, Acsc, b, self.cones,
+                                          self.settings).solve()
+
+        sol: Any
+        try:
+            sol = session.guarded(run)
+            status = str(sol.status)
+        except (ValueError, RuntimeError, ArithmeticError):
+            status, sol = "error", None
+        session.add_time("solve_total", time.perf_counter() - t0)
+        if status == "MaxTime":
+            raise SolverAbort("Clarabel stopped at the time limit of the point")
+        if sol is None:
+            return LmiOut("failed")
+        session.add_time("clarabel", float(sol.solve_time))
+        if status in ("DualInfeasible", "AlmostDualInfeasible"):
+            return LmiOut("unbounded")
+        x, z = np.asarray(sol.x), np.asarray(sol.z)
+        if status not in _CLARABEL_USABLE or x.size != self.nz or not np.all(np.isfinite(x)):
+            return LmiOut("failed")
+        theta = project_scales([x[c] for c in self.cols], self.blocks)
+        dual = None
+        zm = z[self.r0:]
+        if np.all(np.isfinite(zm)):
+            Sm = np.zeros((dim, dim))
+            v = zm / self.wsv
+            Sm[self.iu, self.ju] = v
+            Sm[self.ju, self.iu] = v
+            dual = complexify(Sm, self.m)
+        return LmiOut("optimal" if status == "Solved" else "inaccurate", float(x[0]), theta, dual)
+
+    def solve_many(self, G0: np.ndarray, Gs: np.ndarray, terms: Sequence[Sequence[np.ndarray]],
+                   session: SolveSession, point_seconds: float | None) -> list[LmiOut]:
+        """'maxs' problems of a stack of points (see :meth:`ClarabelLmi.solve_many`)."""
+        out = []
+        for i in range(G0.shape[0]):
+            def solve(i: int = i) -> LmiOut:
+                return self.solve(G0[i], Gs[i], [[T[i] for T in ts] for ts in terms], session)
+
+            out.append(solve() if point_seconds is None
+                       else session.guarded_point(solve, point_seconds))
+        return out
+
+
 class LmiCache:
     """The problem-structure cache: one built LMI per (backend, kind, size, blocks, normalization),
     re-filled per point. Not thread-safe (its problems hold parameter values and a reused sparse
     buffer): one per call or thread; :func:`required_gamma` makes its own."""
 
     def __init__(self) -> None:
-        self._lmis: dict[tuple[str, str, int, BlockSig, bool], CvxpyLmi | ClarabelLmi] = {}
+        self._lmis: dict[tuple[str, str, int, BlockSig, bool],
+                         CvxpyLmi | ClarabelLmi | ClarabelGeneralLmi] = {}
 
     def __len__(self) -> int:
         return len(self._lmis)
 
     def get(self, backend: str, kind: str, m: int, blocks: BlockSig, normalize: bool
-            ) -> CvxpyLmi | ClarabelLmi:
+            ) -> CvxpyLmi | ClarabelLmi | ClarabelGeneralLmi:
         use_direct = backend == "clarabel" and all(k == "full" for k, _ in blocks)
-        key = ("clarabel" if use_direct else "cvxpy", kind, m, blocks, normalize)
+        # G-scales (real blocks) or Hermitian D-scales (repeated blocks) with the clarabel
+        # backend: the general direct class
+        general = backend == "clarabel" and any(k in ("free", "repeated") for k, _ in blocks)
+        name = "clarabel" if use_direct else ("clarabel-general" if general else "cvxpy")
+        key = (name, kind, m, blocks, normalize)
         lmi = self._lmis.get(key)
         if lmi is None:
-            lmi = (ClarabelLmi(kind, m, len(blocks), normalize) if use_direct
-                   else CvxpyLmi(kind, m, blocks, normalize))
+            if use_direct:
+                lmi = ClarabelLmi(kind, m, len(blocks), normalize)
+            elif general:
+                lmi = ClarabelGeneralLmi(kind, m, blocks, normalize)
+            else:
+                lmi = CvxpyLmi(kind, m, blocks, normalize)
             self._lmis[key] = lmi
         return lmi

@@ -243,10 +243,19 @@ def adapted_basis(P0: np.ndarray, x: np.ndarray, nu: int) -> np.ndarray | None:
     return np.concatenate([x[:, None] / nu_out, P0 @ Uc], axis=1)
 
 
+REAL_KINDS = ("real", "realrep")
+
+
+def d_kind(kind: str) -> str:
+    """The D-scale kind of an LMI block kind: 'full' (scalar d >= 0) or 'repeated' (D >= 0)."""
+    return {"real": "full", "realrep": "repeated"}.get(kind, kind)
+
+
 def block_terms(kind: str, k: int, Ap: np.ndarray, Bp: np.ndarray
                 ) -> tuple[list[np.ndarray], list[np.ndarray]]:
     """Hermitian (f, m, m) terms of one block: returns (A-parts, B-parts) per D-scale basis
     element; the block's contribution is ``sum_l theta_l (r^2 A_l - B_l)``."""
+    kind = d_kind(kind)
     if kind == "full":
         return [gram(Ap)], [gram(Bp)]
     As, Bs = [], []
@@ -254,6 +263,21 @@ def block_terms(kind: str, k: int, Ap: np.ndarray, Bp: np.ndarray
         As.append(herm(Ap) @ H @ Ap)
         Bs.append(herm(Bp) @ H @ Bp)
     return As, Bs
+
+
+def g_terms(kind: str, k: int, Ap: np.ndarray, Bp: np.ndarray) -> list[np.ndarray]:
+    """G-scale terms (f, m, m) of a real block, one per coordinate of the Hermitian G
+    (:func:`herm_basis` order; k = 1: one real g): ``j (B^* H A - A^* H B)``. For ``u = delta v``
+    with delta real, ``x^* j(B^* G A - A^* G B) x = j delta (v^* G v - v^* G v) = 0``: the term
+    vanishes on the uncertainty set and enters the certificate with a free sign (the D-G scaling
+    bound of mixed mu). Empty for complex blocks."""
+    if kind not in REAL_KINDS:
+        return []
+    out = []
+    for H in herm_basis(k):
+        X = herm(Bp) @ H @ Ap
+        out.append(1j * (X - herm(X)))
+    return out
 
 
 # --------------------------------------------------------------------------------------------------
@@ -288,7 +312,7 @@ def engine_sdp(fm: Forms, session: SolveSession, point_seconds: float | None = N
 
     ``point_seconds``: every point's solve under its own budget (an abort gives status 'aborted'
     with the reason); None: the session's current budget (an abort raises)."""
-    _, _, Ap, Bp = fm.gamma_blocks[0]
+    kind0, k0, Ap, Bp = fm.gamma_blocks[0]
     sig = tuple((kind, k) for kind, k, _, _ in fm.fixed_blocks)
     Fu = gram(Ap)
     F0 = -gram(Bp)
@@ -296,6 +320,11 @@ def engine_sdp(fm: Forms, session: SolveSession, point_seconds: float | None = N
     for kind, k, Ak, Bk in fm.fixed_blocks:
         As, Bs = block_terms(kind, k, Ak, Bk)
         fixed_terms.append([a - b for a, b in zip(As, Bs, strict=True)])
+    n_noise = len(fixed_terms)
+    gt = g_terms(kind0, k0, Ap, Bp)
+    if gt:  # a real uncertainty block: its free G-scale (its D-scale stays fixed to 1)
+        sig = (*sig, ("free", k0))
+        fixed_terms.append(gt)
     lmi = session.lmi("maxs", fm.m, sig, False)
     res = lmi.solve_many(F0, Fu, fixed_terms, session, point_seconds)
     out = [EngineOut("aborted", calls=1, method="sdp", reason=r.reason) if r.status == "aborted"
@@ -322,12 +351,13 @@ def engine_sdp(fm: Forms, session: SolveSession, point_seconds: float | None = N
             jd = np.flatnonzero(has_dual)
             Z = np.stack([d for d in duals if d is not None])
             xd[jd] = (fm.P[idx[jd]] @ top_eigvec(Z)[:, :, None])[:, :, 0]
-        one = [len(terms) == 1 for terms in fixed_terms]
+        one = [len(terms) == 1 for terms in fixed_terms[:n_noise]]
         for j, (i, s_j, fin_j) in enumerate(zip(idx.tolist(), s_cert.tolist(), fin.tolist(),
                                                 strict=True)):
             r = res[i]
             cands = ([xy[j]] if fin_j else []) + ([xd[j]] if has_dual[j] else [])
-            theta = [float(th[0]) if o else np.nan for th, o in zip(r.theta, one, strict=True)]
+            theta = [float(th[0]) if o else np.nan
+                     for th, o in zip(r.theta[:n_noise], one, strict=True)]
             out[i] = EngineOut("ok", s_j, cands, calls=1, method="sdp", y=y[j] if fin_j else None,
                                theta=theta, inaccurate=r.status == "inaccurate")
     for o, r in zip(out, res, strict=True):
@@ -336,37 +366,48 @@ def engine_sdp(fm: Forms, session: SolveSession, point_seconds: float | None = N
 
 
 def _feas_terms(fm: Forms, s: float, fix_first: bool
-                ) -> tuple[np.ndarray, list[list[np.ndarray]], list[list[np.ndarray]]]:
-    """(G_fix, per-variable-block terms at s, per-variable-block A-parts) for the feasibility LMI
-    of one point (``fm`` a stack of one)."""
+                ) -> tuple[np.ndarray, list[tuple[str, int]], list[list[np.ndarray]],
+                           list[list[np.ndarray]]]:
+    """(G_fix, variable-block signature, per-variable-block terms at s, per-variable-block
+    A-parts) for the feasibility LMI of one point (``fm`` a stack of one). A real block adds its
+    G-scale as a 'free' variable block (zero A-part), also when its D-scale is fixed."""
     m = fm.m
     Gfix = np.zeros((m, m), complex)
+    sig: list[tuple[str, int]] = []
     var_terms: list[list[np.ndarray]] = []
     var_a: list[list[np.ndarray]] = []
+    zero = np.zeros((m, m), complex)
+    g_blocks: list[tuple[int, list[np.ndarray]]] = []
     for idx, (kind, k, Ap, Bp) in enumerate(fm.gamma_blocks):
+        gt = g_terms(kind, k, Ap, Bp)
+        if gt:
+            g_blocks.append((k, [g[0] for g in gt]))
         As, Bs = block_terms(kind, k, Ap, Bp)
         terms = [s * a[0] - b[0] for a, b in zip(As, Bs, strict=True)]
         if fix_first and idx == 0:
             Gfix = terms[0]
             continue
+        sig.append((d_kind(kind), k))
         var_terms.append(terms)
         var_a.append([a[0] for a in As])
     for kind, k, Ap, Bp in fm.fixed_blocks:
         As, Bs = block_terms(kind, k, Ap, Bp)
+        sig.append((d_kind(kind), k))
         var_terms.append([a[0] - b[0] for a, b in zip(As, Bs, strict=True)])
-        var_a.append([np.zeros((m, m), complex)] * len(As))
-    return Gfix, var_terms, var_a
+        var_a.append([zero] * len(As))
+    for k, gt0 in g_blocks:
+        sig.append(("free", k))
+        var_terms.append(gt0)
+        var_a.append([zero] * len(gt0))
+    return Gfix, sig, var_terms, var_a
 
 
 def _feasible(fm: Forms, s: float, fix_first: bool, session: SolveSession
               ) -> tuple[str, float, np.ndarray | None, np.ndarray | None]:
     """Certificate at s? Returns (status, verified lambda_max, Q(theta) at s, Fa(theta))."""
     m = fm.m
-    blocks = [(kind, k) for kind, k, _, _ in fm.gamma_blocks]
-    blocks = blocks[1:] if fix_first else blocks
-    sig = tuple(blocks) + tuple((kind, k) for kind, k, _, _ in fm.fixed_blocks)
-    Gfix, var_terms, var_a = _feas_terms(fm, s, fix_first)
-    res = session.lmi("feas", m, sig, not fix_first).solve(Gfix, None, var_terms, session)
+    Gfix, sig, var_terms, var_a = _feas_terms(fm, s, fix_first)
+    res = session.lmi("feas", m, tuple(sig), not fix_first).solve(Gfix, None, var_terms, session)
     if res.status not in ("optimal", "inaccurate"):
         return "failed", np.inf, None, None
     Q = Gfix.copy()
@@ -454,7 +495,8 @@ def implicit_lmi_bound(N: np.ndarray, A: Sequence[np.ndarray], B: Sequence[np.nd
     well-scaled problem).
 
     ``N`` (rows, n): kernel constraint ``N x = 0``; ``A[i]`` (q_i, n) / ``B[i]`` (p_i, n): input and
-    output rows of block i; ``kinds[i]``: 'scalar' | 'full' | 'repeated'; ``gamma_block[i]``: block
+    output rows of block i; ``kinds[i]``: 'scalar' | 'full' | 'repeated' | 'real' (a real
+    (repeated) scalar: D-G scalings); ``gamma_block[i]``: block
     bounded by ``radius[i] * gamma`` (else by ``radius[i]``, default 1). One gamma block of scalar
     or full kind: one SDP (or an exact eigenvalue without other blocks); otherwise bisection.
     ``time_limit``: seconds for all solver calls; a solver that raises or runs out of time gives
@@ -473,15 +515,18 @@ def implicit_lmi_bound(N: np.ndarray, A: Sequence[np.ndarray], B: Sequence[np.nd
     for Ai, Bi, kd, gb, ri in zip(A, B, kinds, gamma_block, rad, strict=True):
         Ai = np.atleast_2d(np.asarray(Ai, dtype=complex))
         Bi = np.atleast_2d(np.asarray(Bi, dtype=complex))
-        lk = "repeated" if kd == "repeated" and Ai.shape[0] > 1 else "full"
+        if kd == "real":
+            lk = "realrep" if Ai.shape[0] > 1 else "real"
+        else:
+            lk = "repeated" if kd == "repeated" and Ai.shape[0] > 1 else "full"
         (gam if gb else fix).append((lk, Bi.shape[0], ri * Ai @ P, Bi @ P))
     if not gam:
         raise ValueError("at least one block must be scaled by gamma")
     fm = Forms(P, gam, fix)
-    single = len(gam) == 1 and gam[0][0] == "full"
+    single = len(gam) == 1 and gam[0][0] in ("full", "real")
     try:
         with session.point_budget(time_limit):
-            if single and not fix:
+            if single and not fix and gam[0][0] == "full":
                 out = engine_eig(fm)[0]
             elif single:
                 out = engine_sdp(fm, session)[0]

@@ -46,6 +46,7 @@ from rotorcheck.robust.mu.structure import (
     Structure,
     check_noise_bound,
     layout,
+    v0_floor,
 )
 from rotorcheck.robust.mu.witness import (
     CLOSE_RTOL,
@@ -54,6 +55,7 @@ from rotorcheck.robust.mu.witness import (
     explicit_delta,
     noise_ok,
     refine_gap,
+    start_witness,
     upper_from,
 )
 
@@ -204,7 +206,7 @@ def _first_pass(pts: Points, plan: _Plan, idx: np.ndarray, session: SolveSession
             for q in np.flatnonzero(avail).tolist():
                 x[q] = S[q] * res[q].candidates[k]
             cands.append((x, avail))
-        wit = upper_from(pg, cands, lower, Witness.empty(pts.lay, g.size))
+        wit = upper_from(pg, cands, lower, start_witness(pg))
         for j, i in enumerate(g.tolist()):
             out[i] = _FirstPass(res[j], P[j], S[j], wit, j)
     return out
@@ -266,6 +268,8 @@ def _point(pt: Points, plan: _Plan, i: int, first: _FirstPass | None, mode: str,
     kappa: list[float] | None = None
     upper: float = np.inf
     best: Deltas | None = None
+    if lay.has_real and first is None:  # a real parameter alone: its exact explicit Delta
+        upper, best = start_witness(pt).point(0)
     use_sdp = mode != "bisection" and single and V > 0
     inaccurate = False
     n_fixed = lay.n_out if pt.noise == "per_output" else 1  # noise blocks (V > 0)
@@ -298,7 +302,7 @@ def _point(pt: Points, plan: _Plan, i: int, first: _FirstPass | None, mode: str,
             P = fm.P[0]
             if mode == "bisection" or not single:
                 out = engine_bisection(fm, session, rtol, single)
-            elif not fm.fixed_blocks:
+            elif not fm.fixed_blocks and not lay.has_real:
                 out = engine_eig(fm)[0]
             else:
                 out = engine_sdp(fm, session)[0]
@@ -474,7 +478,8 @@ def _run(me: np.ndarray, W: np.ndarray, Zt: np.ndarray, noise_bound: float | np.
     reason[injected] = "injected failure (testing hook)"
     idx = np.flatnonzero(finite & ~injected)
     if idx.size:
-        pts = Points.from_data(M[idx], W_a[idx], Zt_a[idx], V[idx], lay, structure.noise)
+        Vi = v0_floor(V[idx], Zt_a[idx]) if lay.has_real else V[idx]
+        pts = Points.from_data(M[idx], W_a[idx], Zt_a[idx], Vi, lay, structure.noise)
         for i, r in zip(idx, _solve_points(pts, mode, rtol, session, time_limit), strict=True):
             lower[i], upper[i], status[i], method[i] = r.lower, r.upper, r.status, r.method
             deltas[i], reason[i] = r.deltas, r.reason
@@ -500,7 +505,9 @@ def required_gamma(me: np.ndarray, W: np.ndarray, Zt: np.ndarray,
     directly, Clarabel called without cvxpy's per-solve canonicalization; falls back to cvxpy for
     Hermitian D-scales) or 'cvxpy' (the problem built once with cvxpy Parameters, re-solved per
     frequency). The first SDP pass of all points is evaluated as one stack (see the package
-    docstring). ``time_limit``: seconds of solver time per frequency point (default 10).
+    docstring). Real scalar blocks (``Block('real', ...)``, :meth:`Structure.real`): D-G scalings
+    (mixed mu, see the package docstring), a real explicit Delta; V = 0 points are
+    solved with a relative noise floor there. ``time_limit``: seconds of solver time per frequency point (default 10).
     ``cache``: the built problems to reuse across calls (an :class:`LmiCache`, one per thread;
     default: a new one per call).
 

@@ -27,8 +27,11 @@ DEFAULT_BACKEND = "clarabel"  # the Clarabel-direct backend (no cvxpy); "cvxpy" 
 class Block:
     """One uncertainty block ``Delta_i`` mapping ``v_i`` (``shape[1]``) to ``u_i`` (``shape[0]``).
 
-    ``kind``: 'scalar' (complex scalar, 1x1), 'repeated' (``delta I_k``, ``shape=(k, k)``) or
-    'full' (complex matrix). Its bound is ``sigma_max(Delta_i) <= weight * gamma``.
+    ``kind``: 'scalar' (complex scalar, 1x1), 'repeated' (``delta I_k``, ``shape=(k, k)``),
+    'full' (complex matrix) or 'real' (a REAL scalar ``delta I_k``, ``shape=(k, k)``; k = 1 a real
+    parameter, k > 1 a real parameter entering with rank k). Its bound is
+    ``sigma_max(Delta_i) <= weight * gamma``. A real block gets a D-scale and a G-scale in the
+    certificate (mixed mu, D-G scalings; see the package docstring).
     """
 
     kind: str = "full"
@@ -36,18 +39,26 @@ class Block:
     weight: float = 1.0
 
     def __post_init__(self) -> None:
-        if self.kind not in ("scalar", "repeated", "full"):
+        if self.kind not in ("scalar", "repeated", "full", "real"):
             raise ValueError(f"unknown block kind {self.kind!r}")
         if self.kind == "scalar" and tuple(self.shape) != (1, 1):
             raise ValueError("a scalar block has shape (1, 1)")
-        if self.kind == "repeated" and self.shape[0] != self.shape[1]:
-            raise ValueError("a repeated scalar block is square")
+        if self.kind in ("repeated", "real") and self.shape[0] != self.shape[1]:
+            raise ValueError(f"a {self.kind} scalar block is square")
         if self.weight <= 0:
             raise ValueError("block weight must be positive")
 
     @property
+    def is_real(self) -> bool:
+        """A real (repeated) scalar block."""
+        return self.kind == "real"
+
+    @property
     def lmi_kind(self) -> str:
-        """'full' (scalar D-scale) or 'repeated' (Hermitian D-scale)."""
+        """'full' (scalar D-scale), 'repeated' (Hermitian D-scale), 'real' (real scalar: scalar D
+        and G scales) or 'realrep' (real repeated scalar: Hermitian D and G scales)."""
+        if self.kind == "real":
+            return "realrep" if self.shape[0] > 1 else "real"
         return "repeated" if self.kind == "repeated" and self.shape[0] > 1 else "full"
 
 
@@ -75,6 +86,17 @@ class Structure:
     def repeated(k: int) -> Structure:
         """One repeated complex scalar ``delta I_k`` (a parameter entering with rank k)."""
         return Structure((Block("repeated" if k > 1 else "scalar", (k, k)),))
+
+    @staticmethod
+    def real(k: int = 1, weight: float = 1.0) -> Structure:
+        """One REAL (repeated) scalar ``delta I_k``, ``|delta| <= weight gamma``: a physical
+        parameter (a mass, a stiffness) that can only change by a real amount."""
+        return Structure((Block("real", (k, k), weight),))
+
+    @property
+    def has_real(self) -> bool:
+        """Some block is a real scalar."""
+        return self.blocks is not None and any(b.is_real for b in self.blocks)
 
     def resolve(self, nu: int, nv: int) -> tuple[Block, ...]:
         """Blocks checked against the Delta channel size (``nu`` outputs, ``nv`` inputs)."""
@@ -108,8 +130,14 @@ class Layout:
 
     @property
     def single(self) -> bool:
-        """One uncertainty block with a scalar D-scale (one SDP per point, no bisection)."""
-        return len(self.blocks) == 1 and self.blocks[0].lmi_kind == "full"
+        """One uncertainty block with a scalar D-scale (one SDP per point, no bisection); a real
+        scalar (k = 1) also has a free G-scale."""
+        return len(self.blocks) == 1 and self.blocks[0].lmi_kind in ("full", "real")
+
+    @property
+    def has_real(self) -> bool:
+        """Some block is a real scalar (D-G scalings; no exact eigenvalue shortcut)."""
+        return any(b.is_real for b in self.blocks)
 
 
 def layout(me_shape: Sequence[int], n_in: int, n_out: int, structure: Structure) -> Layout:
@@ -200,6 +228,18 @@ def check_noise_bound(noise_bound: float | np.ndarray, n_freq: int | None = None
         raise ValueError(f"noise bound V must be finite and >= 0 (m); got {vals[:3].tolist()} at "
                          f"{where.size} of {V.size} point(s) (first index {int(where[0])})")
     return np.array(V, dtype=float)
+
+
+# relative noise floor (of max |Zt|) used for V = 0 points of a structure with a real block: the
+# data pin delta there, and a delta that is real in exact arithmetic is real only to rounding
+REAL_V0_FLOOR = 1e-6
+
+
+def v0_floor(V: np.ndarray, Zt: np.ndarray) -> np.ndarray:
+    """Noise bound (m) of points with a real block: V, or :data:`REAL_V0_FLOOR` times
+    ``max_k |Zt_k|`` where V = 0 (f,)."""
+    zmax = np.max(np.abs(Zt), axis=1) if Zt.size else np.zeros(V.shape)
+    return np.where(V > 0, V, REAL_V0_FLOOR * zmax)
 
 
 @dataclass

@@ -4,6 +4,9 @@ From a kernel vector of the certificate to a structured Delta (:func:`deltas_fro
 Gauss-Newton polish until ``F_u(Me, Delta) W`` -- evaluated directly, not through the LMI --
 reproduces the data within the noise bound (:func:`polish`), an SQP refinement where a gap to the
 certificate is left (:func:`refine`), and the choice among the candidates (:func:`upper_from`).
+A real block's Delta is real (real fit, polish and refinement in real unknowns); a real parameter
+that is the only block gets its exact smallest Delta (:func:`exact_single_real`, the start of :func:`upper_from` via
+:func:`start_witness`).
 Stacked over points (leading axis); a Delta is a list over the blocks of arrays (f, p_i, q_i).
 """
 
@@ -26,6 +29,10 @@ Deltas = list[np.ndarray]  # per block: (f, p_i, q_i)
 _EPS = float(np.finfo(float).eps)
 # an explicit Delta within this relative distance of the certificate closes the gap
 CLOSE_RTOL = 1e-7
+# candidates inside the noise set up to this relative slack are polished into it (exact real witness)
+_SLACK = 1e-6
+# blocks that are a scalar times the identity (one parameter each)
+_SCALAR_KINDS = ("scalar", "repeated", "real")
 
 
 def noise_ok(r: np.ndarray, V: np.ndarray, noise: str, scale: np.ndarray, rtol: float = 0.0,
@@ -98,7 +105,7 @@ def gamma_of(lay: Layout, deltas: Deltas) -> np.ndarray:
     """Size of each point's Delta in units of gamma: ``max_i ||Delta_i|| / w_i`` (f,)."""
     g = np.zeros(deltas[0].shape[0]) if deltas else np.zeros(0)
     for b, d in zip(lay.blocks, deltas, strict=True):
-        nrm = np.abs(d[:, 0, 0]) if b.kind in ("scalar", "repeated") else np.linalg.norm(
+        nrm = np.abs(d[:, 0, 0]) if b.kind in _SCALAR_KINDS else np.linalg.norm(
             d, 2, axis=(1, 2))
         g = np.maximum(g, nrm / b.weight)
     return g
@@ -118,8 +125,10 @@ def deltas_from_x(pts: Points, x: np.ndarray) -> tuple[Deltas, np.ndarray]:
         zero = nv2 == 0.0
         valid &= ~(zero & (np.linalg.norm(ui, axis=1) > 0))
         den = np.where(zero, 1.0, nv2)
-        if b.kind in ("scalar", "repeated"):
+        if b.kind in _SCALAR_KINDS:
             delta = np.where(zero, 0.0, np.sum(vi.conj() * ui, axis=1) / den)
+            if b.is_real:  # the real least-squares fit of u = delta v
+                delta = delta.real + 0j
             d = delta[:, None, None] * np.eye(b.shape[0], dtype=complex)
         else:
             d = ui[:, :, None] * vi.conj()[:, None, :] / den[:, None, None]
@@ -174,7 +183,7 @@ def polish(pts: Points, deltas: Deltas, live: np.ndarray, iters: int = 8
         for bi, (b, us, vs) in enumerate(zip(lay.blocks, lay.u_slices, lay.v_slices,
                                              strict=True)):
             Lb, vb = L[:, :, us], v[:, vs]
-            if b.kind in ("scalar", "repeated"):
+            if b.kind in _SCALAR_KINDS:
                 cols.append((Lb @ vb[:, :, None])[:, :, 0])
                 where.append((bi, -1, -1))
             else:
@@ -186,8 +195,19 @@ def polish(pts: Points, deltas: Deltas, live: np.ndarray, iters: int = 8
         n_par = J.shape[2]
         step = np.zeros((ix.size, n_par), complex)
         zero = V == 0
-        if np.any(zero):
+        # the imaginary part of a real block's parameter is not free
+        cplx = np.array([not lay.blocks[bi].is_real for bi, _, _ in where], dtype=bool)
+        real_any = not bool(np.all(cplx))
+        if np.any(zero) and not real_any:
             step[zero] = _lstsq(J[zero], dz[zero])  # r must vanish: complex equations
+        elif np.any(zero):  # the same equations in real unknowns
+            Jz, dzz = J[zero], dz[zero]
+            Ar0 = np.concatenate([np.concatenate([Jz.real, -Jz.imag[:, :, cplx]], axis=2),
+                                  np.concatenate([Jz.imag, Jz.real[:, :, cplx]], axis=2)], axis=1)
+            xr0 = _lstsq(Ar0, np.concatenate([dzz.real, dzz.imag], axis=1))
+            st0 = xr0[:, :n_par].astype(complex)
+            st0[:, cplx] += 1j * xr0[:, n_par:]
+            step[zero] = st0
         pos = ~zero
         if np.any(pos):
             # |r_k| <= V is one REAL constraint per output (per_output) or one in total
@@ -204,9 +224,11 @@ def polish(pts: Points, deltas: Deltas, live: np.ndarray, iters: int = 8
                 nr = np.linalg.norm(rp, axis=1)
                 a_rows = (rp.conj() / nr[:, None])[:, None, :] @ Jp
                 rhs = (nr - np.linalg.norm(rp - dzp, axis=1))[:, None]
-            Ar = np.concatenate([a_rows.real, -a_rows.imag], axis=2)
+            Ar = np.concatenate([a_rows.real, -a_rows.imag[:, :, cplx]], axis=2)
             xr = _lstsq(Ar, rhs)
-            step[pos] = xr[:, :n_par] + 1j * xr[:, n_par:]
+            stp = xr[:, :n_par].astype(complex)
+            stp[:, cplx] += 1j * xr[:, n_par:]
+            step[pos] = stp
         for col, (bi, a, c) in enumerate(where):
             if a < 0:
                 deltas[bi][ix] = deltas[bi][ix] + step[:, col, None, None] * np.eye(
@@ -231,19 +253,31 @@ def refine(pts: Points, deltas: Deltas) -> Deltas | None:
     nb = th0.size
     V = float(pts.V[0])
     sc = float(np.max(pts.scale[0])) if V == 0 else V
-
+    # unknowns: the real parts, the imaginary parts of the complex blocks only, the bound t
+    ci = np.array([i for i, b in enumerate(lay.blocks) if not b.is_real], dtype=int)
+    ni = ci.size
     eyes = [np.eye(b.shape[0], dtype=complex)[None] for b in lay.blocks]
 
+    def parts(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        im = np.zeros(nb)
+        im[ci] = x[nb: nb + ni]
+        return x[:nb], im
+
     def mats(x: np.ndarray) -> Deltas:
-        th = g0 * (x[:nb] + 1j * x[nb: 2 * nb])
+        re, im = parts(x)
+        th = g0 * (re + 1j * im)
         return [t * e for t, e in zip(th, eyes, strict=True)]
+
+    def size2(x: np.ndarray) -> np.ndarray:
+        re, im = parts(x)
+        return re**2 + im**2
 
     def resid(x: np.ndarray) -> np.ndarray:
         r, _, _, ok = evaluate(pts, delta_matrix(lay, mats(x)))
         return r[0] / sc if ok[0] else np.full(lay.n_out, 1e3 + 0j)
 
     cons: list[dict[str, object]] = [
-        {"type": "ineq", "fun": lambda x: x[-1] * w**2 - (x[:nb] ** 2 + x[nb: 2 * nb] ** 2)}]
+        {"type": "ineq", "fun": lambda x: x[-1] * w**2 - size2(x)}]
     if V == 0:
         cons.append({"type": "eq",
                      "fun": lambda x: np.concatenate([resid(x).real, resid(x).imag])})
@@ -251,7 +285,7 @@ def refine(pts: Points, deltas: Deltas) -> Deltas | None:
         cons.append({"type": "ineq", "fun": lambda x: 1.0 - np.abs(resid(x)) ** 2})
     else:
         cons.append({"type": "ineq", "fun": lambda x: 1.0 - float(np.sum(np.abs(resid(x)) ** 2))})
-    x0 = np.concatenate([th0.real / g0, th0.imag / g0, [1.0]])
+    x0 = np.concatenate([th0.real / g0, th0.imag[ci] / g0, [1.0]])
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         res = minimize(lambda x: x[-1], x0, method="SLSQP", constraints=cons,
@@ -338,3 +372,109 @@ def explicit_delta(pts: Points, cands: Sequence[np.ndarray], lower: float, upper
                    Witness.of_point(pts.lay, upper, best))
     upper, best = w.point(0)
     return refine_gap(pts, lower, upper, best, session)
+
+
+# --------------------------------------------------------------------------------------------------
+# a real parameter alone: the exact explicit Delta
+
+
+def _poly_coeffs(pts: Points, i: int, k: int) -> tuple[np.ndarray, np.ndarray]:
+    """Ascending complex coefficients of ``d(delta) = det(I - delta M11)`` (k + 1,) and of
+    ``n_j(delta) = d(delta) r_j(delta)`` (n_out, k + 1) at point i (one block, k x k)."""
+    M11, m12w, M21, c = pts.M11[i], pts.M12W[i], pts.M21[i], pts.c[i]
+    if k == 1:
+        a = M11[0, 0]
+        d = np.array([1.0, -a])
+        n = np.stack([c, -(c * a + M21[:, 0] * m12w[0])], axis=1)
+        return d, n
+    N = k + 1
+    nrm = float(np.linalg.norm(M11, 2))
+    rho = 1.0 / nrm if nrm > 0 else 1.0
+    z = rho * np.exp(2j * np.pi * np.arange(N) / N)
+    Ik = np.eye(k)
+    A = Ik[None] - z[:, None, None] * M11[None]
+    dv = np.linalg.det(A)
+    v = np.linalg.solve(A, np.broadcast_to(m12w, (N, k))[:, :, None])[:, :, 0]
+    r = c[None, :] - z[:, None] * (v @ M21.T)
+    nv = dv[:, None] * r
+    scale = rho ** -np.arange(N)
+    d = np.fft.fft(dv) / N * scale
+    n = (np.fft.fft(nv, axis=0) / N * scale[:, None]).T
+    return d, n
+
+
+def _real_roots(p: np.ndarray) -> np.ndarray:
+    """Real roots of a real polynomial with ascending coefficients p (near-real ones included)."""
+    p = np.real(p)
+    big = np.max(np.abs(p)) if p.size else 0.0
+    if big == 0:
+        return np.zeros(0)
+    nz = np.flatnonzero(np.abs(p) > 1e-14 * big)
+    p = p[: nz[-1] + 1]
+    if p.size < 2:
+        return np.zeros(0)
+    rts = np.roots(p[::-1])
+    keep = np.abs(rts.imag) <= 1e-6 * np.maximum(np.abs(rts), 1e-300)
+    return rts.real[keep]
+
+
+def _residual(pts: Points, i: int, k: int, delta: np.ndarray) -> np.ndarray:
+    """Residuals (g, n_out) of point i at real deltas (g,) (NaN at a pole)."""
+    A = np.eye(k)[None] - delta[:, None, None] * pts.M11[i][None]
+    with np.errstate(all="ignore"):
+        try:
+            v = np.linalg.solve(A, np.broadcast_to(pts.M12W[i], (delta.size, k))[:, :, None])
+        except np.linalg.LinAlgError:
+            v = np.full((delta.size, k, 1), np.nan + 0j)
+        return pts.c[i][None, :] - delta[:, None] * (v[:, :, 0] @ pts.M21[i].T)
+
+
+def _inside(r: np.ndarray, V: float, noise: str, slack: float) -> np.ndarray:
+    if noise == "per_output":
+        return np.all(np.abs(r) <= V * (1 + slack), axis=1)
+    return np.linalg.norm(r, axis=1) <= V * (1 + slack)
+
+
+def exact_single_real(pts: Points) -> Witness:
+    """The smallest real delta that explains each point's data (one real block, the only one),
+    verified by evaluating ``F_u(Me, delta) W`` directly; an empty witness (upper inf) where none
+    is found (no real delta explains the data, or rounding beyond the polish)."""
+    lay = pts.lay
+    wit = Witness.empty(lay, pts.f)
+    if len(lay.blocks) != 1 or not lay.blocks[0].is_real:
+        return wit
+    k = lay.blocks[0].shape[0]
+    for i in range(pts.f):
+        V = float(pts.V[i])
+        d, n = _poly_coeffs(pts, i, k)
+        dd = np.real(np.convolve(d, d.conj()))
+        if pts.noise == "per_output":
+            polys = [np.real(np.convolve(nj, nj.conj())) - V**2 * dd for nj in n]
+        else:
+            nn = np.sum([np.convolve(nj, nj.conj()) for nj in n], axis=0)
+            polys = [np.real(nn) - V**2 * dd]
+        cand = np.concatenate([np.zeros(1), *[_real_roots(p) for p in polys]])
+        cand = cand[np.argsort(np.abs(cand))]
+        ok = _inside(_residual(pts, i, k, cand), V, pts.noise, _SLACK)
+        cand = cand[ok][:4]
+        if cand.size == 0:
+            continue
+        sub = pts.take(np.full(cand.size, i))
+        d0 = [cand[:, None, None] * np.eye(k, dtype=complex)[None]]
+        d1, done = polish(sub, d0, np.ones(cand.size, dtype=bool))
+        if not np.any(done):
+            continue
+        g = np.where(done, gamma_of(lay, d1), np.inf)
+        j = int(np.argmin(g))
+        wit.upper[i] = g[j]
+        wit.deltas[0][i] = d1[0][j]
+        wit.have[i] = True
+    return wit
+
+
+def start_witness(pts: Points) -> Witness:
+    """The explicit Delta to start from: :func:`exact_single_real` when the only block is real,
+    else none (an empty witness)."""
+    if len(pts.lay.blocks) == 1 and pts.lay.blocks[0].is_real:
+        return exact_single_real(pts)
+    return Witness.empty(pts.lay, pts.f)
