@@ -11,7 +11,11 @@ Datasets (validated stage): ``frequency_hz`` (f), ``gamma`` (f), ``gamma_lower``
 ``shaft_orders_removed``); for measured detection ``healthy_frf`` (f, n_out) complex m/N (mean over
 the healthy sweeps), ``healthy_frf_var`` (f, n_out) m^2/N^2 (variance of that mean) and
 ``healthy_frf_dof`` (f, n_out) (its real degrees of freedom; inf = known); with the 'per-point' noise
-method ``noise_bound_per_point_m`` (f) m (``noise_bound_m`` is then its maximum).
+method ``noise_bound_per_point_m`` (f) m (``noise_bound_m`` is then its maximum). For the joint
+test (several healthy sweeps): ``benign_directions`` (q, f) complex m/N (benign directions learned
+from the healthy sweeps' spread), ``benign_direction_bound`` (q,) (bound on each coefficient's real
+and imaginary part) and the root attributes ``benign_kappa`` (relative error of the model's benign
+prediction carried in H0; absent: the default) and ``n_healthy`` (healthy sweeps).
 """
 
 from __future__ import annotations
@@ -59,6 +63,10 @@ class Baseline:
     healthy_frf_dof: np.ndarray | None = None
     shaft_orders_removed: int = 0
     noise_bound_per_point_m: np.ndarray | None = None
+    benign_directions: np.ndarray | None = None
+    benign_direction_bound: np.ndarray | None = None
+    benign_kappa: float | None = None
+    n_healthy: int = 1
     extra: dict[str, str] = field(default_factory=dict)
 
     @property
@@ -69,7 +77,8 @@ class Baseline:
 _ATTRS = ("rig_id", "rig_sha256", "run_id", "speed_rpm", "noise_bound_m", "noise_method",
           "noise_confidence", "uncertainty", "parameter", "enclose", "stage", "created_utc")
 _DATASETS = ("frequency_hz", "gamma", "gamma_lower", "model_frf", "input_phasor", "output_phasor",
-             "healthy_frf", "healthy_frf_var", "healthy_frf_dof", "noise_bound_per_point_m")
+             "healthy_frf", "healthy_frf_var", "healthy_frf_dof", "noise_bound_per_point_m", "benign_directions",
+             "benign_direction_bound")
 
 
 def write_baseline(baseline: Baseline, path: str | Path) -> None:
@@ -83,6 +92,9 @@ def write_baseline(baseline: Baseline, path: str | Path) -> None:
             h5.attrs[name] = getattr(baseline, name)
         h5.attrs["sweep_sha256"] = ",".join(baseline.sweep_sha256)
         h5.attrs["shaft_orders_removed"] = int(baseline.shaft_orders_removed)
+        h5.attrs["n_healthy"] = int(baseline.n_healthy)
+        if baseline.benign_kappa is not None:
+            h5.attrs["benign_kappa"] = float(baseline.benign_kappa)
         for k, v in baseline.extra.items():
             h5.attrs[f"x_{k}"] = v
         for name in _DATASETS:
@@ -118,6 +130,9 @@ def read_baseline(path: str | Path) -> Baseline:
         b = Baseline(sweep_sha256=[s for s in sweeps.split(",") if s], **values)  # type: ignore[arg-type]
         b.extra = {k[2:]: str(v) for k, v in h5.attrs.items() if k.startswith("x_")}
         b.shaft_orders_removed = int(h5.attrs.get("shaft_orders_removed", 0))
+        b.n_healthy = int(h5.attrs.get("n_healthy", 1))
+        if "benign_kappa" in h5.attrs:
+            b.benign_kappa = float(h5.attrs["benign_kappa"])
         for name in _DATASETS:
             if name in h5:
                 setattr(b, name, h5[name][()])
@@ -140,6 +155,15 @@ def read_baseline(path: str | Path) -> Baseline:
             var = b.healthy_frf_var
             if var is not None and np.any((var < 0) | np.isinf(var)):
                 raise InputError(p, "/healthy_frf_var", "variances must be >= 0 and finite (NaN: no estimate)")
+    bd, bb = b.benign_directions, b.benign_direction_bound
+    if (bd is None) != (bb is None):
+        raise InputError(p, "/benign_directions", "benign_directions and benign_direction_bound go together")
+    if bd is not None and bb is not None and b.frequency_hz is not None and (
+            bd.ndim != 2 or bd.shape[1] != len(b.frequency_hz) or bb.shape != (bd.shape[0],)):
+        raise InputError(p, "/benign_directions", f"shape {bd.shape} (bound {bb.shape}) does not match "
+                         f"frequency_hz ({len(b.frequency_hz)},)")
+    if b.benign_kappa is not None and not (np.isfinite(b.benign_kappa) and b.benign_kappa >= 0):
+        raise InputError(p, "/@benign_kappa", f"must be finite and >= 0, got {b.benign_kappa}")
     per = b.noise_bound_per_point_m
     if per is not None and (per.ndim != 1 or np.any(per < 0) or np.any(np.isinf(per))):
         raise InputError(p, "/noise_bound_per_point_m", "must be a 1-D array of values >= 0 (NaN: no estimate)")

@@ -270,12 +270,18 @@ def detect(
     plots: Annotated[bool, typer.Option(help="Write the detection plots.")] = True,
     confidence: Annotated[float, typer.Option(
         help="Family-wise confidence of measured detection (1 - false-alarm probability per sweep).")] = 0.99,
+    rule: Annotated[str | None, typer.Option(
+        "--rule", help="Verdict rule: joint (default with a measured baseline: one test over all points, benign "
+                       "change inside the rig's variability ranges allowed) or certified (per-point fault points).")
+    ] = None,
+    false_alarm: Annotated[float, typer.Option(
+        "--false-alarm", help="False-alarm probability per sweep of the joint test.")] = 0.01,
     plot_format: PlotFormatOpt = "png",
     fail_at: FailAtOpt = "",
     as_json: JsonOpt = False,
     force: ForceOpt = False,
 ) -> int:
-    """Steps 4-5: certified fault points, verdict, and the damage dynamics with its exact bound."""
+    """Steps 4-5: verdict (joint test or certified fault points) and the damage with its bound."""
     from rotorcheck import workflow
     from rotorcheck.baseline import read_baseline
     from rotorcheck.fileio import check_writable
@@ -288,7 +294,8 @@ def detect(
     base = read_baseline(base_path)
     cfg, mrun = workflow.load_rig_and_run(sweep, rig, run)
     workflow.check_baseline(base, cfg, mrun, base_path)
-    outcome = workflow.detect(cfg, base, mrun, fail_at=_fail_at(fail_at), confidence=confidence)
+    outcome = workflow.detect(cfg, base, mrun, fail_at=_fail_at(fail_at), confidence=confidence, rule=rule,
+                              false_alarm=false_alarm)
     report = outcome.report()
     plot_files = workflow.detection_plots(outcome, out, at, formats) if plots else []
     files = write_reports(report, out, plot_files)
@@ -298,9 +305,9 @@ def detect(
     err.print(f"{report['n_fault_points']} of {report['n_points']} points are fault points"
               + (f" (sweep p-value {report['p_value']:.3g}, {report['confidence']:.0%} family-wise)"
                  if "p_value" in report else ""))
-    line = workflow.anchored_summary(outcome)
-    if line:
-        err.print(line)
+    for line in (workflow.joint_summary(outcome), workflow.anchored_summary(outcome)):
+        if line:
+            err.print(line)
     for p_ in [*map(str, files), *plot_files]:
         err.print(f"wrote {p_}")
     if as_json:

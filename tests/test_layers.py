@@ -19,10 +19,12 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("rotorcheck", "rotorcheck.errors", "rotorcheck.units"),
     ("rotorcheck.fileio", "rotorcheck.resources"),
     ("rotorcheck.config",),
+    ("rotorcheck.variability",),  # benign parameter ranges over the config: above it, below fe/robust
     ("rotorcheck.fe", "rotorcheck.signal", "rotorcheck.robust"),  # numerics: FE, signal processing, robust
     ("rotorcheck.faults", "rotorcheck.sweep"),
     ("rotorcheck.sim",),  # simulators: above fe, faults and sweep
     ("rotorcheck.nominal",),
+    ("rotorcheck.signatures",),  # crack and benign change shapes by re-solving the model
     ("rotorcheck.baseline", "rotorcheck.report"),
     ("rotorcheck.workflow",),
     ("rotorcheck.cli",),

@@ -245,10 +245,17 @@ def test_solver_failure_at_one_point_is_reported_not_a_number(tmp_path: Path, ca
                      "--enclose", mode]) == EXIT_OK
         capsys.readouterr()
         rc = main(["detect", str(CR / "healthy_1000rpm_repeat.h5"), "--out", str(out2), "--json", "--no-plots",
-                   "--force", "--fail-at", "3"])
+                   "--force", "--fail-at", "3", "--rule", "certified"])
         rep = _json(capsys)
         assert rc == EXIT_INCONCLUSIVE, mode
         assert rep["status"][3] == "solver_failed" and rep["gamma_required"][3] == "nan"
+    # the joint test (the default with a measured baseline) uses every point's data, not the per-point
+    # solver: it still decides, and the failed point stays reported in the per-point arrays
+    rc = main(["detect", str(CR / "healthy_1000rpm_repeat.h5"), "--out", str(out2), "--json", "--no-plots",
+               "--force", "--fail-at", "3"])
+    rep = _json(capsys)
+    assert rc == EXIT_OK and rep["verdict_rule"].startswith("joint GLR")
+    assert rep["status"][3] == "solver_failed" and rep["gamma_required"][3] == "nan"
     assert main(["detect", str(CR / "healthy_1000rpm_repeat.h5"), "--out", str(out2), "--no-plots", "--force",
                  "--fail-at", "x"]) == 2
     assert "--fail-at" in capsys.readouterr().err

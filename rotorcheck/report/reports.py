@@ -96,6 +96,7 @@ def render_markdown(report: dict[str, Any], plots: list[str]) -> str:
         "",
         f"Rule: {report['verdict_rule']}.",
         "",
+        *_joint_section(report),
         "## Where",
         "",
         f"{report['n_fault_points']} of {report['n_points']} points are certified fault points "
@@ -115,6 +116,33 @@ def render_markdown(report: dict[str, Any], plots: list[str]) -> str:
     if plots:
         lines += ["", "## Plots", ""] + [f"- `{p}`" for p in plots]
     return "\n".join(lines) + "\n"
+
+
+def _joint_section(report: dict[str, Any]) -> list[str]:
+    """The joint test: statistic, the best candidate with its interval, benign parameters, detectable size."""
+    if "joint_statistic" not in report:
+        return []
+    lines = ["## Joint test", "",
+             f"T = {report['joint_statistic']:.4g}, threshold {report['joint_threshold']:.4g} at false-alarm rate "
+             f"{report['false_alarm']:g} (p = {report['joint_p_value']:.3g}); model-error fraction kappa = "
+             f"{report['benign_model_error']:g}; {report['learned_benign_directions']} benign directions learned "
+             "from healthy sweeps.", ""]
+    if report.get("best_element") is not None:
+        lo, hi = report["stiffness_loss_interval"]
+        lines += [f"Best candidate: element {report['best_element']}, stiffness loss "
+                  f"{100 * report['stiffness_loss']:.3g} % [{100 * lo:.3g}, {100 * hi:.3g}] (95 %, linearized).", ""]
+    if report.get("benign_parameters"):
+        lines += ["| benign parameter | estimate | 95 % interval | at range edge |", "|---|---:|---|---|"]
+        for b in report["benign_parameters"]:
+            lo, hi = b["interval"]
+            lines.append(f"| {b['name']} | {b['estimate']:+.4g} {b['unit']} | [{lo:+.4g}, {hi:+.4g}] | "
+                         f"{'yes' if b['at_range_edge'] else 'no'} |")
+        lines.append("")
+    els, det = report.get("candidate_elements") or [], report.get("detectable_stiffness_loss") or []
+    if els:
+        lines += ["Smallest stiffness loss this sweep could reveal (90 % power at the stated rate): "
+                  + ", ".join(f"element {e}: {100 * x:.3g} %" for e, x in zip(els, det)) + ".", ""]
+    return lines
 
 
 def _what_changed(report: dict[str, Any], f: np.ndarray, fault: np.ndarray, d: np.ndarray) -> list[str]:

@@ -93,6 +93,20 @@ class DetectionReport:
     damage_anchored_channel_error: FloatArray | None = None
     damage_anchored_noise_min_abs: FloatArray | None = None
     damage_anchored_noise_max_abs: FloatArray | None = None
+    # the joint test (verdict_rule names it when it decided)
+    joint_statistic: float | None = None  # T = max_e T_e (chi-square units)
+    joint_threshold: float | None = None  # T at which p = false_alarm
+    joint_p_value: float | None = None
+    false_alarm: float | None = None  # per-sweep false-alarm rate the threshold gives
+    candidate_elements: list[int] | None = None  # shaft elements tested (1-based)
+    element_statistic: list[float] | None = None  # T_e per candidate
+    best_element: int | None = None
+    stiffness_loss: float | None = None  # estimated loss of the best element's stiffness (fraction)
+    stiffness_loss_interval: list[float] | None = None  # 95 %, linearized
+    detectable_stiffness_loss: list[float] | None = None  # per candidate: 90 % power at false_alarm
+    benign_parameters: list[dict[str, Any]] | None = None  # {name, estimate, interval, unit, at_range_edge}
+    benign_model_error: float | None = None  # kappa: relative error of the model's benign prediction in H0
+    learned_benign_directions: int | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """The report.json document (arrays as numpy; :func:`rotorcheck.report.reports.render_json`)."""

@@ -1,0 +1,289 @@
+"""One joint test over every frequency point (and channel): is the new sweep's change from the healthy
+baseline benign, or benign plus a crack?
+
+The residual ``r = T_new - T_healthy`` (stacked over points and channels, m/N) is whitened by the
+noise of both sweeps, ``sigma_k^2 = var_new,k + var_healthy,k`` (``E|noise_k|^2``, variances of the
+mean FRFs). Two hypotheses:
+
+- H0: ``r = b(theta) + U c + e``: a benign change ``b(theta)`` predicted by re-solving the model at
+  real parameter values ``theta`` inside their configured box, plus data-learned benign directions
+  ``U`` (from several healthy sweeps) with bounded coefficients, plus noise; the model's own error in
+  predicting a benign change is carried as extra variance ``kappa^2 m_k^2`` at each point (``kappa``:
+  relative error of the prediction; ``m_k`` the size of the change there, :func:`change_scale`);
+- H1: the same plus ``a s_e``: a stiffness loss ``a >= 0`` (fraction) of candidate element ``e`` with
+  the model's signature ``s_e`` (FRF change per unit loss).
+
+Statistic: the generalized likelihood ratio ``T = max_e T_e``, ``T_e = min_H0 chi2 - min_H1,e chi2``
+(chi2 = the whitened residual norm, real degrees of freedom; H1 is solved on the model linearized
+at the H0 fit). Null distribution, stated: noise complex Gaussian with the given variances treated as
+known; nuisance interior to its box and locally linear; then ``T_e`` is a one-sided normal squared
+and ``max_e`` is computed exactly for the correlated candidates by seeded Monte Carlo over their
+correlation (not Bonferroni). The p-value and threshold follow; ``damage`` iff ``p < false_alarm``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.optimize import least_squares, lsq_linear
+from scipy.stats import norm
+
+#: how the joint verdict is made (report.json ``verdict_rule``)
+JOINT_RULE = ("joint GLR over all points and channels: damage iff P(max_e T_e >= T | H0) < false_alarm; H0 = "
+              "benign parameters inside their ranges (model re-solved) + learned benign directions + the model's "
+              "error in predicting them + noise of both sweeps; T_e = chi2(H0) - chi2(H0 + stiffness loss a >= 0 "
+              "in element e)")
+
+POWER_Z = float(norm.ppf(0.9))  # 90 % detection probability
+MC_DRAWS = 200_000
+MC_SEED = 20261124
+
+
+@dataclass(frozen=True)
+class BenignModel:
+    """Benign change predicted by the model: ``predict(theta)`` (n,) complex, m/N, with ``theta``
+    (p,) real inside ``[lo, hi]``; ``kappa`` the relative error of that prediction carried in H0."""
+
+    predict: Callable[[np.ndarray], np.ndarray]
+    lo: np.ndarray
+    hi: np.ndarray
+    names: tuple[str, ...]
+    kappa: float = 0.0
+    step: np.ndarray | float = 1e-4  # finite-difference step(s) of theta for the Jacobian (theta's units)
+
+
+@dataclass(frozen=True)
+class LearnedDirections:
+    """Benign directions learned from healthy sweeps: ``U`` (q, n) complex (m/N per unit coefficient,
+    unit whitened norm) and the bound ``c_max`` (q,) on each coefficient's real and imaginary part."""
+
+    U: np.ndarray
+    c_max: np.ndarray
+    singular_values: np.ndarray  # whitened, all components (for the report)
+    n_sweeps: int
+
+
+@dataclass
+class JointResult:
+    """The joint test of one sweep (see the module docstring)."""
+
+    statistic: float
+    threshold: float
+    p_value: float
+    false_alarm: float
+    damage: bool
+    elements: tuple[int, ...]
+    t_element: np.ndarray  # (n_e,) T_e
+    severity: np.ndarray  # (n_e,) estimated stiffness loss a_e (fraction, >= 0)
+    severity_se: np.ndarray  # (n_e,) its standard error (linearized)
+    detectable: np.ndarray  # (n_e,) smallest loss detected with 90 % power at false_alarm (fraction)
+    best: int  # index into elements
+    theta: np.ndarray  # (p,) benign parameters fitted under H0
+    theta_se: np.ndarray  # (p,) their standard errors (linearized, inf where on a bound)
+    theta_names: tuple[str, ...]
+    theta_at_bound: np.ndarray  # (p,) bool
+    chi2_h0: float
+    dof_h0: int
+    learned: int  # number of learned directions used
+    kappa: float
+    n_points: int
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def severity_interval(self) -> tuple[float, float]:
+        """95 % interval of the best candidate's loss (fraction), clipped at 0."""
+        a, s = float(self.severity[self.best]), float(self.severity_se[self.best])
+        return max(0.0, a - 1.96 * s), a + 1.96 * s
+
+
+def _ri(z: np.ndarray) -> np.ndarray:
+    return np.concatenate([z.real, z.imag], axis=-1)
+
+
+def change_scale(residual: np.ndarray, var_total: np.ndarray, predicted: np.ndarray, halfwidth: int = 2
+                 ) -> np.ndarray:
+    """Size of the change at each point (m/N) that the model-error term scales with: the larger of the
+    predicted benign change and the observed change beyond the noise, the largest over +-``halfwidth``
+    points (a model's error moves with a resonance, not point by point)."""
+    seen = np.sqrt(np.maximum(np.abs(residual) ** 2 - var_total, 0.0))
+    m = np.maximum(np.abs(predicted), seen)
+    if halfwidth <= 0 or m.size == 0:
+        return m
+    pad = np.pad(m, halfwidth, mode="edge")
+    return np.max(np.lib.stride_tricks.sliding_window_view(pad, 2 * halfwidth + 1), axis=1)
+
+
+def whitening(var_total: np.ndarray) -> np.ndarray:
+    """Real weights ``sqrt(2 / sigma^2)`` (2n,) for the stacked [Re, Im] residual."""
+    w = np.sqrt(2.0 / np.asarray(var_total, dtype=float))
+    return np.concatenate([w, w])
+
+
+def learn_directions(deviations: Sequence[np.ndarray], var_total: np.ndarray, margin: float = 1.5,
+                     noise_factor: float = 4.0) -> LearnedDirections | None:
+    """Benign directions from healthy sweeps' deviations (each (n,) complex, m/N, e.g. sweep minus
+    the healthy mean), whitened by ``var_total``. A component is kept when its squared singular value
+    exceeds ``noise_factor`` times the noise's expected largest one ((sqrt(2n) + sqrt(K))^2, real
+    dims); coefficients bounded by ``margin`` times the largest seen. None when nothing exceeds noise."""
+    D = np.array(deviations, dtype=complex)  # (K, n)
+    if D.shape[0] < 2:
+        return None
+    w = np.sqrt(2.0 / np.asarray(var_total, dtype=float))
+    X = D * w  # whitened complex, each complex entry has E|x|^2 = 2 (real parts unit variance)
+    # complex SVD over sweeps: rows are sweeps
+    _, s, Vh = np.linalg.svd(X, full_matrices=False)
+    n, K = X.shape[1], X.shape[0]
+    floor = noise_factor * (np.sqrt(2 * n) + np.sqrt(2 * K)) ** 2 / 2.0
+    keep = s**2 > floor
+    if not np.any(keep):
+        return None
+    V = Vh[keep]  # (q, n), unit norm in whitened complex space
+    U = V / w  # back to m/N: whitened U has unit norm
+    coef = X @ V.conj().T  # (K, q)
+    c_max = margin * np.maximum(np.max(np.abs(coef.real), axis=0), np.max(np.abs(coef.imag), axis=0))
+    return LearnedDirections(U=U, c_max=np.maximum(c_max, 1.0), singular_values=s, n_sweeps=K)
+
+
+def _max_one_sided(C: np.ndarray, draws: int, seed: int) -> np.ndarray:
+    """Sorted Monte-Carlo draws of ``max_e max(g_e, 0)^2`` for ``g ~ N(0, C)``."""
+    L = np.linalg.cholesky(C + 1e-12 * np.eye(C.shape[0]))
+    rng = np.random.default_rng(seed)
+    g = rng.standard_normal((draws, C.shape[0])) @ L.T
+    return np.sort(np.max(np.maximum(g, 0.0), axis=1) ** 2)
+
+
+def joint_test(residual: np.ndarray, var_total: np.ndarray, signatures: np.ndarray,
+               elements: Sequence[int], benign: BenignModel | None = None,
+               learned: LearnedDirections | None = None, false_alarm: float = 0.01,
+               draws: int = MC_DRAWS, seed: int = MC_SEED) -> JointResult:
+    """The joint GLR test (module docstring). ``residual`` (n,) complex m/N; ``var_total`` (n,) m^2/N^2;
+    ``signatures`` (n_e, n) complex m/N per unit stiffness loss of each candidate element."""
+    if not 0.0 < false_alarm < 1.0:
+        raise ValueError(f"false_alarm must be in (0, 1), got {false_alarm}")
+    r = np.asarray(residual, dtype=complex).ravel()
+    var = np.asarray(var_total, dtype=float).ravel()
+    S = np.asarray(signatures, dtype=complex).reshape(len(elements), r.size)
+    notes: list[str] = []
+    p = 0 if benign is None else len(benign.lo)
+    q = 0 if learned is None else learned.U.shape[0]
+    U = learned.U if learned is not None else np.zeros((0, r.size), dtype=complex)
+
+    def model_ri(x: np.ndarray) -> np.ndarray:
+        b = np.zeros_like(r)
+        if p:
+            assert benign is not None
+            b = b + benign.predict(x[:p])
+        if q:
+            c = x[p:p + q] + 1j * x[p + q:]
+            b = b + c @ U
+        return b
+
+    lo = np.concatenate([benign.lo if benign is not None else [], -learned.c_max if learned else [],
+                         -learned.c_max if learned else []])
+    hi = -lo if benign is None else np.concatenate([benign.hi, learned.c_max if learned else [],
+                                                   learned.c_max if learned else []])
+    if benign is None and learned is not None:
+        hi = np.concatenate([learned.c_max, learned.c_max])
+    x0 = np.zeros(lo.size)
+    if benign is not None:
+        x0[:p] = np.clip(0.0, benign.lo, benign.hi)
+    kappa = benign.kappa if benign is not None else 0.0
+
+    def jac_at(x: np.ndarray, w: np.ndarray) -> np.ndarray:
+        J = np.zeros((2 * r.size, x.size))
+        if p:
+            assert benign is not None
+            b0 = benign.predict(x[:p])
+            steps = np.broadcast_to(np.asarray(benign.step, dtype=float), (p,))
+            for j in range(p):
+                h = float(steps[j]) if x[j] + steps[j] <= hi[j] else -float(steps[j])
+                xj = x[:p].copy()
+                xj[j] += h
+                J[:, j] = _ri((benign.predict(xj) - b0) / h) * w
+        if q:
+            J[:, p:p + q] = _ri(U).T * w[:, None]
+            J[:, p + q:] = _ri(1j * U).T * w[:, None]
+        return J
+
+    w = whitening(var)
+    theta = x0
+    if lo.size:
+        # start from the bounded linear fit at x0 as well as from x0 (a large change such as E at the edge
+        # of its range is far outside the first-order region; the better end point is kept)
+        lin = lsq_linear(jac_at(x0, w), _ri(r - model_ri(x0)) * w, bounds=(lo - x0, hi - x0), method="bvls")
+        starts = [x0, np.clip(x0 + lin.x, lo, hi)]
+        for _ in range(2 if kappa > 0 else 1):  # refit once with the model-error variance
+            def fun(x: np.ndarray, ww: np.ndarray = w) -> np.ndarray:
+                return (_ri(r - model_ri(x))) * ww
+
+            sols = [least_squares(fun, x_s, bounds=(lo, hi), jac=lambda x, ww=w: -jac_at(x, ww),
+                                  x_scale="jac", method="trf", max_nfev=60) for x_s in starts]
+            theta = min(sols, key=lambda sl: float(sl.cost)).x
+            starts = [theta]
+            if kappa > 0 and p:
+                assert benign is not None
+                w = whitening(var + kappa**2 * change_scale(r, var, benign.predict(theta[:p])) ** 2)
+    res0 = _ri(r - model_ri(theta)) * w if lo.size else _ri(r) * w
+    chi2_h0 = float(res0 @ res0)
+    J = jac_at(theta, w) if lo.size else np.zeros((2 * r.size, 0))
+    at_bound = np.zeros(lo.size, dtype=bool)
+    if lo.size:
+        span = np.maximum(hi - lo, 1e-300)
+        at_bound = (theta - lo <= 1e-6 * span) | (hi - theta <= 1e-6 * span)
+    # free nuisance columns: the linearized H0 tangent space (bound-active ones held)
+    Jf = J[:, ~at_bound]
+    Sw = _ri(S) * w  # (n_e, 2n)
+    if Jf.shape[1]:
+        Q, _ = np.linalg.qr(Jf)
+        Sp = Sw - (Sw @ Q) @ Q.T
+        rp = res0 - Q @ (Q.T @ res0)
+    else:
+        Sp, rp = Sw, res0
+    nrm = np.linalg.norm(Sp, axis=1)
+    ok = nrm > 1e-12 * np.maximum(np.linalg.norm(Sw, axis=1), 1e-300)
+    z = np.where(ok, (Sp @ rp) / np.where(ok, nrm, 1.0), 0.0)
+    t_el = np.maximum(z, 0.0) ** 2
+    sev = np.where(ok, np.maximum(z, 0.0) / np.where(ok, nrm, 1.0), 0.0)
+    se = np.where(ok, 1.0 / np.where(ok, nrm, 1.0), np.inf)
+    # the nuisance's box: T_e from the bounded linear problem (a >= 0, every nuisance inside its box);
+    # where the crack would need benign values outside the ranges this is what separates them
+    if lo.size:
+        for e in range(len(elements)):
+            A = np.column_stack([J, Sw[e]])
+            lb = np.concatenate([lo - theta, [0.0]])
+            ub = np.concatenate([hi - theta, [np.inf]])
+            fit = lsq_linear(A, res0, bounds=(lb, ub), method="bvls")
+            t_el[e] = max(0.0, chi2_h0 - float(fit.fun @ fit.fun))
+            sev[e] = float(fit.x[-1])
+    Un = Sp / np.where(ok, nrm, 1.0)[:, None]
+    C = Un @ Un.T
+    C[~ok, :] = 0.0
+    C[:, ~ok] = 0.0
+    C[np.diag_indices_from(C)] = 1.0
+    null = _max_one_sided(C, draws, seed)
+    stat = float(np.max(t_el)) if t_el.size else 0.0
+    n_ge = null.size - np.searchsorted(null, stat, side="left")
+    p_value = float((n_ge + 1) / (null.size + 1))
+    thr = float(np.quantile(null, 1.0 - false_alarm))
+    detectable = np.where(ok, (np.sqrt(thr) + POWER_Z) / np.where(ok, nrm, 1.0), np.inf)
+    best = int(np.argmax(t_el)) if np.any(t_el > 0) else int(np.argmin(detectable))
+    theta_se = np.full(p, np.inf)
+    if p:
+        F = J[:, :p]
+        free = ~at_bound[:p]
+        if np.any(free):
+            cov = np.linalg.pinv(F[:, free].T @ F[:, free])
+            theta_se[free] = np.sqrt(np.maximum(np.diag(cov), 0.0))
+    if np.any(at_bound[:p]) and benign is not None:
+        names = ", ".join(n for n, b in zip(benign.names, at_bound[:p]) if b)
+        notes.append(f"benign parameters at the edge of their range: {names} (the change may exceed the range)")
+    return JointResult(
+        statistic=stat, threshold=thr, p_value=p_value, false_alarm=false_alarm,
+        damage=bool(p_value < false_alarm), elements=tuple(int(e) for e in elements), t_element=t_el,
+        severity=sev, severity_se=se, detectable=detectable, best=best, theta=theta[:p],
+        theta_se=theta_se, theta_names=benign.names if benign is not None else (),
+        theta_at_bound=at_bound[:p], chi2_h0=chi2_h0, dof_h0=int(2 * r.size - int(np.count_nonzero(~at_bound))),
+        learned=q, kappa=kappa, n_points=r.size, notes=notes,
+    )
