@@ -369,7 +369,8 @@ def validate(
     if not isinstance(V, float):  # per-point: every healthy run's own V(w), the largest per point
         V = np.max(np.array([noise_values(noise_bound, r) for r in runs], dtype=float), axis=0)
     res = validation.validate(model.me, [r.W for r in runs], [r.Zt for r in runs], V,
-                              enclose="system" if enclose == "measured" else enclose, fail_at=fail_at)
+                              enclose="system" if enclose == "measured" else enclose,
+                              structure=parameter_structure(model, enclose), fail_at=fail_at)
     healthy = healthy_estimate(runs)
     learned, kappa = learn_benign(rig, runs) if enclose == "measured" else (None, None)
     base = Baseline(
@@ -388,6 +389,15 @@ def validate(
         benign_kappa=kappa, n_healthy=len(runs),
     )
     return ValidationOutcome(base, res, model, runs, rig)
+
+
+def parameter_structure(model: Any, enclose: str) -> Any:
+    """A named physical parameter (``uncertainty.structure: parametric``) is real: a real scalar block
+    (mixed mu, D-G scalings) where the LMI path solves it ('data'); None (one complex block) otherwise
+    ('system'/'measured' enclose through the complex closed form, a relaxation the report notes)."""
+    from rotorcheck.robust.mu import Structure
+
+    return Structure.real() if model.structure == "parametric" and enclose == "data" else None
 
 
 def _dof(run: MeasuredRun) -> np.ndarray:
@@ -608,7 +618,8 @@ def detect(
             notes.append("the sweep stores no per-period phasors: shaft-speed harmonics (1X, 2X, ...) could not "
                          "be removed; with a free-running start angle they may show as differences near kX")
     else:
-        det = validation.detect(model.me, run.W, run.Zt, _baseline_v(baseline, run), baseline.gamma, fail_at=fail_at)
+        det = validation.detect(model.me, run.W, run.Zt, _baseline_v(baseline, run), baseline.gamma,
+                                parameter_structure(model, baseline.enclose), fail_at=fail_at)
         ver = validation.verdict(det.fault, det.status, baseline.gamma_status)
     damage = identify.damage_dynamics(E[:, 0, 0], E[:, 0, 1], E[:, 1, 0], E[:, 1, 1], T)
     if model.structure in ("additive", "multiplicative"):
@@ -758,34 +769,38 @@ def joint_detection(rig: RigConfig, Th: np.ndarray, var_h: np.ndarray, run: Meas
 
 
 def learn_benign(rig: RigConfig, runs: list[MeasuredRun], false_alarm: float = 0.01) -> tuple[Any, float]:
-    """From several healthy sweeps: the benign directions their spread shows (beyond the model's benign
-    parameters) and the model-error fraction kappa, the smallest of :data:`KAPPA_GRID` under which no
-    sweep, left out and tested against the others, is called damage. One sweep: (None, KAPPA_NOMINAL)."""
+    """From several healthy sweeps: benign directions that the model's benign parameters do not explain
+    (the principal directions of what is left of each sweep's deviation from the mean after fitting the
+    parameters inside their ranges), and the model-error fraction kappa: the smallest of
+    :data:`KAPPA_GRID` under which no sweep, left out and tested against the others (the directions
+    learned without it), is called damage. One sweep, or fewer than 3: (None or the directions,
+    :data:`KAPPA_NOMINAL`)."""
     from rotorcheck.robust.joint import learn_directions
 
     if len(runs) < 2:
         return None, KAPPA_NOMINAL
     ests = [frf_estimate(r) for r in runs]
-    mean = np.mean([e.frf[:, 0] for e in ests], axis=0)
+    frfs = [e.frf[:, 0] for e in ests]
+    mean = np.mean(frfs, axis=0)
+    var_mean = np.sum([e.var[:, 0] for e in ests], axis=0) / len(ests) ** 2
     var_one = np.mean([e.var[:, 0] for e in ests], axis=0)
-    learned = learn_directions([e.frf[:, 0] - mean for e in ests], 2.0 * var_one)
+    left = [joint_detection(rig, mean, var_mean, r, 0.0, None, false_alarm).unexplained for r in runs]
+    learned = learn_directions(left, 2.0 * var_one)
     if len(runs) < 3:
         return learned, KAPPA_NOMINAL
-    kappa = KAPPA_GRID[-1]
     for k_try in KAPPA_GRID:
         ok = True
         for i, r in enumerate(runs):
-            rest = [e for j, e in enumerate(ests) if j != i]
-            c = np.mean([e.frf[:, 0] for e in rest], axis=0)
-            v = np.sum([e.var[:, 0] for e in rest], axis=0) / len(rest) ** 2
-            lrn = learn_directions([e.frf[:, 0] - c for e in rest], 2.0 * var_one)
+            rest = [j for j in range(len(runs)) if j != i]
+            c = np.mean([frfs[j] for j in rest], axis=0)
+            v = np.sum([ests[j].var[:, 0] for j in rest], axis=0) / len(rest) ** 2
+            lrn = learn_directions([left[j] for j in rest], 2.0 * var_one)
             if joint_detection(rig, c, v, r, k_try, lrn, false_alarm).damage:
                 ok = False
                 break
         if ok:
-            kappa = k_try
-            break
-    return learned, kappa
+            return learned, k_try
+    return learned, KAPPA_GRID[-1]
 
 
 def joint_summary(outcome: DetectionOutcome) -> str:

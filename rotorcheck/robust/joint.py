@@ -89,6 +89,7 @@ class JointResult:
     learned: int  # number of learned directions used
     kappa: float
     n_points: int
+    unexplained: np.ndarray  # (n,) complex m/N: the change left after the H0 fit (benign + learned)
     notes: list[str] = field(default_factory=list)
 
     @property
@@ -285,5 +286,6 @@ def joint_test(residual: np.ndarray, var_total: np.ndarray, signatures: np.ndarr
         severity=sev, severity_se=se, detectable=detectable, best=best, theta=theta[:p],
         theta_se=theta_se, theta_names=benign.names if benign is not None else (),
         theta_at_bound=at_bound[:p], chi2_h0=chi2_h0, dof_h0=int(2 * r.size - int(np.count_nonzero(~at_bound))),
-        learned=q, kappa=kappa, n_points=r.size, notes=notes,
+        learned=q, kappa=kappa, n_points=r.size, unexplained=r - model_ri(theta) if lo.size else r.copy(),
+        notes=notes,
     )

@@ -154,6 +154,7 @@ def _lstsq(A: np.ndarray, b: np.ndarray) -> np.ndarray:
     return (herm(Vh) @ y[:, :, None])[:, :, 0]
 
 
+@np.errstate(over="ignore", divide="ignore", invalid="ignore")  # diverging candidates are rejected by evaluate
 def polish(pts: Points, deltas: Deltas, live: np.ndarray, iters: int = 8
            ) -> tuple[Deltas, np.ndarray]:
     """Gauss-Newton on the Delta parameters of the ``live`` points until the residual lies in the
