@@ -132,7 +132,8 @@ def _close(a: Any, b: Any, path: str, problems: list[str]) -> None:
                 _close(x, y, f"{path}[{i}]", problems)
     elif isinstance(a, float) or isinstance(b, float):
         x, y = float(a), float(b)
-        if not (x == y or (math.isnan(x) and math.isnan(y)) or (math.isfinite(x) and math.isfinite(y) and abs(x - y) <= RTOL * max(abs(x), abs(y), 1e-300))):
+        same = x == y or (math.isnan(x) and math.isnan(y))
+        if not (same or (math.isfinite(x) and math.isfinite(y) and abs(x - y) <= RTOL * max(abs(x), abs(y), 1e-300))):
             # absolute floor for quantities that should be zero (imaginary parts, gamma 0)
             if not (abs(x) < 1e-9 * 1e-3 and abs(y) < 1e-9 * 1e-3):
                 problems.append(f"{path}: {x!r} != {y!r}")
