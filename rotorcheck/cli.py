@@ -217,6 +217,9 @@ def validate(
     run: RunOpt = None,
     at: Annotated[float | None, typer.Option("--at", help="Frequency (Hz) of the complex-plane plot.")] = None,
     plots: Annotated[bool, typer.Option(help="Write the validation plots.")] = True,
+    update: Annotated[bool, typer.Option(
+        "--update", help="Fit the rig's variability parameters to the healthy FRF (model updating) and predict "
+                         "benign change around the updated model.")] = False,
     plot_format: PlotFormatOpt = "png",
     fail_at: FailAtOpt = "",
     as_json: JsonOpt = False,
@@ -239,8 +242,11 @@ def validate(
         noise = workflow.fit_noise(runs[0])
         err.print(f"no noise fit in {out}: fitted V = {noise.value_m * 1e6:.4g} um ({noise.method}, "
                   f"{noise.confidence:.0%}) from {runs[0].path}")
-    outcome = workflow.validate(cfg, runs, noise, enclose=enclose, fail_at=_fail_at(fail_at))
+    outcome = workflow.validate(cfg, runs, noise, enclose=enclose, fail_at=_fail_at(fail_at), update=update)
     write_baseline(outcome.baseline, target)
+    line = workflow.update_summary(outcome)
+    if line:
+        err.print(line)
     files = workflow.validation_plots(outcome, out, at, formats) if plots else []
     res = outcome.result
     n_bad = outcome.n_not_enclosed

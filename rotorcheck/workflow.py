@@ -7,6 +7,7 @@ port with its exact bound). Frequencies in Hz, receptances in m/N, D_u in N/m.
 
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -310,6 +311,7 @@ class ValidationOutcome:
     model: Any  # rotorcheck.nominal.NominalModel
     runs: list[MeasuredRun]
     rig: RigConfig
+    update: Any = None  # rotorcheck.updating.Update (validate --update)
 
     @property
     def n_not_enclosed(self) -> int:
@@ -342,11 +344,14 @@ def validate(
     noise_bound: Any,
     enclose: str = "measured",
     fail_at: tuple[int, ...] = (),
+    update: bool = False,
 ) -> ValidationOutcome:
     """Step 3: gamma_h(w) enclosing every healthy run, and the measured healthy FRF with its noise.
 
     ``enclose``: 'measured' (default; gamma_h as for 'system', detection centred on the healthy
-    data), 'system' or 'data' (see :data:`ENCLOSE_MODES`).
+    data), 'system' or 'data' (see :data:`ENCLOSE_MODES`). ``update``: fit the rig's variability
+    parameters to the healthy FRF (:mod:`rotorcheck.updating`); the joint test then predicts benign
+    change around the updated model (stored in the baseline as ``updated_parameters``).
     """
     from rotorcheck.baseline import Baseline
     from rotorcheck.nominal import nominal_model
@@ -372,7 +377,15 @@ def validate(
                               enclose="system" if enclose == "measured" else enclose,
                               structure=parameter_structure(model, enclose), fail_at=fail_at)
     healthy = healthy_estimate(runs)
-    learned, kappa = learn_benign(rig, runs) if enclose == "measured" else (None, None)
+    upd = None
+    if update:
+        from rotorcheck.updating import update_parameters
+
+        if not rig.variability:
+            raise InputError(None, "--update", "the rig has no variability section: nothing to update")
+        upd = update_parameters(rig, first.frequency_hz, first.speed_rpm, healthy.frf[:, 0])
+    model_rig = updated_rig(rig, None if upd is None else upd.as_dict())
+    learned, kappa = learn_benign(model_rig, runs) if enclose == "measured" else (None, None)
     base = Baseline(
         rig_id=rig.rig_id, rig_sha256=rig.sha256(), sweep_sha256=[r.sha256 for r in runs],
         run_id=first.run_id, speed_rpm=first.speed_rpm, noise_bound_m=float(noise_bound.value_m),
@@ -388,7 +401,36 @@ def validate(
         benign_direction_bound=None if learned is None else learned.c_max,
         benign_kappa=kappa, n_healthy=len(runs),
     )
-    return ValidationOutcome(base, res, model, runs, rig)
+    if upd is not None:
+        base.extra["updated_parameters"] = json.dumps(upd.as_dict(), sort_keys=True)
+    return ValidationOutcome(base, res, model, runs, rig, upd)
+
+
+def updated_rig(rig: RigConfig, values: dict[str, float] | None) -> RigConfig:
+    """``rig`` with updated parameter values applied (the model benign change is predicted around)."""
+    if not values:
+        return rig
+    from rotorcheck.variability import with_benign
+
+    return with_benign(rig, values)[0]
+
+
+def baseline_updates(baseline: Any) -> dict[str, float] | None:
+    """The updated parameter values stored in a baseline, if any."""
+    doc = baseline.extra.get("updated_parameters")
+    return {str(k): float(v) for k, v in json.loads(doc).items()} if doc else None
+
+
+def update_summary(outcome: ValidationOutcome) -> str:
+    """One line: the updated parameters with standard errors and the FRF error before and after."""
+    u = outcome.update
+    if u is None:
+        return ""
+    parts = []
+    for n, v, e, b in zip(u.names, u.values, u.se, u.at_bound):
+        parts.append(f"{n} {100 * v:+.3g} % ({'range edge' if b or not np.isfinite(e) else f'se {100 * e:.2g} %'})")
+    return ("model updated to the healthy FRF: " + ", ".join(parts)
+            + f"; RMS relative FRF error {u.rms_before:.3g} -> {u.rms_after:.3g}")
 
 
 def parameter_structure(model: Any, enclose: str) -> Any:
@@ -660,7 +702,8 @@ def detect(
     joint = None
     if use_joint and Th is not None:
         kappa = KAPPA_NOMINAL if baseline.benign_kappa is None else float(baseline.benign_kappa)
-        joint = joint_detection(rig, Th, np.asarray(baseline.healthy_frf_var)[:, 0], run, kappa, _learned(baseline),
+        joint = joint_detection(updated_rig(rig, baseline_updates(baseline)), Th,
+                                np.asarray(baseline.healthy_frf_var)[:, 0], run, kappa, _learned(baseline),
                                 false_alarm, speed_rpm=baseline.speed_rpm)
         ver = joint_verdict(joint, ver)
         notes.extend(joint.notes)

@@ -25,6 +25,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("rotorcheck.sim",),  # simulators: above fe, faults and sweep
     ("rotorcheck.nominal",),
     ("rotorcheck.signatures",),  # crack and benign change shapes by re-solving the model
+    ("rotorcheck.updating",),  # model updating on the benign parameters
     ("rotorcheck.baseline", "rotorcheck.report"),
     ("rotorcheck.workflow",),
     ("rotorcheck.cli",),
