@@ -77,16 +77,16 @@ def sweep_run(truth: RigConfig, nominal: RigConfig, speed: float, noise: float, 
     return dataclasses.replace(run, Zt=run.Zt * g, output_var=run.output_var * g**2) if g != 1.0 else run
 
 
-def _baseline(runs: list[workflow.MeasuredRun], nominal: RigConfig) -> tuple[np.ndarray, np.ndarray, Any, float]:
+def _baseline(runs: list[workflow.MeasuredRun], nominal: RigConfig) -> tuple[np.ndarray, np.ndarray, Any]:
     h = workflow.healthy_estimate(runs)
-    learned, kappa = workflow.learn_benign(nominal, runs)
-    return h.frf[:, 0], h.var[:, 0], learned, kappa
+    return h.frf[:, 0], h.var[:, 0], workflow.learn_benign(nominal, runs)
 
 
-def _called(nominal: RigConfig, base: tuple[np.ndarray, np.ndarray, Any, float], run: workflow.MeasuredRun,
+def _called(nominal: RigConfig, base: tuple[np.ndarray, np.ndarray, Any], run: workflow.MeasuredRun,
             speed: float) -> Any:
-    Th, vh, learned, kappa = base
-    return workflow.joint_detection(nominal, Th, vh, run, kappa, learned, 0.01, speed_rpm=speed)
+    Th, vh, lrn = base
+    return workflow.joint_detection(nominal, Th, vh, run, lrn.kappa, lrn.learned, 0.01, speed_rpm=speed,
+                                    correction=lrn.correction)
 
 
 def _rate(n: int, trial: Callable[[int], Any]) -> tuple[float, list[Any]]:
@@ -167,8 +167,9 @@ def part_b(trials: int, log: Callable[[str], None], n_train: int = 8) -> list[st
         train = [sweep_run(truth, nominal, speed, 1.0, 9_100_000 + int(speed) * 10 + k, benign=_inside(rng))
                  for k in range(n_train)]
         bases[(speed, "train")] = _baseline(train, nominal)
-        log(f"B baselines {speed:g} rpm: kappa one {bases[(speed, 'one')][3]}, train {bases[(speed, 'train')][3]}, "
-            f"learned {0 if bases[(speed, 'train')][2] is None else bases[(speed, 'train')][2].U.shape[0]} "
+        lt = bases[(speed, "train")][2]
+        log(f"B baselines {speed:g} rpm: kappa one {bases[(speed, 'one')][2].kappa}, train {lt.kappa}, "
+            f"learned {0 if lt.learned is None else lt.learned.U.shape[0]} "
             f"({time.perf_counter() - t:.0f} s)")
     cases: list[tuple[str, float, Callable[[int], dict[str, float]]]] = []
     for name, vals in BENIGN_CASES.items():

@@ -15,7 +15,10 @@ method ``noise_bound_per_point_m`` (f) m (``noise_bound_m`` is then its maximum)
 test (several healthy sweeps): ``benign_directions`` (q, f) complex m/N (benign directions learned
 from the healthy sweeps' spread), ``benign_direction_bound`` (q,) (bound on each coefficient's real
 and imaginary part) and the root attributes ``benign_kappa`` (relative error of the model's benign
-prediction carried in H0; absent: the default) and ``n_healthy`` (healthy sweeps).
+prediction carried in H0; absent: the default) and ``n_healthy`` (healthy sweeps);
+``benign_correction`` (p, f) complex m/N per unit parameter (the healthy sweeps' correction of the
+model's benign change, one row per benign parameter in the order of the rig's variability section at
+the baseline's speed).
 """
 
 from __future__ import annotations
@@ -66,6 +69,7 @@ class Baseline:
     benign_directions: np.ndarray | None = None
     benign_direction_bound: np.ndarray | None = None
     benign_kappa: float | None = None
+    benign_correction: np.ndarray | None = None
     n_healthy: int = 1
     extra: dict[str, str] = field(default_factory=dict)
 
@@ -78,7 +82,7 @@ _ATTRS = ("rig_id", "rig_sha256", "run_id", "speed_rpm", "noise_bound_m", "noise
           "noise_confidence", "uncertainty", "parameter", "enclose", "stage", "created_utc")
 _DATASETS = ("frequency_hz", "gamma", "gamma_lower", "model_frf", "input_phasor", "output_phasor",
              "healthy_frf", "healthy_frf_var", "healthy_frf_dof", "noise_bound_per_point_m", "benign_directions",
-             "benign_direction_bound")
+             "benign_direction_bound", "benign_correction")
 
 
 def write_baseline(baseline: Baseline, path: str | Path) -> None:

@@ -385,7 +385,8 @@ def validate(
             raise InputError(None, "--update", "the rig has no variability section: nothing to update")
         upd = update_parameters(rig, first.frequency_hz, first.speed_rpm, healthy.frf[:, 0])
     model_rig = updated_rig(rig, None if upd is None else upd.as_dict())
-    learned, kappa = learn_benign(model_rig, runs) if enclose == "measured" else (None, None)
+    learning = learn_benign(model_rig, runs) if enclose == "measured" else None
+    learned = learning.learned if learning is not None else None
     base = Baseline(
         rig_id=rig.rig_id, rig_sha256=rig.sha256(), sweep_sha256=[r.sha256 for r in runs],
         run_id=first.run_id, speed_rpm=first.speed_rpm, noise_bound_m=float(noise_bound.value_m),
@@ -399,7 +400,8 @@ def validate(
         noise_bound_per_point_m=None if isinstance(V, float) else np.asarray(V, dtype=float),
         benign_directions=None if learned is None else learned.U,
         benign_direction_bound=None if learned is None else learned.c_max,
-        benign_kappa=kappa, n_healthy=len(runs),
+        benign_kappa=learning.kappa if learning is not None else None, n_healthy=len(runs),
+        benign_correction=learning.correction if learning is not None else None,
     )
     if upd is not None:
         base.extra["updated_parameters"] = json.dumps(upd.as_dict(), sort_keys=True)
@@ -704,7 +706,7 @@ def detect(
         kappa = KAPPA_NOMINAL if baseline.benign_kappa is None else float(baseline.benign_kappa)
         joint = joint_detection(updated_rig(rig, baseline_updates(baseline)), Th,
                                 np.asarray(baseline.healthy_frf_var)[:, 0], run, kappa, _learned(baseline),
-                                false_alarm, speed_rpm=baseline.speed_rpm)
+                                false_alarm, speed_rpm=baseline.speed_rpm, correction=baseline.benign_correction)
         ver = joint_verdict(joint, ver)
         notes.extend(joint.notes)
     return DetectionOutcome(rig, baseline, run, model, det, ver, damage, dset, anchored, anchored_set, notes,
@@ -765,9 +767,10 @@ KAPPA_GRID = (0.0, 0.1, 0.2, 0.3, 0.45, 0.6, 0.8, 1.0, 1.5, 2.0)
 
 
 def _benign_model(rig: RigConfig, f: np.ndarray, speed_rpm: float, Th: np.ndarray, kappa: float,
-                  speed_offset: float = 0.0) -> Any:
+                  speed_offset: float = 0.0, correction: np.ndarray | None = None) -> Any:
     """The model's benign change (re-solved, anchored at ``Th``) for the joint test; None without a
-    ``variability`` section. A recorded speed offset shifts the speed parameter's range."""
+    ``variability`` section. A recorded speed offset shifts the speed parameter's range. ``correction``
+    (p, f) m/N per unit parameter, learned from healthy sweeps, is added: ``b(theta) + theta C``."""
     from rotorcheck.robust.joint import BenignModel
     from rotorcheck.signatures import benign_prediction
     from rotorcheck.variability import benign_parameters
@@ -784,7 +787,16 @@ def _benign_model(rig: RigConfig, f: np.ndarray, speed_rpm: float, Th: np.ndarra
         if prm.name == "speed":
             lo[i], hi[i] = lo[i] + speed_offset, hi[i] + speed_offset
             step[i] = 0.5
-    return BenignModel(pred.predict, lo, hi, pred.names, kappa, step)
+    predict = pred.predict
+    if correction is not None:
+        C = np.asarray(correction, dtype=complex)
+        if C.shape != (len(params), f.size):
+            raise InputError(None, "benign_correction", f"shape {C.shape} does not match the rig's {len(params)} "
+                             f"benign parameters at {f.size} points")
+
+        def predict(theta: np.ndarray, base: Any = pred.predict) -> np.ndarray:
+            return base(theta) + np.asarray(theta, dtype=float) @ C
+    return BenignModel(predict, lo, hi, pred.names, kappa, step)
 
 
 def _learned(baseline: Any) -> Any:
@@ -797,9 +809,10 @@ def _learned(baseline: Any) -> Any:
 
 
 def joint_detection(rig: RigConfig, Th: np.ndarray, var_h: np.ndarray, run: MeasuredRun, kappa: float,
-                    learned: Any = None, false_alarm: float = 0.01, speed_rpm: float | None = None) -> Any:
+                    learned: Any = None, false_alarm: float = 0.01, speed_rpm: float | None = None,
+                    correction: np.ndarray | None = None) -> Any:
     """The joint test (:mod:`rotorcheck.robust.joint`) of ``run`` against the healthy FRF ``Th`` (f,)
-    with the variance of its mean ``var_h`` (f,), m^2/N^2."""
+    with the variance of its mean ``var_h`` (f,), m^2/N^2; ``correction``: see :func:`learn_benign`."""
     from rotorcheck.robust.joint import joint_test
     from rotorcheck.signatures import crack_signatures
 
@@ -807,43 +820,100 @@ def joint_detection(rig: RigConfig, Th: np.ndarray, var_h: np.ndarray, run: Meas
     speed = run.speed_rpm if speed_rpm is None else speed_rpm
     est = frf_estimate(run)
     els, S = crack_signatures(rig, f, speed, Th)
-    benign = _benign_model(rig, f, speed, Th, kappa, run.speed_rpm - speed)
+    benign = _benign_model(rig, f, speed, Th, kappa, run.speed_rpm - speed, correction)
     return joint_test(est.frf[:, 0] - Th, est.var[:, 0] + var_h, S, els, benign, learned, false_alarm)
 
 
-def learn_benign(rig: RigConfig, runs: list[MeasuredRun], false_alarm: float = 0.01) -> tuple[Any, float]:
-    """From several healthy sweeps: benign directions that the model's benign parameters do not explain
-    (the principal directions of what is left of each sweep's deviation from the mean after fitting the
-    parameters inside their ranges), and the model-error fraction kappa: the smallest of
-    :data:`KAPPA_GRID` under which no sweep, left out and tested against the others (the directions
-    learned without it), is called damage. One sweep, or fewer than 3: (None or the directions,
-    :data:`KAPPA_NOMINAL`)."""
+@dataclass
+class BenignLearning:
+    """What several healthy sweeps teach about benign change (:func:`learn_benign`)."""
+
+    kappa: float  # relative error of the benign prediction carried in H0
+    correction: np.ndarray | None = None  # (p, f) m/N per unit parameter: data's correction of the model
+    learned: Any = None  # robust.joint.LearnedDirections: what parameters cannot explain
+    theta: np.ndarray | None = None  # (K, p) the training sweeps' fitted parameters
+
+
+def _benign_names(rig: RigConfig, speed_rpm: float) -> list[str]:
+    from rotorcheck.variability import benign_parameters
+
+    return [p.name for p in benign_parameters(rig) if not (p.name == "speed" and speed_rpm == 0.0)]
+
+
+def _regress(theta: np.ndarray, left: np.ndarray, ridge: float = 1e-3) -> np.ndarray:
+    """``C`` (p, f) minimizing sum_k ||left_k - theta_k C||^2, each parameter scaled to unit RMS first
+    (parameters come in % and rpm) with a ridge ``ridge`` on the scaled Gram matrix."""
+    scale = np.sqrt(np.mean(theta**2, axis=0))
+    scale = np.where(scale > 0, scale, 1.0)
+    t = theta / scale
+    G = t.T @ t
+    lam = ridge * max(float(np.trace(G)) / max(G.shape[0], 1), 1e-300)
+    return np.linalg.solve(G + lam * np.eye(G.shape[0]), t.T @ left) / scale[:, None]
+
+
+def learn_benign(rig: RigConfig, runs: list[MeasuredRun], false_alarm: float = 0.01, iterations: int = 3
+                 ) -> BenignLearning:
+    """From several healthy sweeps (a warm-up, several days: drifted across the ranges):
+
+    1. each sweep's benign parameters ``theta_k`` fitted against the mean, and what the model leaves,
+       ``e_k``; the model's benign change is corrected by the regression ``e ~ theta C`` (the data's own
+       response to each named parameter, so the ranges keep their meaning), refitted ``iterations`` times;
+    2. benign directions in what remains (:func:`rotorcheck.robust.joint.learn_directions`);
+    3. kappa: the smallest of :data:`KAPPA_GRID` under which no sweep, left out and tested against the
+       others (correction and directions learned without it), is called damage.
+
+    One sweep: kappa = :data:`KAPPA_NOMINAL`, nothing learned; two: directions only (no leave-one-out)."""
     from rotorcheck.robust.joint import learn_directions
 
     if len(runs) < 2:
-        return None, KAPPA_NOMINAL
+        return BenignLearning(KAPPA_NOMINAL)
+    speed = runs[0].speed_rpm
     ests = [frf_estimate(r) for r in runs]
     frfs = [e.frf[:, 0] for e in ests]
     mean = np.mean(frfs, axis=0)
     var_mean = np.sum([e.var[:, 0] for e in ests], axis=0) / len(ests) ** 2
     var_one = np.mean([e.var[:, 0] for e in ests], axis=0)
-    left = [joint_detection(rig, mean, var_mean, r, 0.0, None, false_alarm).unexplained for r in runs]
-    learned = learn_directions(left, 2.0 * var_one)
+
+    def fits(C: np.ndarray | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        js = [joint_detection(rig, mean, var_mean, r, 0.0, None, false_alarm, speed, C) for r in runs]
+        th = np.array([j.theta for j in js], dtype=float)
+        left = np.array([j.unexplained for j in js])
+        raw = left + (th @ C if C is not None else 0.0)  # what the uncorrected model leaves
+        return th, left, raw
+
+    C: np.ndarray | None = None
+    th, left, raw = fits(None)
+    # the speed tolerance is corrected by nothing: its effect (gyroscopics) is small beside the others
+    # and its training values are barely identifiable, so a regression on it learns noise
+    names = _benign_names(rig, speed)
+    keep = np.array([n != "speed" for n in names], dtype=bool)
+
+    def regress(t: np.ndarray, e: np.ndarray) -> np.ndarray:
+        out = np.zeros((t.shape[1], e.shape[1]), dtype=complex)
+        out[keep] = _regress(t[:, keep], e)
+        return out
+
+    if th.shape[1] and len(runs) > int(np.count_nonzero(keep)):
+        for _ in range(iterations):
+            C = regress(th, raw)
+            th, left, raw = fits(C)
+    learned = learn_directions(list(left), 2.0 * var_one)
     if len(runs) < 3:
-        return learned, KAPPA_NOMINAL
+        return BenignLearning(KAPPA_NOMINAL, C, learned, th)
     for k_try in KAPPA_GRID:
         ok = True
         for i, r in enumerate(runs):
             rest = [j for j in range(len(runs)) if j != i]
             c = np.mean([frfs[j] for j in rest], axis=0)
             v = np.sum([ests[j].var[:, 0] for j in rest], axis=0) / len(rest) ** 2
+            Ci = regress(th[rest], raw[rest]) if C is not None else None
             lrn = learn_directions([left[j] for j in rest], 2.0 * var_one)
-            if joint_detection(rig, c, v, r, k_try, lrn, false_alarm).damage:
+            if joint_detection(rig, c, v, r, k_try, lrn, false_alarm, speed, Ci).damage:
                 ok = False
                 break
         if ok:
-            return learned, k_try
-    return learned, KAPPA_GRID[-1]
+            return BenignLearning(k_try, C, learned, th)
+    return BenignLearning(KAPPA_GRID[-1], C, learned, th)
 
 
 def joint_summary(outcome: DetectionOutcome) -> str:
