@@ -57,7 +57,8 @@ def _emit_json(doc: dict[str, Any]) -> None:
 @app.command()
 def model(
     rig: Annotated[Path | None, typer.Argument(help="Rig YAML (default: configs/crack_rig.yaml).")] = None,
-    speed: Annotated[float, typer.Option("--speed", help="Spin speed, rpm.")] = 0.0,
+    speed: Annotated[float | None, typer.Option(
+        "--speed", help="Spin speed, rpm (default: every speed of the rig's analysis.speeds_rpm).")] = None,
     out: OutOpt = DEFAULT_OUT,
     as_json: JsonOpt = False,
     force: ForceOpt = False,
@@ -74,12 +75,13 @@ def model(
     result = model_report(rig_path, speed_rpm=speed, out_dir=out if plots else None, force=force,
                           formats=plot_formats(plot_format))
     summary = result["summary"]
-    table = Table(title=f"{summary['rig_id']} at {speed:g} rpm", title_justify="left")
-    for col in ("mode", "f (Hz)", "zeta", "whirl"):
-        table.add_column(col, justify="right")
-    for i, m in enumerate(summary["modes"], 1):
-        table.add_row(str(i), f"{m['frequency_hz']:.2f}", f"{m['damping_ratio']:.4f}", m["whirl"])
-    err.print(table)
+    for at in summary.get("at_speeds", [summary]):
+        table = Table(title=f"{summary['rig_id']} at {at['speed_rpm']:g} rpm", title_justify="left")
+        for col in ("mode", "f (Hz)", "zeta", "whirl"):
+            table.add_column(col, justify="right")
+        for i, m in enumerate(at["modes"], 1):
+            table.add_row(str(i), f"{m['frequency_hz']:.2f}", f"{m['damping_ratio']:.4f}", m["whirl"])
+        err.print(table)
     crit = ", ".join(f"{c:.0f}" for c in summary["critical_speeds_rpm"]) or "none"
     err.print(f"critical speeds (rpm, up to {summary.get('campbell_max_rpm', 0):.0f}): {crit}")
     for p in result["files"]:
@@ -325,7 +327,8 @@ def detect(
 def simulate(
     output: Annotated[Path, typer.Argument(help="Sweep file to write (HDF5).")],
     rig: Annotated[Path | None, typer.Option("--rig", help="Truth rig (default configs/crack_rig_truth.yaml).")] = None,
-    speed: Annotated[float, typer.Option("--speed", help="Spin speed, rpm.")] = 0.0,
+    speed: Annotated[float | None, typer.Option(
+        "--speed", help="Spin speed, rpm (default: every speed of the rig's analysis.speeds_rpm).")] = None,
     fault: Annotated[str | None, typer.Option("--fault", help="A fault named in the rig's faults section.")] = None,
     f_min: Annotated[float, typer.Option("--f-min", help="First frequency, Hz.")] = 30.0,
     f_max: Annotated[float, typer.Option("--f-max", help="Last frequency, Hz.")] = 600.0,

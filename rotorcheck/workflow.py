@@ -50,11 +50,13 @@ def plot_paths(out_dir: str | Path, stems: tuple[str, ...] | list[str], formats:
 
 
 def model_report(
-    rig_path: str | Path, speed_rpm: float = 0.0, out_dir: str | Path | None = None, force: bool = False,
+    rig_path: str | Path, speed_rpm: float | None = 0.0, out_dir: str | Path | None = None, force: bool = False,
     formats: tuple[str, ...] = ("png",),
 ) -> dict[str, Any]:
     """Modal summary of a rig at ``speed_rpm`` and, with ``out_dir``, Campbell and mode-shape plots.
 
+    ``speed_rpm=None``: every speed of the rig's ``analysis.speeds_rpm``; the summary's top-level
+    keys are those of the first, ``at_speeds`` holds each speed's ``{speed_rpm, modes}``.
     Returns ``{"summary": <cli.md model keys>, "files": [written paths]}``.
     """
     config = load_config(rig_path)  # bad input fails here, before any work or output
@@ -62,7 +64,12 @@ def model_report(
     from rotorcheck.fe.assembly import build_system
     from rotorcheck.fe.modal import model_summary
 
+    speeds = [float(speed_rpm)] if speed_rpm is not None else [float(x) for x in config.analysis.speeds_rpm]
+    speed_rpm = speeds[0]
     summary = model_summary(config, speed_rpm)
+    summary["speed_rpm"] = speed_rpm
+    summary["at_speeds"] = [{"speed_rpm": speed_rpm, "modes": summary["modes"]}] + [
+        {"speed_rpm": sp, "modes": model_summary(config, sp)["modes"]} for sp in speeds[1:]]
     summary.setdefault("rig_id", config.rig_id)
     summary.setdefault("campbell_max_rpm", config.analysis.campbell_max_rpm)
     files: list[str] = []

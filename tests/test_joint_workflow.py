@@ -75,3 +75,18 @@ def test_rule_choice_and_bad_values_exit_2(tmp_path: Path, capsys: pytest.Captur
     assert main(["detect", str(TM / "damaged.h5"), "--rig", rig, "--out", str(tm), "--no-plots", "--rule",
                  "joint"]) == 2
     assert "lumped" in capsys.readouterr().err
+
+
+def test_model_without_speed_reports_every_configured_speed(capsys: pytest.CaptureFixture) -> None:
+    """analysis.speeds_rpm [0, 1000] of the crack rig: one table per speed, the first at the top level;
+    each equals the single-speed run."""
+    import json
+
+    assert main(["model", "--no-plots", "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert [a["speed_rpm"] for a in doc["at_speeds"]] == [0.0, 1000.0] and doc["speed_rpm"] == 0.0
+    assert main(["model", "--no-plots", "--json", "--speed", "1000"]) == 0
+    one = json.loads(capsys.readouterr().out)
+    got = [m["frequency_hz"] for m in doc["at_speeds"][1]["modes"]]
+    np.testing.assert_allclose(got, [m["frequency_hz"] for m in one["modes"]], rtol=1e-12)
+    assert got[1] - got[0] > 0.3  # gyroscopic split of mode 1 at 1000 rpm (54.42 / 54.81 Hz)
