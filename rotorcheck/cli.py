@@ -327,8 +327,7 @@ def detect(
 def simulate(
     output: Annotated[Path, typer.Argument(help="Sweep file to write (HDF5).")],
     rig: Annotated[Path | None, typer.Option("--rig", help="Truth rig (default configs/crack_rig_truth.yaml).")] = None,
-    speed: Annotated[float | None, typer.Option(
-        "--speed", help="Spin speed, rpm (default: every speed of the rig's analysis.speeds_rpm).")] = None,
+    speed: Annotated[float, typer.Option("--speed", help="Spin speed, rpm.")] = 0.0,
     fault: Annotated[str | None, typer.Option("--fault", help="A fault named in the rig's faults section.")] = None,
     f_min: Annotated[float, typer.Option("--f-min", help="First frequency, Hz.")] = 30.0,
     f_max: Annotated[float, typer.Option("--f-max", help="Last frequency, Hz.")] = 600.0,
