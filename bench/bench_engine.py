@@ -3,11 +3,15 @@
 (a) ``frf_*``: the crack rig's nominal plant at 262 points (30-600 Hz, 1000 rpm; receptances at
     [damage port, sensor] for [damage port, actuator]) as the product computes it
     (:func:`rotorcheck.nominal.nominal_model`), against a per-frequency dense solve of the same
-    columns in the same run; median times (s), the ratio and the largest relative difference.
+    columns in the same run (timed in turn), on every mesh 9 ... 576 elements (``frf_rows``; the
+    dense baseline on a 16-point subset above 72 elements, scaled to 262), the product time fitted
+    as a power law in the element count; median times (s), the ratio, the largest relative
+    difference. The published rig also at 0 rpm, with the assembly, and the floor of its path: one
+    eigensolution of the (half-size complex / full real) state matrix.
 (b) ``scaling``: the same engine call (factorisation + 262 points) on the rig with every element
     split into 1, 2, 4, ... 64 (9 ... 576 elements), with its peak traced memory, fitted as a power
-    law ``t = a N^p`` in the element count N; the dense per-frequency baseline where affordable; and
-    the nominal plant of the 576-element mesh on 262 and on 3,081 points (time, peak traced memory).
+    law ``t = a N^p`` in the element count N; and the nominal plant of the 576-element mesh on 262
+    and on 3,081 points (time, peak traced memory).
 (c) ``cli_*``: ``rotorcheck model --speed 1000`` and ``rotorcheck validate`` (after ``fit-noise``)
     of the bundled healthy 1000 rpm sweep on the 576-element mesh (and the 9-element rig in the
     same run), each a fresh process as a user runs it: wall time and peak RSS (``os.wait4``).
@@ -16,7 +20,7 @@
     (as the product runs them) and with the BLAS default, in the same run, with the load average
     (the difference depends on what else runs on the machine).
 
-``python -m bench.bench_engine`` prints the dict as JSON.
+``python -m bench.bench_engine`` prints the dict as JSON; ``python -m bench.bench_engine frf`` only (a).
 """
 
 from __future__ import annotations
@@ -28,7 +32,7 @@ import sys
 import tempfile
 import time
 import tracemalloc
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -40,7 +44,7 @@ from rotorcheck.faults.crack import crack_stiffness
 from rotorcheck.faults.harmonic_balance import HBSolver
 from rotorcheck.fe.assembly import build_system
 from rotorcheck.fe.blas import one_blas_thread
-from rotorcheck.fe.frf import _scaled_modal_factors, system_receptance
+from rotorcheck.fe.frf import _isotropic_half, _modal_state, _scaled_modal_factors, system_receptance
 from rotorcheck.fe.system import RPM_TO_RAD_S, MechanicalSystem
 from rotorcheck.nominal import nominal_model
 
@@ -61,6 +65,20 @@ def _median(fn: Callable[[], Any], repeat: int) -> float:
         fn()
         times.append(time.perf_counter() - t0)
     return float(np.median(times))
+
+
+def _paired(fns: Sequence[Callable[[], Any]], repeat: int) -> list[float]:
+    """Median times of several functions run in turn (a, b, c, a, b, c, ...): a change of the
+    machine's load during the run affects all of them alike."""
+    for fn in fns:
+        fn()  # warm-up
+    times: list[list[float]] = [[] for _ in fns]
+    for _ in range(repeat):
+        for fn, ts in zip(fns, times):
+            t0 = time.perf_counter()
+            fn()
+            ts.append(time.perf_counter() - t0)
+    return [float(np.median(ts)) for ts in times]
 
 
 def refined(config: RigConfig, refine: int) -> RigConfig:
@@ -93,34 +111,134 @@ def _engine(system: MechanicalSystem, outs: list[int], ins: list[int]) -> np.nda
     return system_receptance(system, SPEED_RPM, outs, ins, band_hz=float(FREQ_HZ.max())).at_hz(FREQ_HZ)
 
 
+def _dense_one_thread(system: MechanicalSystem, freq_hz: np.ndarray, speed_rpm: float,
+                      outs: list[int], ins: list[int]) -> np.ndarray:
+    with one_blas_thread():
+        return dense_per_frequency(system, freq_hz, speed_rpm, outs, ins)
+
+
+def _max_rel(got: np.ndarray, ref: np.ndarray) -> float:
+    return float(np.max(np.abs(got - ref).max(axis=(1, 2)) / np.abs(ref).max(axis=(1, 2))))
+
+
+#: meshes up to this many elements get the dense baseline on all 262 points; finer ones on an
+#: evenly spread subset of DENSE_SUBSET points, its time scaled to 262 (labelled ``_extrapolated``)
+DENSE_FULL_UP_TO = 72
+DENSE_SUBSET = 16
+
+
 def frf_ratio(repeat: int) -> dict[str, Any]:
-    """(a) the product's nominal plant vs per-frequency dense solves: the rig as published (9
-    elements) and refined 8x (72 elements, whose dense (f, n, n) stack was 357 MB)."""
+    """(a) the product's nominal plant (:func:`rotorcheck.nominal.nominal_model` on a built system,
+    as ``validate`` and ``detect`` compute it) vs per-frequency dense solves, every mesh of REFINE
+    (9 ... 576 elements), at 1000 rpm (and 0 rpm for the rig as published). Timed in turn in the
+    same loop (:func:`_paired`). The dense baseline is the faster of BLAS default threads and one
+    thread (on 2 cores one thread wins below ~100 DOF); 9 elements also with the assembly
+    (``nominal_model`` without a built system, as the CLI calls it) and timed back to back as this
+    bench did before (warm caches: the interleaved product time is ~0.3 ms longer)."""
     out: dict[str, Any] = {}
-    for r in (1, 8):
-        config = refined(load_config(RIG), r)
+    base = load_config(RIG)
+    rows = []
+    for r in REFINE:
+        config = refined(base, r)
         system = build_system(config)
         system.matrices(SPEED_RPM)  # both timings without the assembly
+        system.matrices(0.0)
         outs, ins = _ports(config, system)
-        tag = f"{9 * r}el"
-        t_prod = _median(lambda c=config, s=system: nominal_model(c, FREQ_HZ, SPEED_RPM, system=s), repeat)
-        t_dense = _median(lambda s=system, o=outs, i=ins: dense_per_frequency(s, FREQ_HZ, SPEED_RPM, o, i),
-                          repeat if r == 1 else 2)
+        n_el = 9 * r
+        full = n_el <= DENSE_FULL_UP_TO
+        f_dense = FREQ_HZ if full else FREQ_HZ[:: FREQ_HZ.size // DENSE_SUBSET][:DENSE_SUBSET]
+        reps = repeat if n_el <= 36 else (3 if n_el <= 72 else 1)
+
+        def prod(c: RigConfig = config, s: MechanicalSystem = system) -> Any:
+            return nominal_model(c, FREQ_HZ, SPEED_RPM, system=s)
+
+        def dense(s: MechanicalSystem = system, f: np.ndarray = f_dense, o: list[int] = outs,
+                  i: list[int] = ins) -> Any:
+            return dense_per_frequency(s, f, SPEED_RPM, o, i)
+
+        def dense1(s: MechanicalSystem = system, f: np.ndarray = f_dense, o: list[int] = outs,
+                   i: list[int] = ins) -> Any:
+            return _dense_one_thread(s, f, SPEED_RPM, o, i)
+
+        if n_el <= 72:
+            t_prod, t_d, t_d1 = _paired([prod, dense, dense1], reps)
+        else:
+            t_prod, t_d = _paired([prod, dense], reps)
+            t_d1 = np.inf
+        t_dense = min(t_d, t_d1) * FREQ_HZ.size / f_dense.size
         got = nominal_model(config, FREQ_HZ, SPEED_RPM, system=system).P[:, 1:, 1:]
-        ref = dense_per_frequency(system, FREQ_HZ, SPEED_RPM, outs, ins)
+        ref = dense_per_frequency(system, f_dense, SPEED_RPM, outs, ins)
+        sel = np.searchsorted(FREQ_HZ, f_dense)
+        row: dict[str, Any] = {
+            "elements": n_el, "n_dof": system.n_dof, "product_s": t_prod,
+            ("dense_per_frequency_s" if full else "dense_per_frequency_extrapolated_s"): t_dense,
+            "dense_points_timed": int(f_dense.size),
+            "dense_threads": "one" if t_d1 < t_d else "default",
+            "ratio_dense_over_product": t_dense / t_prod,
+            "max_rel_diff": _max_rel(got[sel], ref),
+        }
+        rows.append(row)
+        out[f"frf_{n_el}el_ratio_dense_over_product"] = row["ratio_dense_over_product"]
+    out["frf_rows"] = rows
+    n = np.array([row["elements"] for row in rows], dtype=float)
+    t = np.array([row["product_s"] for row in rows])
+    out["frf_product_power_law_exponent"] = float(np.polyfit(np.log(n), np.log(t), 1)[0])
+    # the rig as published: also at rest, and with the assembly in the timing
+    config = base
+    system = build_system(config)
+    outs, ins = _ports(config, system)
+    for rpm in (SPEED_RPM, 0.0):
+        system.matrices(rpm)
+
+        def prod0(s: MechanicalSystem = system, w: float = rpm) -> Any:
+            return nominal_model(config, FREQ_HZ, w, system=s)
+
+        def cold(w: float = rpm) -> Any:
+            return nominal_model(config, FREQ_HZ, w)
+
+        def dense0(s: MechanicalSystem = system, w: float = rpm) -> Any:
+            return _dense_one_thread(s, FREQ_HZ, w, outs, ins)
+
+        t_prod, t_cold, t_dense = _paired([prod0, cold, dense0], repeat)
+        # as the bench measured before (each back to back, warm): the product after itself runs
+        # ~0.3 ms faster than after a dense loop or an idle moment
+        t_prod_b2b, t_dense_b2b = _median(prod0, 3 * repeat), _median(dense0, repeat)
+        tag = f"frf_9el_{int(rpm)}rpm"
+        got = nominal_model(config, FREQ_HZ, rpm, system=system).P[:, 1:, 1:]
         out.update({
-            f"frf_{tag}_n_dof": system.n_dof,
-            f"frf_{tag}_product_s": t_prod,
-            f"frf_{tag}_dense_per_frequency_s": t_dense,
-            f"frf_{tag}_ratio_dense_over_product": t_dense / t_prod,
-            f"frf_{tag}_max_rel_diff": float(np.max(np.abs(got - ref).max(axis=(1, 2))
-                                                    / np.abs(ref).max(axis=(1, 2)))),
+            f"{tag}_product_s": t_prod,
+            f"{tag}_product_with_assembly_s": t_cold,
+            f"{tag}_dense_per_frequency_one_thread_s": t_dense,
+            f"{tag}_ratio_dense_over_product": t_dense / t_prod,
+            f"{tag}_ratio_dense_over_product_with_assembly": t_dense / t_cold,
+            f"{tag}_product_back_to_back_s": t_prod_b2b,
+            f"{tag}_dense_back_to_back_s": t_dense_b2b,
+            f"{tag}_ratio_back_to_back": t_dense_b2b / t_prod_b2b,
+            f"{tag}_max_rel_diff": _max_rel(got, dense_per_frequency(system, FREQ_HZ, rpm, outs, ins)),
         })
+    # the floor of the product path on the rig: one eigensolution of its state matrix (the
+    # isotropic half-size complex one, rotorcheck.fe.frf._isotropic_half, and the full real one)
+    M, C, G, K = system.matrices(SPEED_RPM)
+    D = C + SPEED_RPM * RPM_TO_RAD_S * G
+    half = _isotropic_half((M, D, K), system.plane_pairs())
+    assert half is not None
+
+    def eig_half() -> Any:
+        with one_blas_thread():
+            return _modal_state(*half)
+
+    def eig_full() -> Any:
+        with one_blas_thread():
+            return _modal_state(M, D, K)
+
+    out["frf_9el_floor_modal_state_half_s"], out["frf_9el_floor_modal_state_full_s"] = _paired(
+        [eig_half, eig_full], 5 * repeat)
     return out
 
 
-def scaling(dense_up_to: int = 144) -> dict[str, Any]:
-    """(b) engine time and peak traced memory against the element count; power-law fit."""
+def scaling(dense_up_to: int = 0) -> dict[str, Any]:
+    """(b) engine time and peak traced memory against the element count; power-law fit (the dense
+    baseline of each mesh is in :func:`frf_ratio`; ``dense_up_to`` elements repeat it here)."""
     base = load_config(RIG)
     rows = []
     for r in REFINE:
@@ -259,4 +377,7 @@ def run(repeat: int = 15) -> dict[str, Any]:
 
 
 if __name__ == "__main__":
-    print(json.dumps(run(), indent=2))
+    if sys.argv[1:] == ["frf"]:
+        print(json.dumps(frf_ratio(15), indent=2))
+    else:
+        print(json.dumps(run(), indent=2))

@@ -8,16 +8,21 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import replace
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from scipy.optimize import minimize_scalar
 
 from rotorcheck.config import Crack, UnbalanceMass
 from rotorcheck.faults.crack import CrackStiffness, crack_stiffness
 from rotorcheck.faults.harmonic_balance import cracked_disturbance_tones, fold_tones, solve_hb
 from rotorcheck.fe.modal import critical_speeds, modes
 from rotorcheck.fe.system import RPM_TO_RAD_S, MechanicalSystem
+from rotorcheck.lazy import lazy_module
+
+if TYPE_CHECKING:
+    import scipy.optimize as sopt
+else:  # scipy.optimize costs ~0.1 s to import: loaded at first use
+    sopt = lazy_module("scipy.optimize")
 
 __all__ = [
     "averaged_system",
@@ -76,7 +81,7 @@ def hb_resonance_hz(
     g = mag(grid)
     i = int(np.argmax(g))
     lo, hi = grid[max(i - 1, 0)], grid[min(i + 1, grid.size - 1)]
-    r = minimize_scalar(lambda f: -float(mag(f)[0]), bounds=(lo, hi), method="bounded", options={"xatol": 1e-6})
+    r = sopt.minimize_scalar(lambda f: -float(mag(f)[0]), bounds=(lo, hi), method="bounded", options={"xatol": 1e-6})
     return float(r.x)
 
 

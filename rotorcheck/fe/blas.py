@@ -9,6 +9,7 @@ counts on exit: nothing outside the block changes (no environment variables, no 
 
 from __future__ import annotations
 
+import sys
 from contextlib import AbstractContextManager
 from typing import Any
 
@@ -16,11 +17,15 @@ from threadpoolctl import ThreadpoolController
 
 __all__ = ["one_blas_thread"]
 
-_controller: list[ThreadpoolController] = []  # created on first use (inspecting the loaded libraries)
+#: (number of imported modules when created, controller): created on first use by inspecting the
+#: loaded libraries, again when modules were imported since (scipy.linalg, loaded lazily, brings
+#: its own OpenBLAS next to numpy's; a controller made before would not limit it)
+_controller: list[tuple[int, ThreadpoolController]] = []
 
 
 def one_blas_thread() -> AbstractContextManager[Any]:
     """``with one_blas_thread(): ...`` runs the body with one BLAS thread (scoped, restored on exit)."""
-    if not _controller:
-        _controller.append(ThreadpoolController())
-    return _controller[0].limit(limits=1, user_api="blas")
+    loaded = len(sys.modules)
+    if not _controller or _controller[0][0] != loaded:
+        _controller[:] = [(loaded, ThreadpoolController())]
+    return _controller[0][1].limit(limits=1, user_api="blas")

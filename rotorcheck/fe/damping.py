@@ -19,9 +19,16 @@ Lumped models have no planes: ratio i goes to mode i.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
-import scipy.linalg as sla
+
+from rotorcheck.lazy import lazy_module
+
+if TYPE_CHECKING:
+    import scipy.linalg as sla
+else:  # loaded at the first modal damping matrix, not by every command importing the FE package
+    sla = lazy_module("scipy.linalg")
 
 
 def ratio_per_mode(ratios: Sequence[float], n: int) -> np.ndarray:

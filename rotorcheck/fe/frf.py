@@ -19,7 +19,17 @@ Methods (``method=``):
   ``Z^-1 F = Phi W^-1 [I 0] V diag(1/(j nu - lambda)) V^-1 [0; Phi^T F]``: O((2n)^3) once, exact
   for a diagonalisable state matrix. Chosen by ``"auto"`` from :data:`N_DIRECT` to :data:`N_FULL`
   DOF when it agrees with a direct solve to 1e-9 at one frequency (an ill-conditioned eigenvector
-  basis does not).
+  basis does not). Two exact shortcuts (issue 13: the 9-element rig's 262 points in ~1/5 of the
+  per-frequency dense solves' time, bench/bench_engine.py): an isotropic rotor (``planes=``, which
+  :func:`system_receptance` passes for rotors; checked to a few ulps) is one complex model of half
+  the size, whose n-state eigensolution costs about half that of the real 2n-state one
+  (:func:`_isotropic_half`); and when D and K are diagonal in the undamped modes (modal damping at
+  rest) the eigenpairs are 2x2 blocks in closed form (:func:`_decoupled_pairs`): no eigensolution
+  of the state matrix at all. The evaluation is one product ``(points, modes) x (modes, outputs x
+  inputs)`` of the residues; the undamped modes of the half model come from
+  :func:`rotorcheck.fe.dense.eigh_pencil`. The full real path (anisotropic rotors, lumped models,
+  the harmonic balance, the simulator's truth rigs) is unchanged to the bit: the bundled samples
+  are checked bit for bit against a regeneration. scipy.sparse is loaded by the reduced path only.
 - ``"direct"``: per-frequency LU solves of ``Z(nu)`` for the input columns only, in chunks of at
   most :data:`CHUNK_ELEMENTS` matrix entries (sparse LU per frequency when M, D, K are sparse and
   n > :data:`N_FULL`). O(points n^3) dense: the reference, the choice of ``"auto"`` for tiny
@@ -43,15 +53,23 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
-import scipy.linalg as sla
-import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from rotorcheck.fe.blas import one_blas_thread
+from rotorcheck.fe.dense import eigh_pencil
 from rotorcheck.fe.system import RPM_TO_RAD_S, MechanicalSystem
+from rotorcheck.lazy import lazy_module
+
+if TYPE_CHECKING:
+    import scipy.linalg as sla
+    import scipy.sparse as sp
+    import scipy.sparse.linalg as spla
+else:  # the reduced path of large meshes only: not loaded for the small models of every command
+    sla = lazy_module("scipy.linalg")
+    sp = lazy_module("scipy.sparse")
+    spla = lazy_module("scipy.sparse.linalg")
 
 __all__ = [
     "CUTOFF_FACTOR",
@@ -230,17 +248,75 @@ def _as_inputs(inputs: int | Sequence[int] | np.ndarray, n: int) -> np.ndarray:
     return B
 
 
+def _modal_state(
+    M: np.ndarray, D: np.ndarray, K: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The state matrix in energy-scaled undamped modal coordinates and its eigendecomposition.
+
+    ``q = Phi W^-1 r1``, ``q' = Phi r2`` (``Phi`` the mass-normalised undamped modes of the Hermitian
+    part of K, ``W = diag(w_i)``) is an exact change of variables of ``x = [q, q']`` that turns the
+    state matrix into ``[[0, W], [-Phi^H K Phi W^-1, -Phi^H D Phi]]``, of norm ~ ``w_max`` instead of
+    ``w_max^2``: its low eigenvalues and their vectors come out far more accurately (5e-10 -> 1e-12
+    relative at a resonance of the 9-element rig). M, D, K real or complex (M Hermitian positive
+    definite). Returns ``(lambda (2n,), V (2n, 2n), Phi (n, n), w (n,))``.
+    """
+    n = M.shape[0]
+    w2, phi = eigh_pencil(0.5 * (K + K.conj().T), M)
+    w_max = np.sqrt(max(float(w2.max()), 1e-300))
+    wn = np.sqrt(np.maximum(w2, (1e-6 * w_max) ** 2))
+    ph = phi.conj().T
+    Kt, Dt = ph @ K @ phi, ph @ D @ phi
+    if _is_diagonal(Dt) and _is_diagonal(Kt):
+        # undamped modes that D does not couple (modal damping at rest): 2x2 blocks in closed form
+        pair = _decoupled_pairs(np.diag(Kt) / wn, np.diag(Dt), wn)
+        if pair is not None:
+            return (*pair, phi, wn)
+    A = np.zeros((2 * n, 2 * n), dtype=np.result_type(Kt, Dt))
+    A[:n, n:] = np.diag(wn)
+    A[n:, :n] = -Kt / wn[None, :]
+    A[n:, n:] = -Dt
+    lam, V = np.linalg.eig(A)
+    return lam, V, phi, wn
+
+
+#: off-diagonal entries of a modal matrix below this fraction of the geometric mean of their
+#: diagonal entries count as round-off (they are 2e-12 for the modal damping of the crack rig)
+_DIAG_RTOL = 1e-10
+
+
+def _is_diagonal(X: np.ndarray) -> bool:
+    off = np.abs(X)
+    d = np.sqrt(np.diag(off))
+    np.fill_diagonal(off, 0.0)
+    return bool(np.all(off <= _DIAG_RTOL * np.outer(d, d)))
+
+
+def _decoupled_pairs(
+    k: np.ndarray, c: np.ndarray, wn: np.ndarray
+) -> tuple[np.ndarray, np.ndarray] | None:
+    """Eigenpairs of the state matrix ``[[0, diag(wn)], [-diag(k), -diag(c)]]`` in closed form:
+    ``lambda^2 + c lambda + k wn = 0`` per mode, vectors ``[wn, lambda]``. None when a mode is
+    (nearly) critically damped (its two vectors nearly parallel)."""
+    n = wn.size
+    disc = np.sqrt((c * c - 4.0 * k * wn).astype(complex))
+    l1, l2 = 0.5 * (-c + disc), 0.5 * (-c - disc)
+    if np.any(np.abs(l1 - l2) <= 1e-6 * np.maximum(np.abs(l1), np.abs(l2))):
+        return None
+    i = np.arange(n)
+    V = np.zeros((2 * n, 2 * n), dtype=complex)
+    V[i, i] = V[i, n + i] = wn
+    V[n + i, i], V[n + i, n + i] = l1, l2
+    return np.r_[l1, l2], V
+
+
 def _scaled_modal_factors(
     M: np.ndarray, D: np.ndarray, K: np.ndarray, cols: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Eigendecomposition of the state matrix in energy-scaled undamped modal coordinates.
-
-    ``q = Phi W^-1 r1``, ``q' = Phi r2`` (``Phi`` the mass-normalised undamped modes of the symmetric
-    part of K, ``W = diag(w_i)``) is an exact change of variables of ``x = [q, q']`` that turns the
-    state matrix into ``[[0, W], [-Phi^T K Phi W^-1, -Phi^T D Phi]]``, of norm ~ ``w_max`` instead of
-    ``w_max^2``: its low eigenvalues and their vectors come out far more accurately (5e-10 -> 1e-12
-    relative at a resonance of the 9-element rig). Returns ``(lambda (2n,), V (2n, 2n), V^-1 B
-    (2n, c), Phi W^-1 (n, n))``: ``Z(nu)^-1 B = Phi W^-1 V[:n] diag(1/(j nu - lambda)) V^-1 B``.
+    """Eigendecomposition of the real state matrix in energy-scaled undamped modal coordinates (as
+    :func:`_modal_state`, with scipy's ``eigh``: the simulator's truth rigs and the harmonic balance
+    take this path, and the bundled samples are checked bit for bit against a regeneration). Returns
+    ``(lambda (2n,), V (2n, 2n), V^-1 B (2n, c), Phi W^-1 (n, n))``:
+    ``Z(nu)^-1 B = Phi W^-1 V[:n] diag(1/(j nu - lambda)) V^-1 [0; Phi^T B]``.
     """
     n = M.shape[0]
     w2, phi = sla.eigh(0.5 * (K + K.T), M)
@@ -254,6 +330,48 @@ def _scaled_modal_factors(
     rhs = np.zeros((2 * n, cols.shape[1]), dtype=complex)
     rhs[n:] = phi.T @ cols
     return lam, V, np.linalg.solve(V, rhs), phi / wn[None, :]
+
+
+#: a rotor's x/y plane map: ``(ix, iy, sign)`` with DOF ``iy[k]`` (times ``sign[k]``) the image of
+#: DOF ``ix[k]`` under a quarter turn about the shaft axis (see :func:`_isotropic_half`)
+Planes = tuple[np.ndarray, np.ndarray, np.ndarray]
+#: largest deviation from isotropy (relative to the largest entry of each matrix) that
+#: :func:`_isotropic_half` accepts: a few ulps (the assembled rig is isotropic bit for bit)
+_ISO_TOL = 1e-14
+
+
+def _isotropic_half(
+    matrices: Sequence[np.ndarray], planes: Planes
+) -> list[np.ndarray] | None:
+    """The half-size complex matrices of an isotropic rotor, or None when it is not isotropic.
+
+    With ``x = q[ix]`` and ``y = sign q[iy]`` every matrix ``X`` of an isotropic rotor (axisymmetric
+    shaft and discs, equal supports in x and y; gyroscopic and cross-coupled terms allowed) has the
+    form ``[[A, B], [-B, A]]``: it commutes with the quarter turn ``J = [[0, -I], [I, 0]]``. In the
+    eigenvector basis ``[I; -jI] / sqrt 2``, ``[I; jI] / sqrt 2`` of J the dynamic stiffness is
+    ``diag(Z1, Z2)`` with ``Z1 = A - jB`` (n/2 DOF, complex) and ``Z2(nu) = conj(Z1(-nu))``: one
+    eigensolution of the n-state matrix of Z1 instead of the 2n-state real one (the same poles, as
+    ``lambda`` and ``conj(lambda)``). Returns ``[A - jB for each X]`` (real when every B is 0).
+    """
+    ix, iy, sign = planes
+    n = matrices[0].shape[0]
+    m = ix.size
+    if 2 * m != n or iy.size != m or np.unique(np.r_[ix, iy]).size != n:
+        return None
+    perm = np.r_[ix, iy]
+    flip = np.r_[np.ones(m), sign]
+    k = len(matrices)
+    P = np.take(np.take(np.stack(matrices), perm, axis=1), perm, axis=2)  # (k, n, n) C-contiguous
+    P *= flip[:, None] * flip[None, :]  # [[xx, xy], [yx, yy]] in the aligned coordinates
+    xx, xy, yx, yy = P[:, :m, :m], P[:, :m, m:], P[:, m:, :m], P[:, m:, m:]
+    tol = _ISO_TOL * np.abs(P).reshape(k, -1).max(axis=1)
+    if np.any(np.abs(xx - yy).reshape(k, -1).max(axis=1) > tol) or np.any(
+        np.abs(xy + yx).reshape(k, -1).max(axis=1) > tol
+    ):
+        return None
+    a = 0.5 * (xx + yy)
+    b = 0.5 * (xy - yx)
+    return [a[i] - 1j * b[i] if np.any(b[i]) else a[i] for i in range(k)]
 
 
 class Receptance:
@@ -274,6 +392,7 @@ class Receptance:
         inputs: int | Sequence[int] | np.ndarray,
         method: Method = "auto",
         band_hz: float | None = None,
+        planes: Planes | None = None,
     ):
         if method == "solve":
             method = "direct"
@@ -284,6 +403,9 @@ class Receptance:
         self.rows, self.C = _as_outputs(outputs, n)
         self.cols = _as_inputs(inputs, n)
         self.band_hz = float(band_hz) if band_hz is not None else None
+        self.planes = planes
+        self._residues = False  # evaluate the modal sum by residues (see _modal)
+        self._res: np.ndarray | None = None
         self.method: str = "direct"
         self._sparse_direct = n > N_FULL and all(
             np.count_nonzero(A) <= 0.05 * n * n for A in (self.M, self.D, self.K)
@@ -303,18 +425,23 @@ class Receptance:
 
     # -- modal ---------------------------------------------------------------------------------
     def _setup_modal(self, check: bool) -> bool:
-        n = self.n
         try:
-            lam, V, right, out = _scaled_modal_factors(self.M, self.D, self.K, self.cols)
+            half = (_isotropic_half((self.M, self.D, self.K), self.planes)
+                    if self.planes is not None else None)
+            if half is None:
+                self._lam, self._left, self._right = self._modal_full()
+            else:
+                self._lam, self._left, self._right = self._modal_isotropic(*half)
+            self._residues = half is not None
+            self._res = None
         except np.linalg.LinAlgError:
             if not check:
                 raise
             return False
-        self._lam, self._right = lam, right
-        self._left = (out[self.rows] if self.rows is not None else self.C @ out) @ V[:n]  # (r, 2n)
         self.method = "modal"
         if check:
-            nu = np.array([[float(np.median(np.abs(lam.imag)))]])
+            mid = np.sort(np.abs(self._lam.imag))
+            nu = np.array([[float(mid[mid.size // 2])]])
             ref = self._direct(nu)
             err = np.abs(self._modal(nu) - ref).max()
             if not np.isfinite(err) or err > _CHECK_RTOL * np.abs(ref).max():
@@ -322,16 +449,59 @@ class Receptance:
                 return False
         return True
 
+    def _modal_full(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(poles (2n,), left (r, 2n), right (2n, c)) of the 2n-state system."""
+        lam, V, right, out = _scaled_modal_factors(self.M, self.D, self.K, self.cols)
+        left = (out[self.rows] if self.rows is not None else self.C @ out) @ V[: self.n]
+        return lam, left, right
+
+    def _modal_isotropic(
+        self, Mh: np.ndarray, Dh: np.ndarray, Kh: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The same for an isotropic rotor from the half-size complex ``Z1`` (:func:`_isotropic_half`):
+
+        ``C Z^-1 B = 1/2 [(Cx - jCy) Z1(nu)^-1 (Bx + jBy) + (Cx + jCy) conj(Z1(-nu)^-1) (Bx - jBy)]``
+        (``Cx = C[:, ix]``, ``Cy = C[:, iy] sign``, ``Bx = B[ix]``, ``By = sign B[iy]``), the second
+        term the conjugate of a modal sum of Z1 at ``-nu``: poles ``[lambda, conj(lambda)]``.
+        """
+        assert self.planes is not None
+        ix, iy, sign = self.planes
+        m = ix.size
+        lam, V, phi, wn = _modal_state(Mh, Dh, Kh)
+        Cx, Cy = self.C[:, ix], self.C[:, iy] * sign[None, :]
+        Bx, By = self.cols[ix], sign[:, None] * self.cols[iy]
+        c = Bx.shape[1]
+        rhs = np.zeros((2 * m, 2 * c), dtype=complex)
+        rhs[m:] = phi.conj().T @ np.hstack([Bx + 1j * By, Bx.conj() + 1j * By.conj()])
+        R = np.linalg.solve(V, rhs)
+        top = (phi / wn[None, :]) @ V[:m]  # (m, 2m)
+        L1 = (Cx - 1j * Cy) @ top
+        L2 = (Cx.conj() - 1j * Cy.conj()) @ top
+        return (np.r_[lam, lam.conj()], 0.5 * np.hstack([L1, L2.conj()]),
+                np.vstack([R[:, :c], R[:, c:].conj()]))
+
     def _modal(self, nu: np.ndarray) -> np.ndarray:
         shape = nu.shape
         flat = nu.reshape(-1)
         r, k = self._left.shape
-        out = np.empty((flat.size, r, self._right.shape[1]), dtype=complex)
-        step = max(1, CHUNK_ELEMENTS // max(r * k, 1))
-        for s in range(0, flat.size, step):
-            d = 1.0 / (1j * flat[s : s + step, None] - self._lam)  # (c, 2n)
-            out[s : s + step] = np.matmul(self._left * d[:, None, :], self._right)
-        return out.reshape(*shape, r, self._right.shape[1])
+        c = self._right.shape[1]
+        out = np.empty((flat.size, r, c), dtype=complex)
+        if self._residues and r * c * k <= CHUNK_ELEMENTS // 8:
+            # few outputs x inputs: the residues (k, r c) once, then one product per chunk (the
+            # isotropic path only: the full one keeps its summation order, bit for bit)
+            res = self._res
+            if res is None:
+                res = self._res = (self._left.T[:, :, None] * self._right[:, None, :]).reshape(k, r * c)
+            step = max(1, CHUNK_ELEMENTS // max(k + r * c, 1))
+            for s in range(0, flat.size, step):
+                d = 1.0 / (1j * flat[s : s + step, None] - self._lam)  # (chunk, k)
+                out[s : s + step] = (d @ res).reshape(-1, r, c)
+        else:
+            step = max(1, CHUNK_ELEMENTS // max(r * k, 1))
+            for s in range(0, flat.size, step):
+                d = 1.0 / (1j * flat[s : s + step, None] - self._lam)  # (chunk, k)
+                out[s : s + step] = np.matmul(self._left * d[:, None, :], self._right)
+        return out.reshape(*shape, r, c)
 
     # -- direct --------------------------------------------------------------------------------
     def _select(self, x: np.ndarray) -> np.ndarray:
@@ -419,7 +589,8 @@ def system_receptance(
 ) -> Receptance:
     """The :class:`Receptance` of ``system`` at ``speed_rpm`` (``D = C + Omega G``)."""
     M, C, G, K = system.matrices(speed_rpm)
-    return Receptance(M, C + speed_rpm * RPM_TO_RAD_S * G, K, outputs, inputs, method, band_hz)
+    planes = system.plane_pairs() if system.kind == "rotor" else None
+    return Receptance(M, C + speed_rpm * RPM_TO_RAD_S * G, K, outputs, inputs, method, band_hz, planes)
 
 
 def _dofs(d: int | Sequence[int] | np.ndarray | None, n: int) -> np.ndarray:

@@ -32,11 +32,9 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import scipy.linalg as sla
-from scipy.optimize import brentq, linear_sum_assignment
 
 from rotorcheck.config import RigConfig
 from rotorcheck.fe.assembly import build_system
@@ -44,6 +42,14 @@ from rotorcheck.fe.blas import one_blas_thread
 from rotorcheck.fe.damping import undamped_modes
 from rotorcheck.fe.frf import N_FULL, lowest_undamped_modes, ritz_basis, state_matrix
 from rotorcheck.fe.system import RPM_TO_RAD_S, MechanicalSystem
+from rotorcheck.lazy import lazy_module
+
+if TYPE_CHECKING:
+    import scipy.linalg as sla
+    import scipy.optimize as sopt
+else:  # loaded at first use: importing the FE package stays cheap
+    sla = lazy_module("scipy.linalg")
+    sopt = lazy_module("scipy.optimize")
 
 TWO_PI = 2.0 * np.pi
 PLANAR_TOL = 1e-3
@@ -326,7 +332,7 @@ def _track(
         f_prev = np.abs(last.imag)[:, None]
         df = np.abs(f_prev - cur.eigenvalues.imag[None, :]) / np.maximum(f_prev, 1e-12)
         cost = (1.0 - m) + 1e-3 * np.nan_to_num(df, nan=1.0)
-        rows, cols = linear_sum_assignment(cost)
+        rows, cols = sopt.linear_sum_assignment(cost)
         if large:
             ok = m[rows, cols] >= _LOST_MAC
             rows, cols = rows[ok], cols[ok]
@@ -421,7 +427,7 @@ def _branch_crossings(
             j = int(np.argmax(mac(ref, md.shapes)[0]))
             return float(md.frequency_hz[j] - order * rpm / 60.0)
 
-        out.append(float(brentq(h, speeds[k], speeds[k + 1], xtol=1e-6, rtol=1e-12)))
+        out.append(float(sopt.brentq(h, speeds[k], speeds[k + 1], xtol=1e-6, rtol=1e-12)))
     return out
 
 

@@ -132,6 +132,18 @@ class MechanicalSystem:
         base = 4 * np.arange(self.n_nodes)
         return np.sort(np.r_[base, base + 3]), np.sort(np.r_[base + 1, base + 2])
 
+    def plane_pairs(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """A rotor's DOF under a quarter turn about the shaft axis: ``(ix, iy, sign)`` with
+        ``ix`` the x-plane DOF (u, psi of each node), ``iy`` their images (v, theta) and ``sign``
+        (+1 for u -> v, -1 for psi -> theta: the slopes are du/dz = psi, dv/dz = -theta)."""
+        hit = self.cache.get("plane_pairs")
+        if hit is None:
+            base = 4 * np.arange(self.n_nodes)
+            ix = np.stack([base, base + 3], axis=1).reshape(-1)
+            iy = np.stack([base + 1, base + 2], axis=1).reshape(-1)
+            hit = self.cache["plane_pairs"] = (ix, iy, np.tile([1.0, -1.0], self.n_nodes))
+        return hit
+
     def dynamic_stiffness(self, freq_hz: np.ndarray, speed_rpm: float = 0.0) -> np.ndarray:
         """Z(w) = K - w^2 M + j w (C + Omega G), shape (f, n, n), complex (N/m).
 

@@ -26,16 +26,21 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-from scipy.linalg import expm
 
 from rotorcheck.config import Crack
 from rotorcheck.faults.crack import CrackStiffness, crack_stiffness
 from rotorcheck.fe.blas import one_blas_thread
 from rotorcheck.fe.system import RPM_TO_RAD_S, MechanicalSystem
+from rotorcheck.lazy import lazy_module
 from rotorcheck.signal.lockin import average_periods, lockin_periods
+
+if TYPE_CHECKING:
+    import scipy.linalg as sla
+else:  # loaded at the first integration, not by every importer of the simulators
+    sla = lazy_module("scipy.linalg")
 
 __all__ = [
     "LTPIntegrator",
@@ -140,7 +145,7 @@ class LTPIntegrator:
                 dd = d1 - d2
                 comm = self.a0 @ dd - dd @ self.a0  # [A2, A1] (Delta Delta products vanish)
                 gen = hb * self.a0 + 0.5 * hb * (d1 + d2) + (np.sqrt(3.0) / 12.0) * hb**2 * comm
-            out[s : s + chunk] = expm(gen)
+            out[s : s + chunk] = sla.expm(gen)
         return out
 
     # -- integration -------------------------------------------------------------------------
