@@ -39,7 +39,9 @@ def series() -> list[dict[str, np.ndarray | float]]:
     for k, mf in enumerate(FACTORS):
         cracked = _with_element_factor(truth, 4, mf)
         run = workflow.measured_run(simulate_rig(cracked, GRID, 0.0, seed=20 + k, settings=st), nominal)
-        det = workflow.detect(nominal, val.baseline, run)
+        # the per-point certified rule: this series is about identification below the first resonance;
+        # the joint test with the rig's benign ranges hides the 0.5 % loss (bench.detection_limit, part B)
+        det = workflow.detect(nominal, val.baseline, run, rule="certified")
         T_ref = nominal_model(_with_element_factor(nominal, 4, mf), GRID, 0.0).frf
         ref = damage_dynamics(E[:, 0, 0], E[:, 0, 1], E[:, 1, 0], E[:, 1, 1], T_ref)
         out.append({"factor": mf, "anchored": det.anchored, "ref": ref, "bound": det.anchored_set,

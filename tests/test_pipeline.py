@@ -163,7 +163,9 @@ def test_three_mass_end_to_end(tmp_path: Path, capsys: pytest.CaptureFixture) ->
     assert np.max(np.abs(d3.real - kd)) < 1e-9 * kd  # D_0 = k3 - kd at every frequency
     assert np.max(np.abs(d3.imag)) < 1e-9 * kd
     n = r[1]["n_points"]
-    assert r[1]["n_fault_points"] > 0.75 * n and r[2]["n_fault_points"] >= r[1]["n_fault_points"]
+    # m1 is a real parameter (D-G scalings): 137 / 131 / 134 fault points of 151 (the complex relaxation
+    # gave 127 / 128 / 151); every trial flags most of the band
+    assert all(r[t]["n_fault_points"] > 0.75 * n for t in (1, 2, 3))
     for t in (1, 2):  # the trial-3 curve lies inside both bounds
         lo = np.asarray(r[t]["damage_bound_min_abs"], float)
         hi = np.asarray([float(x) for x in r[t]["damage_bound_max_abs"]])
