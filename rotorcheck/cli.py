@@ -219,6 +219,9 @@ def validate(
     run: RunOpt = None,
     at: Annotated[float | None, typer.Option("--at", help="Frequency (Hz) of the complex-plane plot.")] = None,
     plots: Annotated[bool, typer.Option(help="Write the validation plots.")] = True,
+    learn_drift: Annotated[bool, typer.Option(
+        "--learn-drift", help="Learn from the healthy sweeps (>= 3, drifted across the ranges) how the machine "
+                              "drifts: a correction of the model's benign change, directions, kappa.")] = False,
     update: Annotated[bool, typer.Option(
         "--update", help="Fit the rig's variability parameters to the healthy FRF (model updating) and predict "
                          "benign change around the updated model.")] = False,
@@ -244,7 +247,8 @@ def validate(
         noise = workflow.fit_noise(runs[0])
         err.print(f"no noise fit in {out}: fitted V = {noise.value_m * 1e6:.4g} um ({noise.method}, "
                   f"{noise.confidence:.0%}) from {runs[0].path}")
-    outcome = workflow.validate(cfg, runs, noise, enclose=enclose, fail_at=_fail_at(fail_at), update=update)
+    outcome = workflow.validate(cfg, runs, noise, enclose=enclose, fail_at=_fail_at(fail_at), update=update,
+                                learn_drift=learn_drift)
     write_baseline(outcome.baseline, target)
     line = workflow.update_summary(outcome)
     if line:

@@ -352,6 +352,7 @@ def validate(
     enclose: str = "measured",
     fail_at: tuple[int, ...] = (),
     update: bool = False,
+    learn_drift: bool = False,
 ) -> ValidationOutcome:
     """Step 3: gamma_h(w) enclosing every healthy run, and the measured healthy FRF with its noise.
 
@@ -359,6 +360,9 @@ def validate(
     data), 'system' or 'data' (see :data:`ENCLOSE_MODES`). ``update``: fit the rig's variability
     parameters to the healthy FRF (:mod:`rotorcheck.updating`); the joint test then predicts benign
     change around the updated model (stored in the baseline as ``updated_parameters``).
+    ``learn_drift``: learn from the healthy sweeps (>= 3, drifted across the ranges) how the machine
+    drifts (:func:`learn_benign`); off by default: on the crack rig it did not detect better than one
+    sweep with the nominal model (bench.detection_limit, part B).
     """
     from rotorcheck.baseline import Baseline
     from rotorcheck.nominal import nominal_model
@@ -392,7 +396,11 @@ def validate(
             raise InputError(None, "--update", "the rig has no variability section: nothing to update")
         upd = update_parameters(rig, first.frequency_hz, first.speed_rpm, healthy.frf[:, 0])
     model_rig = updated_rig(rig, None if upd is None else upd.as_dict())
-    learning = learn_benign(model_rig, runs) if enclose == "measured" else None
+    if learn_drift and len(runs) < 3:
+        raise InputError(None, "--learn-drift", f"needs at least 3 healthy sweeps (got {len(runs)})")
+    learning = None
+    if enclose == "measured":
+        learning = learn_benign(model_rig, runs) if learn_drift else BenignLearning(KAPPA_NOMINAL)
     learned = learning.learned if learning is not None else None
     base = Baseline(
         rig_id=rig.rig_id, rig_sha256=rig.sha256(), sweep_sha256=[r.sha256 for r in runs],

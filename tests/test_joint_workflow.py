@@ -90,3 +90,9 @@ def test_model_without_speed_reports_every_configured_speed(capsys: pytest.Captu
     got = [m["frequency_hz"] for m in doc["at_speeds"][1]["modes"]]
     np.testing.assert_allclose(got, [m["frequency_hz"] for m in one["modes"]], rtol=1e-12)
     assert got[1] - got[0] > 0.3  # gyroscopic split of mode 1 at 1000 rpm (54.42 / 54.81 Hz)
+
+
+def test_learn_drift_needs_three_sweeps(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    assert main(["validate", str(CR / "healthy_1000rpm.h5"), str(CR / "healthy_1000rpm_repeat.h5"), "--out",
+                 str(tmp_path / "o"), "--no-plots", "--learn-drift"]) == 2
+    assert "--learn-drift" in capsys.readouterr().err
