@@ -213,18 +213,22 @@ def joint_test(residual: np.ndarray, var_total: np.ndarray, signatures: np.ndarr
     w = whitening(var)
     theta = x0
     if lo.size:
-        # start from the bounded linear fit at x0 as well as from x0 (a large change such as E at the edge
-        # of its range is far outside the first-order region; the better end point is kept)
+        # start from the better of x0 and the bounded linear fit at x0 (a large change such as E at the
+        # edge of its range is far outside the first-order region)
         lin = optimize.lsq_linear(jac_at(x0, w), _ri(r - model_ri(x0)) * w, bounds=(lo - x0, hi - x0), method="bvls")
-        starts = [x0, np.clip(x0 + lin.x, lo, hi)]
+        x_lin = np.clip(x0 + lin.x, lo, hi)
+
+        def cost(x: np.ndarray) -> float:
+            e = _ri(r - model_ri(x)) * w
+            return float(e @ e)
+
+        theta = x_lin if cost(x_lin) < cost(x0) else x0
         for _ in range(2 if kappa > 0 else 1):  # refit once with the model-error variance
             def fun(x: np.ndarray, ww: np.ndarray = w) -> np.ndarray:
                 return (_ri(r - model_ri(x))) * ww
 
-            sols = [optimize.least_squares(fun, x_s, bounds=(lo, hi), jac=lambda x, ww=w: -jac_at(x, ww),
-                                  x_scale="jac", method="trf", max_nfev=60) for x_s in starts]
-            theta = min(sols, key=lambda sl: float(sl.cost)).x
-            starts = [theta]
+            theta = optimize.least_squares(fun, theta, bounds=(lo, hi), jac=lambda x, ww=w: -jac_at(x, ww),
+                                           x_scale="jac", method="trf", max_nfev=60).x
             if kappa > 0 and p:
                 assert benign is not None
                 w = whitening(var + kappa**2 * change_scale(r, var, benign.predict(theta[:p])) ** 2)
