@@ -811,7 +811,17 @@ def _benign_model(rig: RigConfig, f: np.ndarray, speed_rpm: float, Th: np.ndarra
 
         def predict(theta: np.ndarray, base: Any = pred.predict) -> np.ndarray:
             return base(theta) + np.asarray(theta, dtype=float) @ C
-    return BenignModel(predict, lo, hi, pred.names, kappa, step)
+    # the largest benign change the ranges allow at each point: each parameter at either end of its
+    # range, magnitudes added (the triangle inequality over the parameters)
+    envelope = np.zeros(f.size)
+    for i in range(len(params)):
+        ends = []
+        for end in (lo[i], hi[i]):
+            x = np.zeros(len(params))
+            x[i] = end
+            ends.append(np.abs(predict(x)))
+        envelope += np.maximum(*ends)
+    return BenignModel(predict, lo, hi, pred.names, kappa, step, envelope)
 
 
 def _learned(baseline: Any) -> Any:

@@ -54,6 +54,7 @@ class BenignModel:
     names: tuple[str, ...]
     kappa: float = 0.0
     step: np.ndarray | float = 1e-4  # finite-difference step(s) of theta for the Jacobian (theta's units)
+    envelope: np.ndarray | None = None  # (n,) largest benign change the ranges allow at each point, m/N
 
 
 @dataclass(frozen=True)
@@ -105,13 +106,17 @@ def _ri(z: np.ndarray) -> np.ndarray:
     return np.concatenate([z.real, z.imag], axis=-1)
 
 
-def change_scale(residual: np.ndarray, var_total: np.ndarray, predicted: np.ndarray, halfwidth: int = 2
-                 ) -> np.ndarray:
+def change_scale(residual: np.ndarray, var_total: np.ndarray, predicted: np.ndarray, halfwidth: int = 2,
+                 envelope: np.ndarray | None = None) -> np.ndarray:
     """Size of the change at each point (m/N) that the model-error term scales with: the larger of the
-    predicted benign change and the observed change beyond the noise, the largest over +-``halfwidth``
-    points (a model's error moves with a resonance, not point by point)."""
+    predicted benign change and the observed change beyond the noise, never more than the largest
+    benign change the ranges allow there (``envelope``: a change beyond it is no benign change, however
+    wrong the model), the largest over +-``halfwidth`` points (a model's error moves with a resonance,
+    not point by point)."""
     seen = np.sqrt(np.maximum(np.abs(residual) ** 2 - var_total, 0.0))
     m = np.maximum(np.abs(predicted), seen)
+    if envelope is not None:
+        m = np.minimum(m, np.asarray(envelope, dtype=float))
     if halfwidth <= 0 or m.size == 0:
         return m
     pad = np.pad(m, halfwidth, mode="edge")
@@ -231,7 +236,8 @@ def joint_test(residual: np.ndarray, var_total: np.ndarray, signatures: np.ndarr
                                            x_scale="jac", method="trf", max_nfev=60).x
             if kappa > 0 and p:
                 assert benign is not None
-                w = whitening(var + kappa**2 * change_scale(r, var, benign.predict(theta[:p])) ** 2)
+                scale = change_scale(r, var, benign.predict(theta[:p]), envelope=benign.envelope)
+                w = whitening(var + kappa**2 * scale**2)
     res0 = _ri(r - model_ri(theta)) * w if lo.size else _ri(r) * w
     chi2_h0 = float(res0 @ res0)
     J = jac_at(theta, w) if lo.size else np.zeros((2 * r.size, 0))
