@@ -115,3 +115,14 @@ def test_change_scale_is_a_windowed_maximum() -> None:
     m = np.maximum(np.abs(b), np.sqrt(np.maximum(np.abs(r) ** 2 - var, 0)))
     ref = [max(m[max(0, k - 2): k + 3]) for k in range(30)]
     np.testing.assert_allclose(got, ref)
+
+
+def test_change_scale_never_exceeds_the_benign_envelope() -> None:
+    rng = np.random.default_rng(4)
+    r = 10 * (rng.standard_normal(30) + 1j * rng.standard_normal(30))
+    var = np.full(30, 0.5)
+    b = rng.standard_normal(30)
+    env = rng.uniform(0.5, 3.0, 30)
+    got = change_scale(r, var, b, 0, envelope=env)
+    m = np.maximum(np.abs(b), np.sqrt(np.maximum(np.abs(r) ** 2 - var, 0)))
+    np.testing.assert_allclose(got, np.minimum(m, env))
