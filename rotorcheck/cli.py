@@ -250,9 +250,9 @@ def validate(
     outcome = workflow.validate(cfg, runs, noise, enclose=enclose, fail_at=_fail_at(fail_at), update=update,
                                 learn_drift=learn_drift)
     write_baseline(outcome.baseline, target)
-    line = workflow.update_summary(outcome)
-    if line:
-        err.print(line)
+    for line in (workflow.update_summary(outcome), workflow.learning_summary(outcome)):
+        if line:
+            err.print(line)
     files = workflow.validation_plots(outcome, out, at, formats) if plots else []
     res = outcome.result
     n_bad = outcome.n_not_enclosed

@@ -319,6 +319,7 @@ class ValidationOutcome:
     runs: list[MeasuredRun]
     rig: RigConfig
     update: Any = None  # rotorcheck.updating.Update (validate --update)
+    learning: Any = None  # BenignLearning (validate --learn-drift)
 
     @property
     def n_not_enclosed(self) -> int:
@@ -420,7 +421,9 @@ def validate(
     )
     if upd is not None:
         base.extra["updated_parameters"] = json.dumps(upd.as_dict(), sort_keys=True)
-    return ValidationOutcome(base, res, model, runs, rig, upd)
+    if learning is not None and learning.model_share:
+        base.extra["benign_model_share"] = json.dumps(learning.model_share, sort_keys=True)
+    return ValidationOutcome(base, res, model, runs, rig, upd, learning)
 
 
 def updated_rig(rig: RigConfig, values: dict[str, float] | None) -> RigConfig:
@@ -436,6 +439,19 @@ def baseline_updates(baseline: Any) -> dict[str, float] | None:
     """The updated parameter values stored in a baseline, if any."""
     doc = baseline.extra.get("updated_parameters")
     return {str(k): float(v) for k, v in json.loads(doc).items()} if doc else None
+
+
+def learning_summary(outcome: ValidationOutcome) -> str:
+    """Lines: how much of each benign direction the model predicts and how much the data show."""
+    lrn = outcome.learning
+    if lrn is None or lrn.theta is None:
+        return ""
+    lines = [f"benign drift learned from {len(outcome.runs)} healthy sweeps: the named parameters (model + learned correction) explain in sample "
+             f"{100 * (lrn.explained or 0.0):.1f} % of their spread (whitened); kappa = {lrn.kappa:g}; "
+             f"{0 if lrn.learned is None else lrn.learned.U.shape[0]} further directions"]
+    for name, (sh, cos) in lrn.model_share.items():
+        lines.append(f"  {name}: the model predicts {100 * sh:.0f} % of the data's response (cosine {cos:.2f})")
+    return "\n".join(lines)
 
 
 def update_summary(outcome: ValidationOutcome) -> str:
@@ -857,6 +873,11 @@ class BenignLearning:
     correction: np.ndarray | None = None  # (p, f) m/N per unit parameter: data's correction of the model
     learned: Any = None  # robust.joint.LearnedDirections: what parameters cannot explain
     theta: np.ndarray | None = None  # (K, p) the training sweeps' fitted parameters
+    # per benign parameter: how much of the data's response to it the model predicts (the part of the
+    # model's sensitivity along the learned one, |<s_model, s_data>| / ||s_data||^2, whitened) and the
+    # cosine between them
+    model_share: dict[str, tuple[float, float]] = field(default_factory=dict)
+    explained: float | None = None  # share of the sweeps' spread the parameters (model + correction) explain
 
 
 def _benign_names(rig: RigConfig, speed_rpm: float) -> list[str]:
@@ -925,8 +946,26 @@ def learn_benign(rig: RigConfig, runs: list[MeasuredRun], false_alarm: float = 0
             C = regress(th, raw)
             th, left, raw = fits(C)
     learned = learn_directions(list(left), 2.0 * var_one)
+    share: dict[str, tuple[float, float]] = {}
+    if C is not None:
+        bm = _benign_model(rig, runs[0].frequency_hz, speed, mean, 0.0)
+        wgt = 2.0 / (2.0 * var_one)
+        for j, name in enumerate(names):
+            if not keep[j]:
+                continue
+            h = float(bm.step[j]) if np.ndim(bm.step) else float(bm.step)
+            x = np.zeros(len(names))
+            x[j] = h
+            s_m = (bm.predict(x) - bm.predict(np.zeros(len(names)))) / h
+            s_d = s_m + C[j]
+            inner = np.sum(wgt * s_m.conj() * s_d)
+            nd, nm = np.sum(wgt * np.abs(s_d) ** 2), np.sum(wgt * np.abs(s_m) ** 2)
+            share[name] = (float(abs(inner) / nd), float(abs(inner) / np.sqrt(nd * nm)))
+    devs = np.array(frfs) - mean
+    wv = 2.0 / (2.0 * var_one)
+    explained = 1.0 - float(np.sum(wv * np.abs(left) ** 2) / np.sum(wv * np.abs(devs) ** 2))
     if len(runs) < 3:
-        return BenignLearning(KAPPA_NOMINAL, C, learned, th)
+        return BenignLearning(KAPPA_NOMINAL, C, learned, th, share, explained)
     for k_try in [k for k in KAPPA_GRID if k >= KAPPA_NOMINAL]:
         ok = True
         for i, r in enumerate(runs):
@@ -939,8 +978,8 @@ def learn_benign(rig: RigConfig, runs: list[MeasuredRun], false_alarm: float = 0
                 ok = False
                 break
         if ok:
-            return BenignLearning(max(k_try, KAPPA_NOMINAL), C, learned, th)
-    return BenignLearning(KAPPA_GRID[-1], C, learned, th)
+            return BenignLearning(max(k_try, KAPPA_NOMINAL), C, learned, th, share, explained)
+    return BenignLearning(KAPPA_GRID[-1], C, learned, th, share, explained)
 
 
 def joint_summary(outcome: DetectionOutcome) -> str:
