@@ -446,8 +446,9 @@ def learning_summary(outcome: ValidationOutcome) -> str:
     lrn = outcome.learning
     if lrn is None or lrn.theta is None:
         return ""
-    lines = [f"benign drift learned from {len(outcome.runs)} healthy sweeps: the named parameters (model + learned correction) explain in sample "
-             f"{100 * (lrn.explained or 0.0):.1f} % of their spread (whitened); kappa = {lrn.kappa:g}; "
+    lines = [f"benign drift learned from {len(outcome.runs)} healthy sweeps: the named parameters (model + "
+             f"learned correction) explain in sample {100 * (lrn.explained or 0.0):.1f} % of their spread "
+             f"(whitened); kappa = {lrn.kappa:g}; "
              f"{0 if lrn.learned is None else lrn.learned.U.shape[0]} further directions"]
     for name, (sh, cos) in lrn.model_share.items():
         lines.append(f"  {name}: the model predicts {100 * sh:.0f} % of the data's response (cosine {cos:.2f})")
