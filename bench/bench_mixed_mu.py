@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from rotorcheck.robust import detect, lft, mu, validate
+from tests.oracles.mixed_mu import min_feasible_1d, real_plus_complex
 
 # ECP 210a three-mass system, dissertation Table 1
 _M = (2.8113, 2.6396, 2.6074)
@@ -67,25 +68,6 @@ def _cplx(rng: np.random.Generator, *shape: int) -> np.ndarray:
     return rng.normal(size=shape) + 1j * rng.normal(size=shape)
 
 
-def _brute_1d(feasible: Any, hi: float = 1e3, n: int = 40001) -> float:
-    """Smallest |delta| over real delta with feasible(delta): log grid both signs + bisection."""
-    if feasible(np.zeros(1))[0]:
-        return 0.0
-    mag = np.geomspace(1e-6, hi, n)
-    best = np.inf
-    for sgn in (1.0, -1.0):
-        ok = feasible(sgn * mag)
-        if not ok.any():
-            continue
-        j = int(np.argmax(ok))
-        lo, up = (0.0 if j == 0 else mag[j - 1]), mag[j]
-        for _ in range(60):
-            mid = 0.5 * (lo + up)
-            lo, up = (lo, mid) if feasible(np.array([sgn * mid]))[0] else (mid, up)
-        best = min(best, up)
-    return best
-
-
 def siso_gap(n: int = 300, seed: int = 11) -> dict[str, float]:
     """SISO, one real parameter: gap stats against brute force and time per point."""
     rng = np.random.default_rng(seed)
@@ -111,7 +93,7 @@ def siso_gap(n: int = 300, seed: int = 11) -> dict[str, float]:
                 return np.abs(c - b * d / (1 - a * d)) <= V[i]
         return f
 
-    ref = np.array([_brute_1d(feas(i)) for i in range(n)])
+    ref = np.array([min_feasible_1d(feas(i), n=40001) for i in range(n)])
     return _stats("siso", real, comp, ref, t_real, t_comp, n)
 
 
@@ -132,22 +114,8 @@ def _stats(tag: str, real: mu.GammaResult, comp: mu.GammaResult, ref: np.ndarray
             f"{tag}_time_ratio_real_over_complex": t_real / t_comp}
 
 
-def _gamma_complex_siso(me: np.ndarray, W: complex, Zt: complex, V: float) -> np.ndarray:
-    """method.md's closed form (one complex scalar) over a stack of Me (g, 2, 2)."""
-    a, b, e = me[:, 0, 0], me[:, 0, 1] * me[:, 1, 0] * W, Zt - me[:, 1, 1] * W
-    p = a * e + b
-    alpha = np.abs(p) ** 2 - V**2 * np.abs(a) ** 2
-    beta = np.conj(e) * p - V**2 * a
-    c0 = np.abs(e) ** 2 - V**2
-    disc = np.abs(beta) ** 2 - alpha * c0
-    with np.errstate(all="ignore"):
-        g = c0 / (np.abs(beta) + np.sqrt(np.maximum(disc, 0.0)))
-    return np.where(c0 <= 0, 0.0, np.where(disc < 0, np.inf, g))
-
-
 def mixed_gap(n: int = 40, seed: int = 12) -> dict[str, float]:
     """One real + one complex scalar block sharing gamma: gap stats and time per point."""
-    from scipy.optimize import minimize_scalar
 
     rng = np.random.default_rng(seed)
     me = np.zeros((n, 3, 3), complex)
@@ -164,24 +132,7 @@ def mixed_gap(n: int = 40, seed: int = 12) -> dict[str, float]:
     t0 = time.perf_counter()
     comp = mu.required_gamma(me, W, Zt, V, mu.Structure((mu.Block("scalar"), mu.Block("scalar"))))
     t_comp = time.perf_counter() - t0
-    ref = np.empty(n)
-    grid = np.linspace(-4.0, 4.0, 4001)
-    for i in range(n):
-        M = me[i]
-
-        def g(x: np.ndarray, M: np.ndarray = M, i: int = i) -> np.ndarray:
-            x = np.atleast_1d(x)
-            with np.errstate(all="ignore"):
-                red = M[None, 1:, 1:] + (x / (1 - M[0, 0] * x))[:, None, None] * np.outer(
-                    M[1:, 0], M[0, 1:])[None]
-            return np.maximum(np.abs(x), _gamma_complex_siso(red, W[i], Zt[i], V[i]))
-
-        vals = g(grid)
-        j = int(np.argmin(vals))
-        res = minimize_scalar(lambda x, g=g: float(g(np.array([x]))[0]),
-                              bounds=(grid[max(j - 1, 0)], grid[min(j + 1, grid.size - 1)]),
-                              method="bounded", options={"xatol": 1e-13})
-        ref[i] = min(float(vals[j]), float(res.fun))
+    ref = real_plus_complex(me, W, Zt, V, 4001)
     ref = np.where(ref > 3.9, np.inf, ref)
     return _stats("mixed", real, comp, ref, t_real, t_comp, n)
 

@@ -18,9 +18,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from robust_helpers import M1, three_mass_Z
-from scipy.optimize import minimize_scalar
 
 from rotorcheck.robust import detect, lft, mu, validate
+from tests.oracles.mixed_mu import min_feasible_1d, real_plus_complex
 
 SEED = 2025
 TOL = 1e-6  # brute-force resolution (relative)
@@ -30,51 +30,10 @@ def cplx(rng: np.random.Generator, *shape: int) -> np.ndarray:
     return rng.normal(size=shape) + 1j * rng.normal(size=shape)
 
 
-def _min_feasible_1d(feasible: object, hi: float = 1e3, n: int = 4001) -> float:
-    """Smallest |delta| (delta real) with ``feasible(delta)`` True: a log grid on both signs from
-    1e-6 to ``hi``, the first feasible grid point per sign refined by bisection; inf if none."""
-    f = feasible  # (g,) real -> (g,) bool
-    if f(np.zeros(1))[0]:  # type: ignore[operator]
-        return 0.0
-    mag = np.geomspace(1e-6, hi, n)
-    best = np.inf
-    for sgn in (1.0, -1.0):
-        ok = f(sgn * mag)  # type: ignore[operator]
-        if not ok.any():
-            continue
-        j = int(np.argmax(ok))
-        lo_, hi_ = (0.0 if j == 0 else mag[j - 1]), mag[j]
-        for _ in range(60):
-            mid = 0.5 * (lo_ + hi_)
-            if f(np.array([sgn * mid]))[0]:  # type: ignore[operator]
-                hi_ = mid
-            else:
-                lo_ = mid
-        best = min(best, hi_)
-    return best
-
-
 def _siso_resid(me: np.ndarray, W: complex, Zt: complex, d: np.ndarray) -> np.ndarray:
     a, b = me[0, 0], me[0, 1] * me[1, 0] * W
     with np.errstate(all="ignore"):
         return np.abs(Zt - me[1, 1] * W - b * d / (1 - a * d))
-
-
-def _gamma_complex_siso(me: np.ndarray, W: complex, Zt: complex, V: float) -> np.ndarray:
-    """method.md's closed form for one complex scalar, vectorized over a stack of Me (g, 2, 2)."""
-    a = me[:, 0, 0]
-    b = me[:, 0, 1] * me[:, 1, 0] * W
-    e = Zt - me[:, 1, 1] * W
-    p = a * e + b
-    alpha = np.abs(p) ** 2 - V**2 * np.abs(a) ** 2
-    beta = np.conj(e) * p - V**2 * a
-    c0 = np.abs(e) ** 2 - V**2
-    disc = np.abs(beta) ** 2 - alpha * c0
-    with np.errstate(all="ignore"):
-        g = c0 / (np.abs(beta) + np.sqrt(np.maximum(disc, 0.0)))
-    g = np.where(disc < 0, np.inf, g)
-    g = np.where(np.abs(b) == 0, np.inf, g)
-    return np.where(c0 <= 0, 0.0, g)
 
 
 def _check_bracket(lo: np.ndarray, up: np.ndarray, st: np.ndarray, ref: np.ndarray, big: float
@@ -108,7 +67,7 @@ def siso() -> dict[str, np.ndarray]:
     V = rng.uniform(0.1, 1.2, n) * np.abs(Zt - Z0)
     real = mu.required_gamma(me, W, Zt, V, mu.Structure.real())
     comp = mu.required_gamma(me, W, Zt, V)
-    ref = np.array([_min_feasible_1d(lambda d, i=i: _siso_resid(me[i], W[i], Zt[i], d) <= V[i],
+    ref = np.array([min_feasible_1d(lambda d, i=i: _siso_resid(me[i], W[i], Zt[i], d) <= V[i],
                                      n=40001) for i in range(n)])
     return {"real": real, "comp": comp, "ref": ref, "me": me, "W": W, "Zt": Zt, "V": V}
 
@@ -157,22 +116,7 @@ def mixed() -> dict[str, np.ndarray]:
     real = mu.required_gamma(me, W, Zt, V, st, rtol=1e-7)
     comp = mu.required_gamma(me, W, Zt, V, mu.Structure((mu.Block("scalar"), mu.Block("scalar"))),
                              rtol=1e-7)
-    ref = np.empty(n)
-    grid = np.linspace(-4.0, 4.0, 1601)
-    for i in range(n):
-        def g(x: np.ndarray, i: int = i) -> np.ndarray:
-            x = np.atleast_1d(x)
-            M = me[i]
-            with np.errstate(all="ignore"):
-                red = M[None, 1:, 1:] + (x / (1 - M[0, 0] * x))[:, None, None] * np.outer(
-                    M[1:, 0], M[0, 1:])[None]
-            return np.maximum(np.abs(x), _gamma_complex_siso(red, W[i], Zt[i], V[i]))
-        vals = g(grid)
-        j = int(np.argmin(vals))
-        res = minimize_scalar(lambda x, g=g: float(g(np.array([x]))[0]),
-                              bounds=(grid[max(j - 1, 0)], grid[min(j + 1, grid.size - 1)]),
-                              method="bounded", options={"xatol": 1e-13})
-        ref[i] = min(float(vals[j]), float(res.fun))
+    ref = real_plus_complex(me, W, Zt, V, 1601)
     return {"real": real, "comp": comp, "ref": ref}
 
 
@@ -217,7 +161,7 @@ def repeated() -> dict[str, np.ndarray]:
                               d[:, None, None] * np.eye(2))[:, 0, 0] * W[i]
         return np.abs(Zt[i] - z) <= V[i]
 
-    ref = np.array([_min_feasible_1d(lambda d, i=i: feas(i, d), hi=1e2, n=3001)
+    ref = np.array([min_feasible_1d(lambda d, i=i: feas(i, d), hi=1e2, n=3001)
                     for i in range(f)])
     return {"real": real, "ref": ref}
 

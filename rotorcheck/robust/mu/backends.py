@@ -220,6 +220,19 @@ class SolveSession:
 # the two backends
 
 
+def solve_each(solve_one: Callable[..., LmiOut], G0: np.ndarray, Gs: np.ndarray,
+               terms: Sequence[Sequence[np.ndarray]], session: SolveSession, point_seconds: float | None
+               ) -> list[LmiOut]:
+    """The 'maxs' problems of a stack of points one by one (each guarded when ``point_seconds`` is set)."""
+    out = []
+    for i in range(G0.shape[0]):
+        def solve(i: int = i) -> LmiOut:
+            return solve_one(G0[i], Gs[i], [[T[i] for T in ts] for ts in terms], session)
+
+        out.append(solve() if point_seconds is None else session.guarded_point(solve, point_seconds))
+    return out
+
+
 class CvxpyLmi:
     """``opt s.t. s Gs + G0 + sum_l theta_l G_l <= 0`` in the real embedding.
 
@@ -317,14 +330,7 @@ class CvxpyLmi:
     def solve_many(self, G0: np.ndarray, Gs: np.ndarray, terms: Sequence[Sequence[np.ndarray]],
                    session: SolveSession, point_seconds: float | None) -> list[LmiOut]:
         """'maxs' problems of a stack of points (see :meth:`ClarabelLmi.solve_many`)."""
-        out = []
-        for i in range(G0.shape[0]):
-            def solve(i: int = i) -> LmiOut:
-                return self.solve(G0[i], Gs[i], [[T[i] for T in ts] for ts in terms], session)
-
-            out.append(solve() if point_seconds is None
-                       else session.guarded_point(solve, point_seconds))
-        return out
+        return solve_each(self.solve, G0, Gs, terms, session, point_seconds)
 
 
 class ClarabelLmi:
@@ -672,14 +678,7 @@ class ClarabelGeneralLmi:
     def solve_many(self, G0: np.ndarray, Gs: np.ndarray, terms: Sequence[Sequence[np.ndarray]],
                    session: SolveSession, point_seconds: float | None) -> list[LmiOut]:
         """'maxs' problems of a stack of points (see :meth:`ClarabelLmi.solve_many`)."""
-        out = []
-        for i in range(G0.shape[0]):
-            def solve(i: int = i) -> LmiOut:
-                return self.solve(G0[i], Gs[i], [[T[i] for T in ts] for ts in terms], session)
-
-            out.append(solve() if point_seconds is None
-                       else session.guarded_point(solve, point_seconds))
-        return out
+        return solve_each(self.solve, G0, Gs, terms, session, point_seconds)
 
 
 class LmiCache:
