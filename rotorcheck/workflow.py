@@ -604,6 +604,9 @@ class DetectionOutcome:
             rep.detectable_stiffness_loss = [float(x) for x in j.detectable]
             rep.benign_parameters = benign_table(j, self.rig)
             rep.benign_model_error, rep.learned_benign_directions = j.kappa, j.learned
+            rem = np.asarray(j.remaining, dtype=bool)
+            rep.fault_beyond_benign = rem
+            rep.fault_beyond_benign_frequencies_hz = [float(x) for x in f[rem]]
         return rep
 
 

@@ -118,6 +118,11 @@ def render_markdown(report: dict[str, Any], plots: list[str]) -> str:
     return "\n".join(lines) + "\n"
 
 
+def _step(report: dict[str, Any]) -> float:
+    f = np.asarray(report["frequency_hz"], dtype=float)
+    return float(np.median(np.diff(f))) if f.size > 1 else 1.0
+
+
 def _joint_section(report: dict[str, Any]) -> list[str]:
     """The joint test: statistic, the best candidate with its interval, benign parameters, detectable size."""
     if "joint_statistic" not in report:
@@ -138,6 +143,11 @@ def _joint_section(report: dict[str, Any]) -> list[str]:
             lines.append(f"| {b['name']} | {b['estimate']:+.4g} {b['unit']} | [{lo:+.4g}, {hi:+.4g}] | "
                          f"{'yes' if b['at_range_edge'] else 'no'} |")
         lines.append("")
+    beyond = report.get("fault_beyond_benign_frequencies_hz")
+    if beyond is not None:
+        lines += [f"{len(beyond)} points stay unexplained after the fitted benign change (per point, the noise and "
+                  f"the model-error allowance, Sidak at {report['false_alarm']:g} over the points)"
+                  + (f": {_ranges(list(beyond), _step(report))}." if beyond else "."), ""]
     els, det = report.get("candidate_elements") or [], report.get("detectable_stiffness_loss") or []
     if els:
         lines += ["Smallest stiffness loss this sweep could reveal (90 % power at the stated rate): "

@@ -107,6 +107,9 @@ class DetectionReport:
     benign_parameters: list[dict[str, Any]] | None = None  # {name, estimate, interval, unit, at_range_edge}
     benign_model_error: float | None = None  # kappa: relative error of the model's benign prediction in H0
     learned_benign_directions: int | None = None
+    # points the fitted benign change leaves unexplained (per point, Sidak at false_alarm over the points)
+    fault_beyond_benign: FloatArray | None = None  # (f,) bool
+    fault_beyond_benign_frequencies_hz: list[float] | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """The report.json document (arrays as numpy; :func:`rotorcheck.report.reports.render_json`)."""

@@ -93,7 +93,15 @@ class JointResult:
     kappa: float
     n_points: int
     unexplained: np.ndarray  # (n,) complex m/N: the change left after the H0 fit (benign + learned)
+    point_statistic: np.ndarray  # (n,) |unexplained|^2 / (sigma^2 / 2) per point (chi2, 2 dof under H0)
+    point_threshold: float  # per-point threshold: Sidak over the points at the false-alarm rate
     notes: list[str] = field(default_factory=list)
+
+    @property
+    def remaining(self) -> np.ndarray:
+        """(n,) bool: points the benign change fitted under H0 leaves unexplained beyond the noise and the
+        model-error allowance (per point, Sidak at ``false_alarm`` over the points)."""
+        return self.point_statistic > self.point_threshold
 
     @property
     def severity_interval(self) -> tuple[float, float]:
@@ -299,5 +307,7 @@ def joint_test(residual: np.ndarray, var_total: np.ndarray, signatures: np.ndarr
         theta_se=theta_se, theta_names=benign.names if benign is not None else (),
         theta_at_bound=at_bound[:p], chi2_h0=chi2_h0, dof_h0=int(2 * r.size - int(np.count_nonzero(~at_bound))),
         learned=q, kappa=kappa, n_points=r.size, unexplained=r - model_ri(theta) if lo.size else r.copy(),
+        point_statistic=res0[: r.size] ** 2 + res0[r.size:] ** 2,
+        point_threshold=float(-2.0 * np.log(-np.expm1(np.log1p(-false_alarm) / max(r.size, 1)))),
         notes=notes,
     )
