@@ -833,15 +833,19 @@ def _benign_model(rig: RigConfig, f: np.ndarray, speed_rpm: float, Th: np.ndarra
             return base(theta) + np.asarray(theta, dtype=float) @ C
     # the largest benign change the ranges allow at each point: each parameter at either end of its
     # range, magnitudes added (the triangle inequality over the parameters)
+    # a gain's change is exact (T_h g): it carries no model error; the envelope covers the rest
+    exact = np.array([p.name in ("sensor_gain", "actuator_gain") for p in params], dtype=bool)
     envelope = np.zeros(f.size)
     for i in range(len(params)):
+        if exact[i]:
+            continue
         ends = []
         for end in (lo[i], hi[i]):
             x = np.zeros(len(params))
             x[i] = end
             ends.append(np.abs(predict(x)))
         envelope += np.maximum(*ends)
-    return BenignModel(predict, lo, hi, pred.names, kappa, step, envelope)
+    return BenignModel(predict, lo, hi, pred.names, kappa, step, envelope, exact)
 
 
 def _learned(baseline: Any) -> Any:

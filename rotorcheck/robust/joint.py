@@ -55,6 +55,7 @@ class BenignModel:
     kappa: float = 0.0
     step: np.ndarray | float = 1e-4  # finite-difference step(s) of theta for the Jacobian (theta's units)
     envelope: np.ndarray | None = None  # (n,) largest benign change the ranges allow at each point, m/N
+    exact: np.ndarray | None = None  # (p,) bool: parameters whose predicted change is exact (gains): no kappa
 
 
 @dataclass(frozen=True)
@@ -244,7 +245,12 @@ def joint_test(residual: np.ndarray, var_total: np.ndarray, signatures: np.ndarr
                                            x_scale="jac", method="trf", max_nfev=60).x
             if kappa > 0 and p:
                 assert benign is not None
-                scale = change_scale(r, var, benign.predict(theta[:p]), envelope=benign.envelope)
+                b_all = benign.predict(theta[:p])
+                b_exact = np.zeros_like(b_all)
+                if benign.exact is not None and np.any(benign.exact):
+                    inexact = np.where(benign.exact, 0.0, theta[:p])
+                    b_exact = b_all - benign.predict(inexact)  # the exactly predicted part (a gain)
+                scale = change_scale(r - b_exact, var, b_all - b_exact, envelope=benign.envelope)
                 w = whitening(var + kappa**2 * scale**2)
     res0 = _ri(r - model_ri(theta)) * w if lo.size else _ri(r) * w
     chi2_h0 = float(res0 @ res0)
