@@ -197,12 +197,10 @@ def joint_test(residual: np.ndarray, var_total: np.ndarray, signatures: np.ndarr
             b = b + c @ U
         return b
 
-    lo = np.concatenate([benign.lo if benign is not None else [], -learned.c_max if learned else [],
-                         -learned.c_max if learned else []])
-    hi = -lo if benign is None else np.concatenate([benign.hi, learned.c_max if learned else [],
-                                                   learned.c_max if learned else []])
-    if benign is None and learned is not None:
-        hi = np.concatenate([learned.c_max, learned.c_max])
+    # unknowns: the benign parameters, then the learned coefficients' real and imaginary parts
+    c_max = learned.c_max if learned is not None else np.zeros(0)
+    lo = np.concatenate([benign.lo if benign is not None else np.zeros(0), -c_max, -c_max])
+    hi = np.concatenate([benign.hi if benign is not None else np.zeros(0), c_max, c_max])
     x0 = np.zeros(lo.size)
     if benign is not None:
         x0[:p] = np.clip(0.0, benign.lo, benign.hi)
@@ -224,25 +222,21 @@ def joint_test(residual: np.ndarray, var_total: np.ndarray, signatures: np.ndarr
             J[:, p + q:] = _ri(1j * U).T * w[:, None]
         return J
 
+    def whitened(x: np.ndarray, ww: np.ndarray) -> np.ndarray:
+        """The residual left by the nuisance at ``x``, whitened by ``ww`` (2n,)."""
+        return _ri(r - model_ri(x)) * ww
+
     w = whitening(var)
     theta = x0
     if lo.size:
         # start from the better of x0 and the bounded linear fit at x0 (a large change such as E at the
         # edge of its range is far outside the first-order region)
-        lin = optimize.lsq_linear(jac_at(x0, w), _ri(r - model_ri(x0)) * w, bounds=(lo - x0, hi - x0), method="bvls")
+        lin = optimize.lsq_linear(jac_at(x0, w), whitened(x0, w), bounds=(lo - x0, hi - x0), method="bvls")
         x_lin = np.clip(x0 + lin.x, lo, hi)
-
-        def cost(x: np.ndarray) -> float:
-            e = _ri(r - model_ri(x)) * w
-            return float(e @ e)
-
-        theta = x_lin if cost(x_lin) < cost(x0) else x0
+        theta = min((x0, x_lin), key=lambda x: float(np.sum(whitened(x, w) ** 2)))
         for _ in range(2 if kappa > 0 else 1):  # refit once with the model-error variance
-            def fun(x: np.ndarray, ww: np.ndarray = w) -> np.ndarray:
-                return (_ri(r - model_ri(x))) * ww
-
-            theta = optimize.least_squares(fun, theta, bounds=(lo, hi), jac=lambda x, ww=w: -jac_at(x, ww),
-                                           x_scale="jac", method="trf", max_nfev=60).x
+            theta = optimize.least_squares(whitened, theta, bounds=(lo, hi), jac=lambda x, ww: -jac_at(x, ww),
+                                           x_scale="jac", method="trf", max_nfev=60, args=(w,)).x
             if kappa > 0 and p:
                 assert benign is not None
                 b_all = benign.predict(theta[:p])
@@ -252,9 +246,9 @@ def joint_test(residual: np.ndarray, var_total: np.ndarray, signatures: np.ndarr
                     b_exact = b_all - benign.predict(inexact)  # the exactly predicted part (a gain)
                 scale = change_scale(r - b_exact, var, b_all - b_exact, envelope=benign.envelope)
                 w = whitening(var + kappa**2 * scale**2)
-    res0 = _ri(r - model_ri(theta)) * w if lo.size else _ri(r) * w
+    res0 = whitened(theta, w)
     chi2_h0 = float(res0 @ res0)
-    J = jac_at(theta, w) if lo.size else np.zeros((2 * r.size, 0))
+    J = jac_at(theta, w)
     at_bound = np.zeros(lo.size, dtype=bool)
     if lo.size:
         span = np.maximum(hi - lo, 1e-300)
@@ -312,7 +306,7 @@ def joint_test(residual: np.ndarray, var_total: np.ndarray, signatures: np.ndarr
         severity=sev, severity_se=se, detectable=detectable, best=best, theta=theta[:p],
         theta_se=theta_se, theta_names=benign.names if benign is not None else (),
         theta_at_bound=at_bound[:p], chi2_h0=chi2_h0, dof_h0=int(2 * r.size - int(np.count_nonzero(~at_bound))),
-        learned=q, kappa=kappa, n_points=r.size, unexplained=r - model_ri(theta) if lo.size else r.copy(),
+        learned=q, kappa=kappa, n_points=r.size, unexplained=r - model_ri(theta),
         point_statistic=res0[: r.size] ** 2 + res0[r.size:] ** 2,
         point_threshold=float(-2.0 * np.log(-np.expm1(np.log1p(-false_alarm) / max(r.size, 1)))),
         notes=notes,
