@@ -94,8 +94,8 @@ def benign_prediction(config: RigConfig, freq_hz: np.ndarray, speed_rpm: float, 
         if key not in cache:
             values = {p.name: float(x) for p, x in zip(params, theta)}
             cfg, d_rpm, g_s, g_a = with_benign(config, values)
-            model_values = {k: v for k, v in values.items() if k not in ("sensor_gain", "actuator_gain", "speed")}
-            g = io_frf(cfg, f, speed_rpm + d_rpm) if (model_values and any(model_values.values())) or d_rpm else g0
+            resolve = d_rpm != 0.0 or any(x != 0.0 for p, x in zip(params, theta) if p.changes_model)
+            g = io_frf(cfg, f, speed_rpm + d_rpm) if resolve else g0
             cache[key] = healthy_frf * (g_s * g_a * g / g0 - 1.0)
             if len(cache) > 256:
                 cache.pop(next(iter(cache)))

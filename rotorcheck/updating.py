@@ -46,7 +46,7 @@ def update_parameters(config: RigConfig, freq_hz: np.ndarray, speed_rpm: float, 
                       span: float = 10.0) -> Update:
     """Fit the ``variability`` parameters (not the speed) of ``config`` to the measured ``frf`` (f,) m/N."""
     f = np.asarray(freq_hz, dtype=float)
-    params = [p for p in benign_parameters(config) if p.name != "speed"]
+    params = [p for p in benign_parameters(config) if not p.is_speed]
     if not params:
         raise ValueError("the rig has no variability parameters to update")
     lo = np.array([max(span * p.lo, -0.95) if p.kind == "factor" else span * p.lo for p in params])

@@ -27,7 +27,7 @@ from pydantic import BaseModel
 
 from rotorcheck.config import Leaf, ResolvedBenign, RigConfig, SpeedTable, leaf_text, resolve_benign
 
-__all__ = ["BenignParameter", "benign_parameters", "with_benign"]
+__all__ = ["BenignParameter", "benign_at", "benign_parameters", "with_benign"]
 
 
 @dataclass(frozen=True)
@@ -40,6 +40,20 @@ class BenignParameter:
     hi: float
     unit: str  # unit of x for display: "%" (show x * 100) for factors, "rpm", "N s/m", ...
     target: tuple[str, ...]  # what it touches, e.g. ("bearings", "nme", "stiffness"), ("speed",)
+
+    @property
+    def is_gain(self) -> bool:
+        """A transducer gain: it scales the measured FRF, the model is not re-solved."""
+        return self.target[0] == "gain"
+
+    @property
+    def is_speed(self) -> bool:
+        return self.target[0] == "speed"
+
+    @property
+    def changes_model(self) -> bool:
+        """A parameter of the rig description (not a gain, not the speed)."""
+        return not (self.is_gain or self.is_speed)
 
 
 def _public(r: ResolvedBenign) -> BenignParameter:
@@ -83,6 +97,11 @@ def _scale(factor: float) -> Callable[[float], float]:
 
 def _shift(offset: float) -> Callable[[float], float]:
     return lambda v: v + offset
+
+
+def benign_at(config: RigConfig, speed_rpm: float) -> tuple[BenignParameter, ...]:
+    """The rig's benign parameters that act at ``speed_rpm`` (at standstill a speed tolerance does not)."""
+    return tuple(p for p in benign_parameters(config) if not (p.is_speed and speed_rpm == 0.0))
 
 
 def with_benign(config: RigConfig, values: Mapping[str, float]) -> tuple[RigConfig, float, float, float]:

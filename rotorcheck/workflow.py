@@ -621,7 +621,7 @@ def speed_tolerance(rig: RigConfig) -> float:
     """The rig's speed tolerance (rpm) from its ``variability`` section; 0 without one."""
     from rotorcheck.variability import benign_parameters
 
-    return max((max(abs(p.lo), abs(p.hi)) for p in benign_parameters(rig) if p.name == "speed"), default=0.0)
+    return max((max(abs(p.lo), abs(p.hi)) for p in benign_parameters(rig) if p.is_speed), default=0.0)
 
 
 def check_baseline(baseline: Any, rig: RigConfig, run: MeasuredRun, baseline_path: str | Path) -> None:
@@ -808,18 +808,18 @@ def _benign_model(rig: RigConfig, f: np.ndarray, speed_rpm: float, Th: np.ndarra
     (p, f) m/N per unit parameter, learned from healthy sweeps, is added: ``b(theta) + theta C``."""
     from rotorcheck.robust.joint import BenignModel
     from rotorcheck.signatures import benign_prediction
-    from rotorcheck.variability import benign_parameters
+    from rotorcheck.variability import benign_at
 
     if not rig.variability:
         return None
-    params = [p for p in benign_parameters(rig) if not (p.name == "speed" and speed_rpm == 0.0)]
+    params = benign_at(rig, speed_rpm)
     if not params:  # at standstill a speed tolerance changes nothing
         return None
     pred = benign_prediction(rig, f, speed_rpm, Th, params)
     lo, hi = pred.lo.copy(), pred.hi.copy()
     step = np.array([1e-4 if p.kind == "factor" else 1e-3 * max(p.hi - p.lo, 1e-9) for p in pred.parameters])
     for i, prm in enumerate(pred.parameters):
-        if prm.name == "speed":
+        if prm.is_speed:
             lo[i], hi[i] = lo[i] + speed_offset, hi[i] + speed_offset
             step[i] = 0.5
     predict = pred.predict
@@ -834,7 +834,7 @@ def _benign_model(rig: RigConfig, f: np.ndarray, speed_rpm: float, Th: np.ndarra
     # the largest benign change the ranges allow at each point: each parameter at either end of its
     # range, magnitudes added (the triangle inequality over the parameters)
     # a gain's change is exact (T_h g): it carries no model error; the envelope covers the rest
-    exact = np.array([p.name in ("sensor_gain", "actuator_gain") for p in params], dtype=bool)
+    exact = np.array([p.is_gain for p in params], dtype=bool)
     envelope = np.zeros(f.size)
     for i in range(len(params)):
         if exact[i]:
@@ -888,12 +888,6 @@ class BenignLearning:
     explained: float | None = None  # share of the sweeps' spread the parameters (model + correction) explain
 
 
-def _benign_names(rig: RigConfig, speed_rpm: float) -> list[str]:
-    from rotorcheck.variability import benign_parameters
-
-    return [p.name for p in benign_parameters(rig) if not (p.name == "speed" and speed_rpm == 0.0)]
-
-
 def _regress(theta: np.ndarray, left: np.ndarray, ridge: float = 1e-3) -> np.ndarray:
     """``C`` (p, f) minimizing sum_k ||left_k - theta_k C||^2, each parameter scaled to unit RMS first
     (parameters come in % and rpm) with a ridge ``ridge`` on the scaled Gram matrix."""
@@ -941,8 +935,10 @@ def learn_benign(rig: RigConfig, runs: list[MeasuredRun], false_alarm: float = 0
     th, left, raw = fits(None)
     # the speed tolerance is corrected by nothing: its effect (gyroscopics) is small beside the others
     # and its training values are barely identifiable, so a regression on it learns noise
-    names = _benign_names(rig, speed)
-    keep = np.array([n != "speed" for n in names], dtype=bool)
+    from rotorcheck.variability import benign_at
+
+    names = [p.name for p in benign_at(rig, speed)]
+    keep = np.array([not p.is_speed for p in benign_at(rig, speed)], dtype=bool)
 
     def regress(t: np.ndarray, e: np.ndarray) -> np.ndarray:
         out = np.zeros((t.shape[1], e.shape[1]), dtype=complex)
