@@ -19,12 +19,12 @@ from __future__ import annotations
 
 import json
 import time
-from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from bench.timing import median_time
 from rotorcheck.config import load_config
 from rotorcheck.faults.crack import crack_stiffness
 from rotorcheck.faults.harmonic_balance import cracked_tones
@@ -35,16 +35,6 @@ from rotorcheck.sim.time_sim import steady_state_lockin
 RIG = Path(__file__).resolve().parents[1] / "configs" / "crack_rig_truth.yaml"
 SPEED_RPM = 1000.0
 FREQ_HZ = np.linspace(30.0, 600.0, 262)
-
-
-def _times(fn: Callable[[], Any], repeat: int) -> list[float]:
-    fn()  # warm-up
-    out = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        out.append(time.perf_counter() - t0)
-    return out
 
 
 def run(repeat: int = 20, ti_points: int = 3, n_harmonics: int = 8) -> dict[str, Any]:
@@ -58,9 +48,9 @@ def run(repeat: int = 20, ti_points: int = 3, n_harmonics: int = 8) -> dict[str,
     def sweep() -> Any:
         return cracked_tones(system, crack, SPEED_RPM, ind, out, n_harmonics).sweep(FREQ_HZ)
 
-    t_sweep = float(np.median(_times(sweep, repeat)))
+    t_sweep = median_time(sweep, repeat)
     plant = cracked_tones(system, crack, SPEED_RPM, ind, out, n_harmonics)
-    t_call = float(np.median(_times(lambda: [plant(f) for f in FREQ_HZ[::13]], 3))) / FREQ_HZ[::13].size
+    t_call = median_time(lambda: [plant(f) for f in FREQ_HZ[::13]], 3) / FREQ_HZ[::13].size
     res = plant.sweep(FREQ_HZ)
     idx = np.linspace(0, FREQ_HZ.size - 1, ti_points).round().astype(int)
     ti_times, diffs = [], []

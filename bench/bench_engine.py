@@ -39,6 +39,7 @@ from typing import Any
 import numpy as np
 import yaml
 
+from bench.timing import median_time
 from rotorcheck.config import RigConfig, load_config
 from rotorcheck.faults.crack import crack_stiffness
 from rotorcheck.faults.harmonic_balance import HBSolver
@@ -55,16 +56,6 @@ SWEEP = ROOT / "data_samples" / "crack_rig" / "healthy_1000rpm.h5"
 SPEED_RPM = 1000.0
 FREQ_HZ = np.linspace(30.0, 600.0, 262)
 REFINE = (1, 2, 4, 8, 16, 32, 64)
-
-
-def _median(fn: Callable[[], Any], repeat: int) -> float:
-    fn()  # warm-up
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return float(np.median(times))
 
 
 def _paired(fns: Sequence[Callable[[], Any]], repeat: int) -> list[float]:
@@ -202,7 +193,7 @@ def frf_ratio(repeat: int) -> dict[str, Any]:
         t_prod, t_cold, t_dense = _paired([prod0, cold, dense0], repeat)
         # as the bench measured before (each back to back, warm): the product after itself runs
         # ~0.3 ms faster than after a dense loop or an idle moment
-        t_prod_b2b, t_dense_b2b = _median(prod0, 3 * repeat), _median(dense0, repeat)
+        t_prod_b2b, t_dense_b2b = median_time(prod0, 3 * repeat), median_time(dense0, repeat)
         tag = f"frf_9el_{int(rpm)}rpm"
         got = nominal_model(config, FREQ_HZ, rpm, system=system).P[:, 1:, 1:]
         out.update({
@@ -254,7 +245,7 @@ def scaling(dense_up_to: int = 0) -> dict[str, Any]:
         peak = tracemalloc.get_traced_memory()[1]
         tracemalloc.stop()
         t_frf = time.perf_counter() - t0
-        t_frf = min(t_frf, _median(lambda s=system, o=outs, i=ins: _engine(s, o, i), 2))
+        t_frf = min(t_frf, median_time(lambda s=system, o=outs, i=ins: _engine(s, o, i), 2))
         row: dict[str, Any] = {"elements": 9 * r, "n_dof": system.n_dof, "assembly_s": t_asm, "frf_s": t_frf,
                                "frf_peak_traced_mb": peak / 2**20,
                                "dense_stack_would_be_mb": FREQ_HZ.size * system.n_dof**2 * 16 / 2**20}
@@ -357,10 +348,10 @@ def blas_threads(repeat: int) -> dict[str, Any]:
             return factor()
 
     return {
-        "hb_sweep_one_thread_s": _median(lambda: solver.solve(FREQ_HZ), repeat),
-        "hb_sweep_default_threads_s": _median(lambda: solver._solve(FREQ_HZ, 64), repeat),
-        "modal_factor_18el_one_thread_s": _median(factor_one, 5 * repeat),
-        "modal_factor_18el_default_threads_s": _median(factor, 5 * repeat),
+        "hb_sweep_one_thread_s": median_time(lambda: solver.solve(FREQ_HZ), repeat),
+        "hb_sweep_default_threads_s": median_time(lambda: solver._solve(FREQ_HZ, 64), repeat),
+        "modal_factor_18el_one_thread_s": median_time(factor_one, 5 * repeat),
+        "modal_factor_18el_default_threads_s": median_time(factor, 5 * repeat),
         "load_average_1min": os.getloadavg()[0],
         "cpu_count": os.cpu_count(),
     }

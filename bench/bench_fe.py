@@ -15,13 +15,13 @@ from __future__ import annotations
 
 import json
 import os
-import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from bench.timing import median_time
 from rotorcheck.config import load_config
 from rotorcheck.fe.assembly import build_system
 from rotorcheck.fe.frf import receptance
@@ -30,16 +30,6 @@ from rotorcheck.fe.system import RPM_TO_RAD_S, MechanicalSystem
 RIG = Path(__file__).resolve().parents[1] / "configs" / "crack_rig.yaml"
 SPEED_RPM = 1000.0
 FREQ_HZ = np.linspace(30.0, 600.0, 262)
-
-
-def _median(fn: Callable[[], Any], repeat: int) -> float:
-    fn()  # warm-up (imports, BLAS threads)
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return float(np.median(times))
 
 
 def naive_receptance(
@@ -86,12 +76,12 @@ def run(repeat: int = 25) -> dict[str, Any]:
         "repeat": repeat,
         "openblas_num_threads": os.environ.get("OPENBLAS_NUM_THREADS", "default"),
         "cpu_count": os.cpu_count(),
-        "load_yaml_s": _median(lambda: load_config(RIG), repeat),
-        "assembly_s": _median(lambda: build_system(config).matrices(SPEED_RPM), repeat),
+        "load_yaml_s": median_time(lambda: load_config(RIG), repeat),
+        "assembly_s": median_time(lambda: build_system(config).matrices(SPEED_RPM), repeat),
     }
     for method in ("auto", "direct", "modal", "naive"):
-        res[f"assembly_plus_frf_{method}_s"] = _median(end_to_end(method), repeat)
-        res[f"frf_only_{method}_s"] = _median(frf_only(method), repeat)
+        res[f"assembly_plus_frf_{method}_s"] = median_time(end_to_end(method), repeat)
+        res[f"frf_only_{method}_s"] = median_time(frf_only(method), repeat)
     res["ratio_direct_over_modal"] = res["frf_only_direct_s"] / res["frf_only_modal_s"]
     res["ratio_naive_over_direct"] = res["frf_only_naive_s"] / res["frf_only_direct_s"]
     res["ratio_naive_over_modal"] = res["frf_only_naive_s"] / res["frf_only_modal_s"]
