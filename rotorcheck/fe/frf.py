@@ -51,7 +51,7 @@ the same one).
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Literal
 
@@ -249,7 +249,8 @@ def _as_inputs(inputs: int | Sequence[int] | np.ndarray, n: int) -> np.ndarray:
 
 
 def _modal_state(
-    M: np.ndarray, D: np.ndarray, K: np.ndarray
+    M: np.ndarray, D: np.ndarray, K: np.ndarray, eigh: Callable[..., tuple[np.ndarray, np.ndarray]] = eigh_pencil,
+    closed_form_pairs: bool = True,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The state matrix in energy-scaled undamped modal coordinates and its eigendecomposition.
 
@@ -258,15 +259,17 @@ def _modal_state(
     state matrix into ``[[0, W], [-Phi^H K Phi W^-1, -Phi^H D Phi]]``, of norm ~ ``w_max`` instead of
     ``w_max^2``: its low eigenvalues and their vectors come out far more accurately (5e-10 -> 1e-12
     relative at a resonance of the 9-element rig). M, D, K real or complex (M Hermitian positive
-    definite). Returns ``(lambda (2n,), V (2n, 2n), Phi (n, n), w (n,))``.
+    definite). ``eigh``: the generalized symmetric eigensolver of the undamped modes;
+    ``closed_form_pairs``: take the closed form when D and K are diagonal in those modes.
+    Returns ``(lambda (2n,), V (2n, 2n), Phi (n, n), w (n,))``.
     """
     n = M.shape[0]
-    w2, phi = eigh_pencil(0.5 * (K + K.conj().T), M)
+    w2, phi = eigh(0.5 * (K + K.conj().T), M)
     w_max = np.sqrt(max(float(w2.max()), 1e-300))
     wn = np.sqrt(np.maximum(w2, (1e-6 * w_max) ** 2))
     ph = phi.conj().T
     Kt, Dt = ph @ K @ phi, ph @ D @ phi
-    if _is_diagonal(Dt) and _is_diagonal(Kt):
+    if closed_form_pairs and _is_diagonal(Dt) and _is_diagonal(Kt):
         # undamped modes that D does not couple (modal damping at rest): 2x2 blocks in closed form
         pair = _decoupled_pairs(np.diag(Kt) / wn, np.diag(Dt), wn)
         if pair is not None:
@@ -312,21 +315,15 @@ def _decoupled_pairs(
 def _scaled_modal_factors(
     M: np.ndarray, D: np.ndarray, K: np.ndarray, cols: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Eigendecomposition of the real state matrix in energy-scaled undamped modal coordinates (as
-    :func:`_modal_state`, with scipy's ``eigh``: the simulator's truth rigs and the harmonic balance
-    take this path, and the bundled samples are checked bit for bit against a regeneration). Returns
+    """Eigendecomposition of the real state matrix in energy-scaled undamped modal coordinates:
+    :func:`_modal_state` with scipy's ``eigh`` and no closed form (the simulator's truth rigs and the
+    harmonic balance take this path, and the bundled samples are checked bit for bit against a
+    regeneration). Returns
     ``(lambda (2n,), V (2n, 2n), V^-1 B (2n, c), Phi W^-1 (n, n))``:
     ``Z(nu)^-1 B = Phi W^-1 V[:n] diag(1/(j nu - lambda)) V^-1 [0; Phi^T B]``.
     """
     n = M.shape[0]
-    w2, phi = sla.eigh(0.5 * (K + K.T), M)
-    w_max = np.sqrt(max(float(w2.max()), 1e-300))
-    wn = np.sqrt(np.maximum(w2, (1e-6 * w_max) ** 2))
-    A = np.zeros((2 * n, 2 * n))
-    A[:n, n:] = np.diag(wn)
-    A[n:, :n] = -(phi.T @ K @ phi) / wn[None, :]
-    A[n:, n:] = -(phi.T @ D @ phi)
-    lam, V = np.linalg.eig(A)
+    lam, V, phi, wn = _modal_state(M, D, K, sla.eigh, closed_form_pairs=False)
     rhs = np.zeros((2 * n, cols.shape[1]), dtype=complex)
     rhs[n:] = phi.T @ cols
     return lam, V, np.linalg.solve(V, rhs), phi / wn[None, :]
