@@ -633,14 +633,19 @@ def check_baseline(baseline: Any, rig: RigConfig, run: MeasuredRun, baseline_pat
                          f"baseline was made for another rig description (rig_id {baseline.rig_id!r}, "
                          f"sha256 {baseline.rig_sha256[:12]}; this rig {rig.sha256()[:12]})")
     d_rpm = run.speed_rpm - baseline.speed_rpm
-    if abs(d_rpm) > 1e-9:
-        tol = speed_tolerance(rig)
-        if abs(d_rpm) > tol or baseline.speed_rpm == 0.0:
-            why = (f"outside the rig's speed tolerance (variability: speed +-{tol:g} rpm)" if tol > 0 and
-                   baseline.speed_rpm != 0.0 else "the rig's variability section sets no speed tolerance"
-                   if baseline.speed_rpm != 0.0 else "a baseline at standstill is not compared with a spinning run")
-            raise InputError(run.path, f"/runs/{run.run_id}/@speed_rpm",
-                             f"{run.speed_rpm:g} rpm, the baseline is at {baseline.speed_rpm:g} rpm: {why}")
+    tol = speed_tolerance(rig)
+    why = ""
+    if abs(d_rpm) <= 1e-9:
+        pass
+    elif baseline.speed_rpm == 0.0:
+        why = "a baseline at standstill is not compared with a spinning run"
+    elif tol == 0.0:
+        why = "the rig's variability section sets no speed tolerance"
+    elif abs(d_rpm) > tol:
+        why = f"outside the rig's speed tolerance (variability: speed +-{tol:g} rpm)"
+    if why:
+        raise InputError(run.path, f"/runs/{run.run_id}/@speed_rpm",
+                         f"{run.speed_rpm:g} rpm, the baseline is at {baseline.speed_rpm:g} rpm: {why}")
     if not _same_grid(run.frequency_hz, baseline.frequency_hz):
         raise InputError(run.path, f"/runs/{run.run_id}/frequency",
                          f"grid ({run.frequency_hz.size} points in band) differs from the baseline's "
