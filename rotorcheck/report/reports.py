@@ -73,7 +73,7 @@ def _ranges(freqs: list[float], step: float) -> str:
 def render_markdown(report: dict[str, Any], plots: list[str]) -> str:
     """report.md: the verdict, where, and what changed."""
     f = np.asarray(report["frequency_hz"], dtype=float)
-    step = float(np.median(np.diff(f))) if f.size > 1 else 1.0
+    step = _step(report)
     fault = np.asarray(report["fault"], dtype=bool)
     d = np.asarray(report["damage_dynamics_re"]) + 1j * np.asarray(report["damage_dynamics_im"])
     lines = [
@@ -119,6 +119,7 @@ def render_markdown(report: dict[str, Any], plots: list[str]) -> str:
 
 
 def _step(report: dict[str, Any]) -> float:
+    """The grid step (Hz) for writing frequency ranges."""
     f = np.asarray(report["frequency_hz"], dtype=float)
     return float(np.median(np.diff(f))) if f.size > 1 else 1.0
 
