@@ -535,6 +535,7 @@ class DetectionOutcome:
     measured: Any = None  # robust.measured.MeasuredDetection (enclose 'measured')
     anchored_noise_only: Any = None  # the anchored bound over the noise alone (measured)
     joint: Any = None  # robust.joint.JointResult (the joint test, when it decided)
+    beyond_benign: Any = None  # robust.real_box.BoxCertificate: per-point certificate beyond benign change
 
     @property
     def exit_code(self) -> int:
@@ -607,6 +608,13 @@ class DetectionOutcome:
             rem = np.asarray(j.remaining, dtype=bool)
             rep.fault_beyond_benign = rem
             rep.fault_beyond_benign_frequencies_hz = [float(x) for x in f[rem]]
+        c = self.beyond_benign
+        if c is not None:
+            rep.beyond_benign_rule, rep.beyond_benign_status = c.rule, [str(x) for x in c.status]
+            rep.certified_beyond_benign_frequencies_hz = [float(x) for x in f[c.unexplained]]
+            rep.n_certified_beyond_benign = int(np.count_nonzero(c.unexplained))
+            rep.n_undecided_beyond_benign = int(np.count_nonzero(c.undecided))
+            rep.n_certified_beyond_benign_complex = int(np.count_nonzero(c.complex_unexplained))
         return rep
 
 
@@ -749,8 +757,13 @@ def detect(
                                 false_alarm, baseline.speed_rpm, baseline.benign_correction)
         ver = joint_verdict(joint, ver)
         notes.extend(joint.notes)
+        beyond = certify_beyond_benign(updated_rig(rig, baseline_updates(baseline)), Th,
+                                       np.asarray(baseline.healthy_frf_var)[:, 0], run, joint, baseline.speed_rpm)
+        if beyond is not None:
+            beyond, more = beyond
+            notes.extend(more)
     return DetectionOutcome(rig, baseline, run, model, det, ver, damage, dset, anchored, anchored_set, notes,
-                            measured, noise_only, joint)
+                            measured, noise_only, joint, beyond)
 
 
 def benign_table(joint: Any, rig: RigConfig) -> list[dict[str, Any]]:
@@ -879,6 +892,32 @@ def joint_detection(rig: RigConfig, Th: np.ndarray, var_h: np.ndarray, run: Meas
     return joint_test(est.frf[:, 0] - Th, est.var[:, 0] + var_h, S, els, benign, learned, false_alarm)
 
 
+def certify_beyond_benign(rig: RigConfig, Th: np.ndarray, var_h: np.ndarray, run: MeasuredRun, joint: Any,
+                          speed_rpm: float | None = None, max_boxes: int = 200) -> tuple[Any, list[str]] | None:
+    """Per point: is the change certified beyond every benign change inside the ranges (the parameters
+    real, branch and bound; :mod:`rotorcheck.robust.real_box`), given both sweeps' noise and the joint
+    test's model-error allowance at that point? None without benign parameters that change the model.
+    Returns the certificate and notes."""
+    from rotorcheck.robust.real_box import certify_points
+    from rotorcheck.signatures import benign_box
+    from rotorcheck.variability import benign_at
+
+    speed = run.speed_rpm if speed_rpm is None else speed_rpm
+    params = benign_at(rig, speed) if rig.variability else ()
+    if not params or rig.kind != "rotor":
+        return None
+    box = benign_box(rig, speed, params, run.speed_rpm - speed)
+    est = frf_estimate(run)
+    z = float(np.sqrt(joint.point_threshold / 2.0))  # |r|^2 / sigma^2 ~ Exp(1): chi2_2 / 2
+    cert = certify_points(box.model, 2.0 * np.pi * run.frequency_hz, est.frf[:, 0], Th, est.var[:, 0], var_h, z,
+                          joint.model_error, box.gain, max_boxes)
+    notes = list(box.notes)
+    if joint.learned:
+        notes.append("the per-point certificate beyond benign change uses the model's parameters only (the "
+                     "learned benign directions are no parameters of the model)")
+    return cert, notes
+
+
 @dataclass
 class BenignLearning:
     """What several healthy sweeps teach about benign change (:func:`learn_benign`)."""
@@ -1002,6 +1041,11 @@ def joint_summary(outcome: DetectionOutcome) -> str:
             iv = f" [{lo:+.3g}, {hi:+.3g}]" if np.isfinite(lo) and np.isfinite(hi) else " (range edge)"
             parts.append(f"{b['name']} {b['estimate']:+.3g}{' ' if b['unit'] != '%' else ''}{b['unit']}{iv}")
         lines.append("benign change fitted: " + ", ".join(parts))
+    c = outcome.beyond_benign
+    if c is not None:
+        lines.append(f"points certified beyond every benign change in the ranges: {int(c.unexplained.sum())} of "
+                     f"{c.status.size} ({int(c.undecided.sum())} undecided; parameters as complex discs: "
+                     f"{int(c.complex_unexplained.sum())})")
     if j.elements:
         k = int(np.argmin(j.detectable))
         lines.append(f"smallest stiffness loss this sweep could reveal (90 % power at {j.false_alarm:g}): "

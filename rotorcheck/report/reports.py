@@ -149,6 +149,12 @@ def _joint_section(report: dict[str, Any]) -> list[str]:
         lines += [f"{len(beyond)} points stay unexplained after the fitted benign change (per point, the noise and "
                   f"the model-error allowance, Sidak at {report['false_alarm']:g} over the points)"
                   + (f": {_ranges(list(beyond), _step(report))}." if beyond else "."), ""]
+    cert = report.get("certified_beyond_benign_frequencies_hz")
+    if cert is not None:
+        lines += [f"{len(cert)} points are certified beyond every benign change inside the ranges (parameters real, "
+                  f"branch and bound; {report['n_undecided_beyond_benign']} undecided; with each parameter a complex "
+                  f"disc instead: {report['n_certified_beyond_benign_complex']})"
+                  + (f": {_ranges(list(cert), _step(report))}." if cert else "."), ""]
     els, det = report.get("candidate_elements") or [], report.get("detectable_stiffness_loss") or []
     if els:
         lines += ["Smallest stiffness loss this sweep could reveal (90 % power at the stated rate): "

@@ -110,6 +110,13 @@ class DetectionReport:
     # points the fitted benign change leaves unexplained (per point, Sidak at false_alarm over the points)
     fault_beyond_benign: FloatArray | None = None  # (f,) bool
     fault_beyond_benign_frequencies_hz: list[float] | None = None
+    # per point, certified beyond every benign change in the ranges (real parameters, branch and bound)
+    beyond_benign_rule: str | None = None
+    beyond_benign_status: list[str] | None = None  # (f,) "explained" | "unexplained" | "undecided"
+    certified_beyond_benign_frequencies_hz: list[float] | None = None
+    n_certified_beyond_benign: int | None = None
+    n_undecided_beyond_benign: int | None = None
+    n_certified_beyond_benign_complex: int | None = None  # the same with each parameter a complex disc
 
     def to_dict(self) -> dict[str, Any]:
         """The report.json document (arrays as numpy; :func:`rotorcheck.report.reports.render_json`)."""

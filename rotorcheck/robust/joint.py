@@ -96,6 +96,7 @@ class JointResult:
     unexplained: np.ndarray  # (n,) complex m/N: the change left after the H0 fit (benign + learned)
     point_statistic: np.ndarray  # (n,) |unexplained|^2 / (sigma^2 / 2) per point (chi2, 2 dof under H0)
     point_threshold: float  # per-point threshold: Sidak over the points at the false-alarm rate
+    model_error: np.ndarray  # (n,) m/N: the model-error allowance kappa m_k carried in H0 (sd per point)
     notes: list[str] = field(default_factory=list)
 
     @property
@@ -228,6 +229,7 @@ def joint_test(residual: np.ndarray, var_total: np.ndarray, signatures: np.ndarr
 
     w = whitening(var)
     theta = x0
+    allowance = np.zeros(r.size)
     if lo.size:
         # start from the better of x0 and the bounded linear fit at x0 (a large change such as E at the
         # edge of its range is far outside the first-order region)
@@ -245,7 +247,8 @@ def joint_test(residual: np.ndarray, var_total: np.ndarray, signatures: np.ndarr
                     inexact = np.where(benign.exact, 0.0, theta[:p])
                     b_exact = b_all - benign.predict(inexact)  # the exactly predicted part (a gain)
                 scale = change_scale(r - b_exact, var, b_all - b_exact, envelope=benign.envelope)
-                w = whitening(var + kappa**2 * scale**2)
+                allowance = kappa * scale
+                w = whitening(var + allowance**2)
     res0 = whitened(theta, w)
     chi2_h0 = float(res0 @ res0)
     J = jac_at(theta, w)
@@ -309,5 +312,5 @@ def joint_test(residual: np.ndarray, var_total: np.ndarray, signatures: np.ndarr
         learned=q, kappa=kappa, n_points=r.size, unexplained=r - model_ri(theta),
         point_statistic=res0[: r.size] ** 2 + res0[r.size:] ** 2,
         point_threshold=float(-2.0 * np.log(-np.expm1(np.log1p(-false_alarm) / max(r.size, 1)))),
-        notes=notes,
+        model_error=allowance, notes=notes,
     )
