@@ -11,10 +11,14 @@ Part A, noise only (no ``variability`` section): false alarms on healthy repeats
 
 Part B, benign change (the bundled ranges: E +-2 %, bearings +-3 %, sensor gain +-1 %, speed +-20
 rpm): benign changes of the truth inside the ranges and at their corners, and cracks, against (i) one
-healthy sweep with the nominal model (kappa = the default 0.6) and (ii) 8 healthy training sweeps drawn
+healthy sweep with the nominal model (kappa = the default 1.5) and (ii) 8 healthy training sweeps drawn
 across the ranges (learned directions, kappa from the data).
 
-``python -m bench.detection_limit [--trials 20 --healthy 100] [--part A|B] [--quick]``
+Part C: the fitted benign parameters against the truth, and the joint test's time. Part D: the
+per-point certificate beyond benign change (parameters real, branch and bound) against its complex-disc
+relaxation, on benign cases and cracks.
+
+``python -m bench.detection_limit [--trials 20 --healthy 100] [--part A|B|C|D] [--quick]``
 """
 
 from __future__ import annotations
@@ -251,11 +255,57 @@ def part_c(trials: int, log: Callable[[str], None]) -> list[str]:
     return lines
 
 
+def part_d(trials: int, log: Callable[[str], None]) -> list[str]:
+    """The per-point certificate beyond benign change (issue 10; :func:`rotorcheck.workflow.certify_beyond_benign`):
+    per case, the sweeps with at least one certified point, the mean number of certified points with the
+    parameters real (branch and bound) and as complex discs (the root box alone), the undecided points,
+    and the time per sweep (one healthy sweep, nominal model)."""
+    truth, nominal = _configs()
+    lines = ["| case | rpm | sweeps with a certified point | certified points, mean (real) | same, complex discs | "
+             "undecided, mean | time per sweep |", "|---|---:|---:|---:|---:|---:|---:|"]
+    cases: list[tuple[str, float, Callable[[int], workflow.MeasuredRun]]] = []
+    for speed in (0.0, 1000.0):
+        for name, vals in (("E -1 %", BENIGN_CASES["E -1 %"]), ("bearing me -2 %", BENIGN_CASES["bearing me -2 %"]),
+                           ("E -1 %, nme +2 %, gain +0.5 %", BENIGN_CASES["E -1 %, nme +2 %, gain +0.5 %"])):
+            cases.append((name, speed, lambda k, sp=speed, v=vals: sweep_run(
+                truth, nominal, sp, 1.0, 9_600_000 + int(sp) * 100 + k, benign=v)))
+        cases.append(("random corner of the ranges", speed, lambda k, sp=speed: sweep_run(
+            truth, nominal, sp, 1.0, 9_650_000 + int(sp) * 100 + k, benign=_corner(np.random.default_rng([k, 5])))))
+    for depth in (0.2, 0.4):
+        cfg = workflow.rig_with_crack_depth(truth, None, "breathing_crack", depth)
+        cases.append((f"breathing {100 * depth:g} % depth", 1000.0, lambda k, cf=cfg, d=depth: sweep_run(
+            cf, nominal, 1000.0, 1.0, 9_670_000 + int(d * 1e3) * 100 + k, "breathing_crack")))
+    for mf in (0.9, 0.5):
+        cfg = _open_crack(truth, mf)
+        cases.append((f"open crack, E x {mf:g}", 0.0, lambda k, cf=cfg, m=mf: sweep_run(
+            cf, nominal, 0.0, 1.0, 9_680_000 + int(m * 1e3) * 100 + k, "open_crack")))
+    bases = {sp: _baseline([sweep_run(truth, nominal, sp, 1.0, 9_000_000 + int(sp))], nominal) for sp in (0.0, 1000.0)}
+    for name, speed, make in cases:
+        Th, vh, lrn = bases[speed]
+        hit, real, cplx, und, secs = 0, [], [], [], []
+        for k in range(trials):
+            run = make(k)
+            j = workflow.joint_detection(nominal, Th, vh, run, lrn.kappa, None, 0.01, speed)
+            t0 = time.perf_counter()
+            out = workflow.certify_beyond_benign(nominal, Th, vh, run, j, speed)
+            secs.append(time.perf_counter() - t0)
+            assert out is not None
+            c = out[0]
+            hit += int(c.unexplained.any())
+            real.append(int(c.unexplained.sum()))
+            cplx.append(int(c.complex_unexplained.sum()))
+            und.append(int(c.undecided.sum()))
+        lines.append(f"| {name} | {speed:g} | {hit}/{trials} | {np.mean(real):.1f} | {np.mean(cplx):.1f} | "
+                     f"{np.mean(und):.1f} | {np.median(secs):.2f} s |")
+        log(f"D {lines[-1]}")
+    return lines
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--trials", type=int, default=20, help="sweeps per crack or benign cell")
     ap.add_argument("--healthy", type=int, default=100, help="healthy repeats per speed (part A)")
-    ap.add_argument("--part", choices=("A", "B", "C", "AB", "ABC"), default="ABC")
+    ap.add_argument("--part", choices=("A", "B", "C", "D", "AB", "ABC", "ABCD"), default="ABCD")
     ap.add_argument("--quick", action="store_true", help="1x noise only, 5 trials")
     args = ap.parse_args(argv)
     t = time.perf_counter()
@@ -272,6 +322,9 @@ def main(argv: list[str] | None = None) -> int:
     if "C" in args.part:
         out += ["", "Part C, fitted benign parameters (one healthy sweep, nominal model), 1x noise:", "",
                 *part_c(5 if args.quick else 10, log)]
+    if "D" in args.part:
+        out += ["", "Part D, per-point certificate beyond benign change (one healthy sweep, nominal model), 1x noise:",
+                "", *part_d(3 if args.quick else 10, log)]
     print("\n".join(out))
     print(f"\n({time.perf_counter() - t:.0f} s)")
     return 0
