@@ -244,7 +244,10 @@ def shaft_harmonic_fit(
     coef, *_ = np.linalg.lstsq(A, flat, rcond=None)
     resid = flat - A @ coef
     s2 = np.sum(np.abs(resid) ** 2, axis=0) / (n - q)
-    g00 = float(np.real(np.linalg.inv(A.conj().T @ A)[0, 0]))
+    # [(A^H A)^-1]_00 = |row 0 of R^-1|^2 (A = QR): never negative, unlike inverting a near-singular Gram
+    # matrix (a speed so low that its harmonics nearly alias gave negative variances that way)
+    _, R = np.linalg.qr(A)
+    g00 = float(np.sum(np.abs(np.linalg.solve(R, np.eye(q))[0]) ** 2))
     mean = coef[0].reshape(x.shape[1:])
     var = (s2 * g00).reshape(x.shape[1:])
     return mean, var, 2 * (n - q)
