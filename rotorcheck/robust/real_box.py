@@ -58,6 +58,18 @@ class AffineParameter:
     hi: float
 
 
+def _norm2_bound(N: np.ndarray) -> float:
+    """An upper bound on the spectral norm: the cheaper of Frobenius and sqrt(||N||_1 ||N||_inf), the
+    exact value (singular values only) when those are not already small."""
+    if N.size == 0:
+        return 0.0
+    a = np.abs(N)
+    cheap = min(float(np.sqrt(np.sum(a * a))), float(np.sqrt(a.sum(axis=0).max() * a.sum(axis=1).max())))
+    if cheap < 0.25:
+        return cheap
+    return float(np.linalg.svd(N, compute_uv=False)[0])
+
+
 def _factor(A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``A = U V^T`` with ``U`` (n, r), ``V`` (n, r), r the numerical rank (SVD, 1e-12 relative)."""
     u, s, vt = np.linalg.svd(np.asarray(A, dtype=float))
@@ -134,7 +146,7 @@ class AffineModel:
                 sc[sl] = np.sqrt(nx / ny)
         xs, ys = x / sc, y * sc
         Ns = (sc[:, None] * N) / sc[None, :]
-        n_norm = float(np.linalg.norm(Ns, 2)) if Ns.size else 0.0
+        n_norm = _norm2_bound(Ns)
         if n_norm >= 1.0:
             return g_c, float("inf"), share
         return g_c, float(np.linalg.norm(xs) * np.linalg.norm(ys) / (1.0 - n_norm)), share
@@ -187,12 +199,13 @@ def _examine(model: AffineModel, pt: _Point, centre: np.ndarray, half: np.ndarra
              ) -> tuple[bool, float, np.ndarray, float]:
     """(the centre explains the point?, margin of the exclusion test (> 0: the box is excluded), each
     parameter's share of the bound, the centre's best gain)."""
-    g_c, rad, share = model.box_bound(pt.w, centre, half)
-    rho = g_c / pt.g0
+    share = np.zeros(len(half))
+    rho = model.receptance(pt.w, centre) / pt.g0
     gm = _best_gain(pt.t_new, pt.t_healthy * rho, pt.g_lo, pt.g_hi)
     resid = abs(pt.t_new - gm * pt.t_healthy * rho)
     if resid <= pt.z * np.sqrt(pt.var_new + abs(gm * rho) ** 2 * pt.var_healthy + pt.allowance2):
         return True, -np.inf, share, gm
+    _, rad, share = model.box_bound(pt.w, centre, half)
     if not np.isfinite(rad):
         return False, -np.inf, share, gm
     eps = rad / abs(pt.g0)
