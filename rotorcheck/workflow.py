@@ -750,6 +750,7 @@ def detect(
         notes.append("parametric structure: the nominal damage bound covers the parameter uncertainty only, "
                      "not the noise (a second uncertainty makes the set non-circular)")
     joint = None
+    beyond = None
     if use_joint and Th is not None:
         kappa = KAPPA_NOMINAL if baseline.benign_kappa is None else float(baseline.benign_kappa)
         joint = joint_detection(updated_rig(rig, baseline_updates(baseline)), Th,
@@ -757,11 +758,11 @@ def detect(
                                 false_alarm, baseline.speed_rpm, baseline.benign_correction)
         ver = joint_verdict(joint, ver)
         notes.extend(joint.notes)
-        beyond = certify_beyond_benign(updated_rig(rig, baseline_updates(baseline)), Th,
-                                       np.asarray(baseline.healthy_frf_var)[:, 0], run, joint, baseline.speed_rpm)
-        if beyond is not None:
-            beyond, more = beyond
-            notes.extend(more)
+        certified = certify_beyond_benign(updated_rig(rig, baseline_updates(baseline)), Th,
+                                          np.asarray(baseline.healthy_frf_var)[:, 0], run, joint, baseline.speed_rpm)
+        if certified is not None:
+            beyond = certified[0]
+            notes.extend(certified[1])
     return DetectionOutcome(rig, baseline, run, model, det, ver, damage, dset, anchored, anchored_set, notes,
                             measured, noise_only, joint, beyond)
 
