@@ -35,5 +35,29 @@ golden: $(STAMP)
 bench: $(STAMP)
 	MPLBACKEND=Agg $(BIN)/python -m bench
 
+# issue 12: build the wheel, install it into a fresh venv in a temporary folder (dependencies from .venv through
+# a .pth file: no network) and run the sample commands there, outside the checkout (tests/test_install.py too)
+.PHONY: wheel-check
+wheel-check: $(STAMP)
+	@set -e; tmp=$$(mktemp -d); trap 'rm -rf "$$tmp"' EXIT; mkdir "$$tmp/src" "$$tmp/run"; \
+	for f in pyproject.toml README.md MANIFEST.in setup.py setup.cfg rotorcheck configs data_samples; do \
+	  if [ -e "$$f" ]; then cp -a "$$f" "$$tmp/src/"; fi; done; \
+	find "$$tmp/src" -name __pycache__ -prune -exec rm -rf {} +; \
+	export PIP_DISABLE_PIP_VERSION_CHECK=1 MPLBACKEND=Agg; unset PYTHONPATH ROTORCHECK_CONFIGS ROTORCHECK_SAMPLES; \
+	$(BIN)/python -m pip wheel --quiet --no-deps --no-build-isolation --no-index -w "$$tmp/dist" "$$tmp/src"; \
+	$(BIN)/python -m venv --without-pip "$$tmp/venv"; \
+	$(BIN)/python -m pip --python "$$tmp/venv/bin/python" install --quiet --no-deps --no-index "$$tmp"/dist/*.whl; \
+	purelib=$$("$$tmp/venv/bin/python" -c 'import sysconfig; print(sysconfig.get_paths()["purelib"])'); \
+	$(BIN)/python -c 'import site; print(*site.getsitepackages(), sep="\n")' > "$$purelib/_rotorcheck_deps.pth"; \
+	cd "$$tmp/run"; R="$$tmp/venv/bin/rotorcheck"; \
+	"$$tmp/venv/bin/python" -c 'import sys, rotorcheck as r; print("imported", r.__file__); \
+	  sys.exit(0 if r.__file__.startswith(sys.prefix) else "not the installed wheel")'; \
+	"$$R" --version; S=$$("$$R" --samples-dir); echo "bundled samples: $$S"; \
+	"$$R" fit-noise; \
+	"$$R" validate "$$S/crack_rig/healthy_1000rpm.h5" --no-plots; \
+	rc=0; "$$R" detect "$$S/crack_rig/breathing_crack_1000rpm.h5" --no-plots || rc=$$?; \
+	if [ $$rc -ne 1 ]; then echo "wheel-check: detect exited $$rc, expected 1 (damage)"; exit 1; fi; \
+	echo "wheel-check: ok"
+
 clean:
 	rm -rf $(VENV) rotorcheck-out .pytest_cache

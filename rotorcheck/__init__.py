@@ -6,4 +6,4 @@ local damage dynamics with an exact uncertainty bound. SI units throughout; freq
 interfaces.
 """
 
-__version__ = "0.1.0"
+__version__ = "0.1.0"  # the one place: pyproject.toml reads it ([tool.setuptools.dynamic])

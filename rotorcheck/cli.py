@@ -7,6 +7,7 @@ Exit codes: 0 ok / no damage, 1 damage detected (detect only), 2 unusable input 
 
 from __future__ import annotations
 
+import copy
 import json
 import os
 import sys
@@ -28,6 +29,7 @@ app = typer.Typer(
     no_args_is_help=True,
     pretty_exceptions_enable=False,
     help="Has this shaft changed, where in the spectrum, and what exactly changed?",
+    context_settings={"help_option_names": ["-h", "--help"]},  # inherited by every command
 )
 err = Console(stderr=True, highlight=False, soft_wrap=True)  # never break paths in messages
 
@@ -48,6 +50,47 @@ def _emit_json(doc: dict[str, Any]) -> None:
 
     sys.stdout.write(render_json(doc))
     sys.stdout.flush()
+
+
+# --------------------------------------------------------------------------------------------
+# top-level options
+
+
+def package_version() -> str:
+    """The installed distribution's version (importlib.metadata), else ``rotorcheck.__version__``."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("rotorcheck")
+    except PackageNotFoundError:  # imported from a checkout that is not installed
+        from rotorcheck import __version__
+
+        return __version__
+
+
+def _print_version(value: bool) -> None:
+    if value:
+        sys.stdout.write(f"rotorcheck {package_version()}\n")
+        raise typer.Exit(EXIT_OK)
+
+
+def _print_samples_dir(value: bool) -> None:
+    if value:
+        from rotorcheck.resources import samples_dir
+
+        sys.stdout.write(f"{samples_dir()}\n")
+        raise typer.Exit(EXIT_OK)
+
+
+@app.callback()
+def _top_level(
+    version: Annotated[bool, typer.Option(
+        "--version", is_eager=True, callback=_print_version, help="Print 'rotorcheck <version>' and exit.")] = False,
+    samples: Annotated[bool, typer.Option(
+        "--samples-dir", is_eager=True, callback=_print_samples_dir,
+        help="Print the folder of the bundled sample sweeps (e.g. crack_rig/healthy_1000rpm.h5) and exit.")] = False,
+) -> None:
+    """Has this shaft changed, where in the spectrum, and what exactly changed?"""
 
 
 # --------------------------------------------------------------------------------------------
@@ -417,6 +460,11 @@ def schema(
 def main(argv: list[str] | None = None) -> int:
     """Run the CLI and return its exit code; every failure maps to the documented codes."""
     command = typer.main.get_command(app)
+    version_opt = next(p for p in command.params if p.name == "version")
+    for sub in getattr(command, "commands", {}).values():  # `rotorcheck <command> --version` too (cli.md)
+        opt = copy.copy(version_opt)
+        opt.expose_value = False  # eager: prints and exits; never passed to the command
+        sub.params.append(opt)
     try:
         rc = command.main(args=argv, prog_name="rotorcheck", standalone_mode=False)
     except (UserInputError, FileExistsError) as exc:  # InputError, ConfigError, SweepFormatError

@@ -1,4 +1,11 @@
-"""Where the bundled rigs and sample sweeps live (the repository's ``configs/`` and ``data_samples/``)."""
+"""Where the bundled rigs and sample sweeps live: package data ``rotorcheck/_bundled/{configs,data_samples}``,
+found through importlib.resources, so an installed wheel finds them wherever it is installed.
+
+The repository's top-level ``configs/`` and ``data_samples/`` stay the source of truth: in the checkout
+``rotorcheck/_bundled/configs`` and ``rotorcheck/_bundled/data_samples`` are relative symbolic links to
+them (so the editable install reads them in place), and building the wheel copies their files in
+(``[tool.setuptools.package-data]`` in pyproject.toml).
+"""
 
 from __future__ import annotations
 
@@ -7,17 +14,23 @@ from pathlib import Path
 
 from rotorcheck.errors import InputError
 
-_REPO = Path(__file__).resolve().parents[1]
+
+def _bundled(name: str) -> Path:
+    """The package-data folder ``rotorcheck/_bundled/<name>`` (an installed wheel is unpacked on disk)."""
+    from importlib.resources import files  # here, not at import: it costs ~15 ms (tempfile, zipfile)
+
+    folder = files("rotorcheck") / "_bundled" / name
+    return folder if isinstance(folder, Path) else Path(str(folder))
 
 
 def configs_dir() -> Path:
     """Folder of bundled rig YAML files (``$ROTORCHECK_CONFIGS`` overrides)."""
-    return Path(os.environ.get("ROTORCHECK_CONFIGS", _REPO / "configs"))
+    return Path(os.environ.get("ROTORCHECK_CONFIGS") or _bundled("configs"))
 
 
 def samples_dir() -> Path:
     """Folder of bundled sample sweeps (``$ROTORCHECK_SAMPLES`` overrides)."""
-    return Path(os.environ.get("ROTORCHECK_SAMPLES", _REPO / "data_samples"))
+    return Path(os.environ.get("ROTORCHECK_SAMPLES") or _bundled("data_samples"))
 
 
 def default_rig_path(rig_id: str) -> Path:
