@@ -136,7 +136,7 @@ def model(
 
 @app.command()
 def info(
-    sweep: Annotated[Path, typer.Argument(help="Sweep file (HDF5, rotorcheck.sweep v1).")],
+    sweep: Annotated[Path, typer.Argument(help="Sweep file (HDF5, rotorcheck.sweep v1 or v2).")],
     as_json: JsonOpt = False,
     confidence: Annotated[float, typer.Option(help="Family-wise confidence of the noise bound.")] = 0.99,
 ) -> int:
@@ -148,11 +148,19 @@ def info(
     doc = summarize(sw, confidence=confidence)
     doc["file"] = str(sweep)
     doc["sha256"] = sweep_sha256(sweep)
-    err.print(f"{sweep}: valid rotorcheck.sweep v1, rig_id {sw.rig_id!r}, source {sw.source}, {sw.generator}")
+    err.print(f"{sweep}: valid rotorcheck.sweep v{doc['schema_version']}, rig_id {sw.rig_id!r}, source {sw.source}, "
+              f"{sw.generator}")
     chans = ", ".join(f"{c.name} ({c.role} s{c.node}.{c.direction} {c.unit})" for c in sw.channels)
     err.print(f"channels: {chans}")
     for run in doc["runs"]:
         g, nz, noise = run["grid"], run["noise"]["all_outputs"], run["noise"]
+        if run["frf_only"]:
+            sd = noise.get("frf_std_m_per_n")
+            spread = f"frf std median {sd['median']:.3g} m/N" if sd else "no frf variance"
+            err.print(f"run {run['run_id']}: {run['speed_rpm']:g} rpm, {g['n']} points {g['min_hz']:g}-{g['max_hz']:g} "
+                      f"Hz, FRF only (no phasors); {spread}; noise: {run['noise_source']}")
+            continue
+        patterns = f", {run['n_exc']} excitation patterns" if run["n_exc"] and run["n_exc"] > 1 else ""
         cleaned = ""
         if "pooled_bound_harmonics_removed_m" in noise:
             cleaned = (f"; with shaft harmonics 1X-{noise['shaft_orders_removed']}X removed: "
@@ -160,7 +168,7 @@ def info(
                        f"pooled ({noise['excess_scatter_points_harmonics_removed']} points with excess scatter)")
         err.print(
             f"run {run['run_id']}: {run['speed_rpm']:g} rpm, {g['n']} points "
-            f"{g['min_hz']:g}-{g['max_hz']:g} Hz, {run['n_periods_min']}-{run['n_periods_max']} periods; "
+            f"{g['min_hz']:g}-{g['max_hz']:g} Hz, {run['n_periods_min']}-{run['n_periods_max']} periods{patterns}; "
             f"noise std median {nz['median_std_m']:.3g} m, "
             f"family-wise {confidence:.0%} bound {nz['sidak_bound_m']:.3g} m (max over points), "
             f"{noise['pooled_bound_m']:.3g} m pooled ({noise['excess_scatter_points']} points with excess scatter)"

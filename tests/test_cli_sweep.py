@@ -109,14 +109,14 @@ def _non_increasing(h5: h5py.File) -> None:
 
 
 def _schema_version(h5: h5py.File) -> None:
-    h5.attrs["schema_version"] = np.int32(2)
+    h5.attrs["schema_version"] = np.int32(3)
 
 
 MALFORMED = {
     "missing_dataset": (_missing, f"{RUN}/output_var", "missing dataset"),
     "nan": (_nan, f"{RUN}/output_phasor", "non-finite value at index (17, 0)"),
     "non_increasing": (_non_increasing, f"{RUN}/frequency", "frequency not strictly increasing at index 41"),
-    "schema_version": (_schema_version, "/@schema_version", "unknown schema_version 2"),
+    "schema_version": (_schema_version, "/@schema_version", "unknown schema_version 3"),
 }
 
 
@@ -269,3 +269,32 @@ def test_simulate_output_respects_umask(capsys: pytest.CaptureFixture[str], tmp_
         os.umask(old)
     assert (tmp_path / "plain.txt").stat().st_mode & 0o777 == 0o644  # the umask in effect
     assert (tmp_path / "s.h5").stat().st_mode & 0o777 == 0o644
+
+
+def test_info_on_version_2_files(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    """A two-input sweep (patterns) and an FRF-only run: info names the version, the patterns, and the
+    FRF-only run's noise statement; the JSON counts match what was written."""
+    from rotorcheck.config import Port
+    from rotorcheck.sim.rig_sim import simulate_rig_patterns
+    from rotorcheck.sweep import write_sweep
+    from rotorcheck.sweep.format import Run, Sweep
+
+    cfg = load_config(REPO / "configs" / "crack_rig_truth.yaml")
+    f = np.linspace(40.0, 80.0, 9)
+    sw = simulate_rig_patterns(cfg, f, [Port(station=8, direction="x"), Port(station=8, direction="y")],
+                               [Port(station=6, direction="x"), Port(station=6, direction="y")], speed_rpm=1000.0)
+    two = tmp_path / "two_inputs.h5"
+    write_sweep(sw, two)
+    assert main(["info", str(two), "--json"]) == 0
+    out = capsys.readouterr()
+    doc = json.loads(out.out)
+    assert doc["schema_version"] == 2 and doc["runs"][0]["n_exc"] == 2
+    assert "rotorcheck.sweep v2" in out.err and "2 excitation patterns" in out.err
+    run = next(iter(sw.runs.values()))
+    only = Run.frf_only("frf", 1000.0, f, run.frf, run.frf_variance(), noise_source="assumed: 1 % of |H|")
+    fo = tmp_path / "frf_only.h5"
+    write_sweep(Sweep(sw.rig_id, "measured", "test", sw.created_utc, sw.channels, {"frf": only}), fo)
+    assert main(["info", str(fo), "--json"]) == 0
+    out = capsys.readouterr()
+    assert json.loads(out.out)["runs"][0]["frf_only"] is True
+    assert "FRF only" in out.err and "assumed: 1 % of |H|" in out.err

@@ -10,6 +10,11 @@ misalignment. A fault named in the rig's ``faults`` section changes the plant:
 A time-invariant plant is the FE engine's receptance (:mod:`rotorcheck.fe.frf`) from the actuator to
 the sensor.
 
+Several inputs (:func:`simulate_rig_patterns`): the caller names the actuator and sensor ports
+(config :class:`~rotorcheck.config.Port` s, e.g. the AMB's x and y axes at station 8 and two
+sensors in x and y); the actuators are driven one at a time (pattern ``e`` drives actuator ``e``),
+giving a version-2 run with ``n_exc = n_in`` (:func:`rotorcheck.sim.simulator.simulate_fast_patterns`).
+
 Synchronous disturbances (absolute time t, shaft angle Omega t): unbalance ``m e Omega^2`` rotating
 forward at 1X at its station, phase from +x towards +y; misalignment a forward-rotating 2X force of
 ``force_2x (speed / 1000 rpm)^2`` at its station. Their steady-state responses are added as fixed
@@ -18,12 +23,13 @@ tones, which the lock-in sees as leaks near kX.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
 from rotorcheck import __version__
-from rotorcheck.config import Crack, RigConfig, SpringChange
+from rotorcheck.config import Crack, Port, RigConfig, SpringChange
 from rotorcheck.errors import InputError
 from rotorcheck.faults.harmonic_balance import misalignment_force, unbalance_force
 from rotorcheck.fe.assembly import build_system
@@ -35,8 +41,10 @@ from rotorcheck.sim.simulator import (
     StepSettings,
     Tone,
     receptance_plant,
+    receptance_plants,
     response_tones,
     simulate_fast,
+    simulate_fast_patterns,
 )
 from rotorcheck.sweep.format import Channel, Sweep
 
@@ -54,19 +62,26 @@ class RigPlant:
 
 def rig_channels(config: RigConfig) -> list[Channel]:
     """The sweep's channel table for the rig's actuator and sensor ports."""
+    return port_channels(config, [config.ports.actuator], [config.ports.sensor])
+
+
+def port_channels(config: RigConfig, actuators: Sequence[Port], sensors: Sequence[Port]) -> list[Channel]:
+    """Channel table for the given actuator (force inputs) and sensor (displacement outputs) ports,
+    inputs first, in the order given: ``force_<where>_<dir>``, ``disp_<where>_<dir>``."""
     def node(port: object) -> int:
         if config.kind == "lumped":
             names = [m.name for m in config.masses]
             return names.index(getattr(port, "mass", "")) + 1
         return int(getattr(port, "station", 0))
 
-    a, s = config.ports.actuator, config.ports.sensor
-    where_a = a.mass or f"s{node(a)}"
-    where_s = s.mass or f"s{node(s)}"
-    return [
-        Channel(f"force_{where_a}_{a.direction}", "input", node(a), a.direction, "force", "N"),
-        Channel(f"disp_{where_s}_{s.direction}", "output", node(s), s.direction, "displacement", "m"),
-    ]
+    chans = []
+    for a in actuators:
+        where_a = a.mass or f"s{node(a)}"
+        chans.append(Channel(f"force_{where_a}_{a.direction}", "input", node(a), a.direction, "force", "N"))
+    for s in sensors:
+        where_s = s.mass or f"s{node(s)}"
+        chans.append(Channel(f"disp_{where_s}_{s.direction}", "output", node(s), s.direction, "displacement", "m"))
+    return chans
 
 
 def synchronous_forces(config: RigConfig, system: MechanicalSystem, speed_rpm: float) -> list[Tone]:
@@ -82,15 +97,8 @@ def synchronous_forces(config: RigConfig, system: MechanicalSystem, speed_rpm: f
     return tones
 
 
-def rig_plant(
-    config: RigConfig,
-    speed_rpm: float,
-    fault: str | None = None,
-    n_harmonics: int = 8,
-    band_hz: float | None = None,
-) -> RigPlant:
-    """The rig (optionally with a named fault) as a simulator plant at ``speed_rpm``; ``band_hz``:
-    the highest excitation frequency that will be asked (lets a large mesh reduce once)."""
+def _rig_system(config: RigConfig, fault: str | None) -> tuple[MechanicalSystem, Crack | None]:
+    """The rig's system with a time-invariant fault built in, and the breathing crack (or None)."""
     spec = None
     if fault is not None:
         if fault not in config.faults:
@@ -105,26 +113,81 @@ def rig_plant(
         system = build_system(config, modulus_factors={spec.element: spec.modulus_factor})
     else:
         system = build_system(config)
+    breathing = spec if isinstance(spec, Crack) and spec.model != "open" else None
+    return system, breathing
+
+
+def rig_plant(
+    config: RigConfig,
+    speed_rpm: float,
+    fault: str | None = None,
+    n_harmonics: int = 8,
+    band_hz: float | None = None,
+) -> RigPlant:
+    """The rig (optionally with a named fault) as a simulator plant at ``speed_rpm``; ``band_hz``:
+    the highest excitation frequency that will be asked (lets a large mesh reduce once)."""
+    system, breathing = _rig_system(config, fault)
     in_dof = system.port_dof(config.ports.actuator)
     out_dof = system.port_dof(config.ports.sensor)
-    breathing = spec if isinstance(spec, Crack) and spec.model != "open" else None
     if breathing is not None:
         plant = simulator_plant(system, breathing, speed_rpm, in_dof, [out_dof], n_harmonics)
     else:
         plant = receptance_plant(system_receptance(system, speed_rpm, [out_dof], [in_dof], band_hz=band_hz),
                                  name="matrix")
-    if config.kind == "rotor" and speed_rpm != 0.0:
-        disturbances = simulator_disturbances(system, breathing, speed_rpm, [out_dof], config.measurement.unbalance,
-                                              config.measurement.misalignment, n_harmonics)
-    else:
-        forces = synchronous_forces(config, system, speed_rpm)
-        disturbances = []
-        if forces:
-            M, C, G, K = system.matrices(speed_rpm)
-            c_out = np.zeros((1, system.n_dof))
-            c_out[0, out_dof] = 1.0
-            disturbances = response_tones(M, C + speed_rpm * RPM_TO_RAD_S * G, K, c_out, forces)
+    disturbances = _disturbances(config, system, breathing, speed_rpm, [out_dof], n_harmonics)
     return RigPlant(plant, disturbances, system, in_dof, out_dof)
+
+
+def _disturbances(config: RigConfig, system: MechanicalSystem, breathing: Crack | None, speed_rpm: float,
+                  out_dofs: list[int], n_harmonics: int) -> list[Tone]:
+    """Synchronous output tones (m) at ``out_dofs``: unbalance, misalignment and a breathing crack's
+    harmonics (rotor at speed), else the LTI responses to the synchronous forces."""
+    if config.kind == "rotor" and speed_rpm != 0.0:
+        return simulator_disturbances(system, breathing, speed_rpm, out_dofs, config.measurement.unbalance,
+                                      config.measurement.misalignment, n_harmonics)
+    forces = synchronous_forces(config, system, speed_rpm)
+    disturbances: list[Tone] = []
+    if forces:
+        M, C, G, K = system.matrices(speed_rpm)
+        c_out = np.zeros((len(out_dofs), system.n_dof))
+        for r, d in enumerate(out_dofs):
+            c_out[r, d] = 1.0
+        disturbances = response_tones(M, C + speed_rpm * RPM_TO_RAD_S * G, K, c_out, forces)
+    return disturbances
+
+
+@dataclass(frozen=True)
+class RigPlants:
+    """A rig with several actuators: one plant per actuator (outputs at every sensor), the
+    disturbance tones at the sensors (m), the system and the actuator/sensor DOFs."""
+
+    plants: list[Plant]
+    disturbances: list[Tone]
+    system: MechanicalSystem
+    in_dofs: list[int]
+    out_dofs: list[int]
+
+
+def rig_plants(
+    config: RigConfig,
+    speed_rpm: float,
+    actuators: Sequence[Port],
+    sensors: Sequence[Port],
+    fault: str | None = None,
+    n_harmonics: int = 8,
+    band_hz: float | None = None,
+) -> RigPlants:
+    """:func:`rig_plant` for several actuator and sensor ports (one plant per actuator)."""
+    system, breathing = _rig_system(config, fault)
+    in_dofs = [system.port_dof(a) for a in actuators]
+    out_dofs = [system.port_dof(s) for s in sensors]
+    if breathing is not None:
+        plants = [simulator_plant(system, breathing, speed_rpm, d, out_dofs, n_harmonics) for d in in_dofs]
+    else:
+        rec = system_receptance(system, speed_rpm, out_dofs, in_dofs, band_hz=band_hz)
+        plants = receptance_plants(rec, name="matrix")
+    disturbances = _disturbances(config, system, breathing, speed_rpm, out_dofs, n_harmonics)
+    return RigPlants(plants, disturbances, system, in_dofs, out_dofs)
 
 
 def at_shaft_angle(rp: RigPlant, speed_rpm: float, shaft_angle_rad: float) -> RigPlant:
@@ -137,23 +200,31 @@ def at_shaft_angle(rp: RigPlant, speed_rpm: float, shaft_angle_rad: float) -> Ri
     """
     if shaft_angle_rad == 0.0 or speed_rpm == 0.0:
         return rp
-    shaft_hz = speed_rpm / 60.0
-    base = rp.plant
+    plant = _turned_plant(rp.plant, speed_rpm, shaft_angle_rad)
+    dist = _turned_tones(rp.disturbances, speed_rpm, shaft_angle_rad)
+    return RigPlant(plant, dist, rp.system, rp.in_dof, rp.out_dof)
 
-    def order(offset_hz: np.ndarray) -> np.ndarray:
-        return np.rint(np.asarray(offset_hz, dtype=float) / shaft_hz)
 
+def _order(offset_hz: np.ndarray, speed_rpm: float) -> np.ndarray:
+    return np.rint(np.asarray(offset_hz, dtype=float) / (speed_rpm / 60.0))
+
+
+def _turned_plant(base: Plant, speed_rpm: float, shaft_angle_rad: float) -> Plant:
+    """``base`` with its sideband tones (order k = offset / speed) times ``exp(j k theta0)``."""
     def tones(f_hz: float) -> tuple[np.ndarray, np.ndarray]:
         tf, ta = base.tones(f_hz)
         tf = np.asarray(tf, dtype=float).reshape(-1)
         ta = np.asarray(ta, dtype=complex).reshape(tf.size, base.n_out)
-        return tf, ta * np.exp(1j * order(tf - f_hz) * shaft_angle_rad)[:, None]
+        return tf, ta * np.exp(1j * _order(tf - f_hz, speed_rpm) * shaft_angle_rad)[:, None]
 
-    plant = Plant(tones, base.n_out, base.name)
-    dist = [Tone(d.freq_hz, np.asarray(d.amplitude) * np.exp(1j * float(order(np.asarray(d.freq_hz))) *
+    return Plant(tones, base.n_out, base.name)
+
+
+def _turned_tones(tones: list[Tone], speed_rpm: float, shaft_angle_rad: float) -> list[Tone]:
+    """Synchronous tones (order k = freq / speed) times ``exp(j k theta0)``."""
+    return [Tone(d.freq_hz, np.asarray(d.amplitude) * np.exp(1j * float(_order(np.asarray(d.freq_hz), speed_rpm)) *
                                                             shaft_angle_rad))
-            for d in rp.disturbances]
-    return RigPlant(plant, dist, rp.system, rp.in_dof, rp.out_dof)
+            for d in tones]
 
 
 def step_settings(config: RigConfig, keep_periods: bool = True) -> StepSettings:
@@ -217,6 +288,61 @@ def simulate_rig(
     run = res.to_run(rid, speed_rpm, channels=channels if st.keep_periods else None, notes=notes)
     generator = (
         f"rotorcheck {__version__} simulate (rig {config.rig_id} sha256 {config.sha256()[:12]}, {what})"
+    )
+    return Sweep(
+        rig_id=config.rig_id,
+        source="simulated",
+        generator=generator,
+        created_utc=created_utc,
+        channels=channels,
+        runs={rid: run},
+    )
+
+
+def simulate_rig_patterns(
+    config: RigConfig,
+    freq_hz: np.ndarray,
+    actuators: Sequence[Port],
+    sensors: Sequence[Port] | None = None,
+    speed_rpm: float = 0.0,
+    fault: str | None = None,
+    seed: int = 0,
+    run_id: str | None = None,
+    created_utc: str = "2026-01-01T00:00:00Z",
+    n_harmonics: int = 8,
+    settings: StepSettings | None = None,
+    shaft_angle_rad: float = 0.0,
+) -> Sweep:
+    """Simulated stepped-sine sweep of ``config`` with several actuators driven one at a time
+    (seeded, deterministic) as a one-run version-2 Sweep (``n_exc = n_in = len(actuators)``).
+
+    ``actuators``/``sensors``: config ports (``sensors`` default: the rig's sensor port); the
+    channel table is :func:`port_channels`. Otherwise as :func:`simulate_rig` (the rig's
+    measurement section, faults, shaft angle at the start).
+    """
+    if len(actuators) == 0:
+        raise InputError(None, "actuators", "no actuator ports")
+    sens = list(sensors) if sensors is not None else [config.ports.sensor]
+    f = np.asarray(freq_hz, dtype=float)
+    band = float(np.max(f)) if f.size else None
+    rp = rig_plants(config, speed_rpm, actuators, sens, fault, n_harmonics, band)
+    plants, dist = rp.plants, rp.disturbances
+    if shaft_angle_rad != 0.0 and speed_rpm != 0.0:
+        plants = [_turned_plant(p, speed_rpm, shaft_angle_rad) for p in plants]
+        dist = _turned_tones(dist, speed_rpm, shaft_angle_rad)
+    st = settings if settings is not None else step_settings(config)
+    res = simulate_fast_patterns(plants, f, st, dist, rng=seed)
+    rid = run_id or f"{speed_rpm:g}rpm"
+    what = f"fault {fault!r}" if fault else "healthy"
+    n_per = st.n_periods if isinstance(st.n_periods, int) else f"{min(st.n_periods)}-{max(st.n_periods)}"
+    channels = port_channels(config, actuators, sens)
+    notes = (f"{what}; seed {seed}; {len(actuators)} actuators driven one at a time "
+             f"({', '.join(c.name for c in channels if c.role == 'input')}); {n_per} periods; "
+             f"noise std {st.output_noise_std} m/sample; shaft angle at start {np.degrees(shaft_angle_rad):.6g} deg")
+    run = res.to_run(rid, speed_rpm, channels=channels if st.keep_periods else None, notes=notes)
+    generator = (
+        f"rotorcheck {__version__} simulate (rig {config.rig_id} sha256 {config.sha256()[:12]}, {what}, "
+        f"{len(actuators)} actuators)"
     )
     return Sweep(
         rig_id=config.rig_id,

@@ -23,13 +23,21 @@ timeline and lock-in: exact for time-invariant plants, DOP853 with a time-varyin
 ``t -> dK(t)``; and an independent dense harmonic balance) are test oracles
 (tests/oracles/time_domain.py, tests/oracles/hb.py).
 
+Several inputs (:func:`simulate_fast_patterns`): a stepped-sine test with several actuators (two
+shakers, the AMB's x and y axes) driven one at a time. At each frequency pattern ``e`` drives input
+``e`` alone (one :class:`Plant` per input, e.g. :func:`receptance_plants`), the patterns measured in
+turn on the shared timeline (point ``(j, e)``, frequency-major), each with its own settling; an
+undriven input's force phasor is exactly 0. The result (:class:`PatternSweepResult`) becomes a
+version-2 run with ``n_exc = n_in`` (:meth:`PatternSweepResult.to_run`, frf by least squares).
+
 Conventions: SI units, frequencies in Hz at interfaces, phasors ``x = Re{X exp(j 2 pi f t)}``
-(peak). One input (the actuator force); ``n_out`` outputs. Random numbers come only from a seeded
-``numpy.random.Generator``.
+(peak). :func:`simulate_fast`: one input (the actuator force); ``n_out`` outputs. Random numbers
+come only from a seeded ``numpy.random.Generator``.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
@@ -40,6 +48,7 @@ from rotorcheck.signal.lockin import average_periods, tone_lockin, white_noise_p
 from rotorcheck.sweep.format import Channel, Run
 
 __all__ = [
+    "PatternSweepResult",
     "Plant",
     "StepSettings",
     "SteppedSineResult",
@@ -49,9 +58,11 @@ __all__ = [
     "matrix_plant",
     "point_start_times",
     "receptance_plant",
+    "receptance_plants",
     "response_tones",
     "settle_counts",
     "simulate_fast",
+    "simulate_fast_patterns",
 ]
 
 ToneFn = Callable[[float], tuple[np.ndarray, np.ndarray]]
@@ -204,6 +215,25 @@ def receptance_plant(rec: Receptance, name: str = "lti") -> Plant:
     if rec.cols.shape[1] != 1:
         raise ValueError(f"a plant has one input, the receptance has {rec.cols.shape[1]}")
     return lti_plant(lambda f: rec.at_hz(f)[:, 0], n_out=rec.C.shape[0], name=name)
+
+
+def receptance_plants(rec: Receptance, name: str = "lti") -> list[Plant]:
+    """One time-invariant plant per input column of an engine receptance (outputs (n_out,) m/N),
+    for :func:`simulate_fast_patterns`; the receptance is evaluated once per frequency."""
+    n_out, n_in = rec.C.shape[0], rec.cols.shape[1]
+    cache: dict[float, np.ndarray] = {}
+
+    def column(i: int) -> Callable[[float], np.ndarray]:
+        def frf(f: float) -> np.ndarray:
+            key = float(f)
+            if key not in cache:
+                cache.clear()
+                cache[key] = np.asarray(rec.at_hz(f))
+            return cache[key][:, i]
+
+        return frf
+
+    return [lti_plant(column(i), n_out=n_out, name=f"{name}[{i}]") for i in range(n_in)]
 
 
 def matrix_plant(
@@ -378,30 +408,190 @@ def simulate_fast(
         st.output_noise_std, st.output_phasor_noise_std, m, plant.n_out, "output noise"
     )
     var_in = _phasor_noise_var(st.input_noise_std, st.input_phasor_noise_std, m, 1, "input noise")
-    d_freq = np.array([d.freq_hz for d in disturbances], dtype=np.float64)
-    d_amp = (
-        np.array([np.asarray(d.amplitude, complex).reshape(plant.n_out) for d in disturbances])
-        if disturbances
-        else np.zeros((0, plant.n_out), complex)
-    )
+    d_freq, d_amp = _disturbance_arrays(disturbances, plant.n_out)
     per_in: list[np.ndarray] = []
     per_out: list[np.ndarray] = []
     for j, fj in enumerate(f):
-        w = 2.0 * np.pi * fj
         force = _force(st.force_amplitude, fj)
-        tf, ta = plant.tones(fj)
-        tf = np.asarray(tf, dtype=np.float64).reshape(-1)
-        ta = np.asarray(ta, dtype=np.complex128).reshape(tf.size, plant.n_out)
-        # absolute-time amplitudes -> local frame tau = t - t0 (see module docstring)
-        amp_plant = force * ta * np.exp(1j * (2.0 * np.pi * tf - w) * t0[j])[:, None]
-        amp_dist = d_amp * np.exp(1j * 2.0 * np.pi * d_freq * t0[j])[:, None]
-        freqs = np.concatenate([tf, d_freq])
-        amps = np.concatenate([amp_plant, amp_dist], axis=0)
-        tau0 = settle[j] / fj
-        out = tone_lockin(freqs, amps, fj, tau0, int(n[j]), m)
-        inp = np.full((int(n[j]), 1), force, dtype=np.complex128)
-        inp = inp + _complex_gauss(gen, (int(n[j]), 1), var_in)
-        out = out + _complex_gauss(gen, (int(n[j]), plant.n_out), var_out)
+        inp, out = _point(plant, fj, force, t0[j], settle[j], int(n[j]), m, d_freq, d_amp, gen, var_in, var_out)
         per_in.append(inp)
         per_out.append(out)
     return _assemble(f, t0, n, per_in, per_out, st.keep_periods)
+
+
+def _disturbance_arrays(disturbances: Sequence[Tone], n_out: int) -> tuple[np.ndarray, np.ndarray]:
+    d_freq = np.array([d.freq_hz for d in disturbances], dtype=np.float64)
+    d_amp = (
+        np.array([np.asarray(d.amplitude, complex).reshape(n_out) for d in disturbances])
+        if disturbances
+        else np.zeros((0, n_out), complex)
+    )
+    return d_freq, d_amp
+
+
+def _point(
+    plant: Plant,
+    fj: float,
+    force: complex,
+    t0j: float,
+    settle_j: int,
+    n_j: int,
+    m: int | None,
+    d_freq: np.ndarray,
+    d_amp: np.ndarray,
+    gen: np.random.Generator,
+    var_in: np.ndarray,
+    var_out: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Per-period input (n_j, 1) and output (n_j, n_out) phasors of one point: the plant's tones
+    scaled by ``force``, the disturbance tones, then input noise and output noise drawn in that order."""
+    w = 2.0 * np.pi * fj
+    tf, ta = plant.tones(fj)
+    tf = np.asarray(tf, dtype=np.float64).reshape(-1)
+    ta = np.asarray(ta, dtype=np.complex128).reshape(tf.size, plant.n_out)
+    # absolute-time amplitudes -> local frame tau = t - t0 (see module docstring)
+    amp_plant = force * ta * np.exp(1j * (2.0 * np.pi * tf - w) * t0j)[:, None]
+    amp_dist = d_amp * np.exp(1j * 2.0 * np.pi * d_freq * t0j)[:, None]
+    freqs = np.concatenate([tf, d_freq])
+    amps = np.concatenate([amp_plant, amp_dist], axis=0)
+    tau0 = settle_j / fj
+    out = tone_lockin(freqs, amps, fj, tau0, n_j, m)
+    inp = np.full((n_j, 1), force, dtype=np.complex128)
+    inp = inp + _complex_gauss(gen, (n_j, 1), var_in)
+    out = out + _complex_gauss(gen, (n_j, plant.n_out), var_out)
+    return inp, out
+
+
+# ------------------------------------------------------------------------------------------
+# several inputs, driven one at a time
+# ------------------------------------------------------------------------------------------
+
+
+@dataclass
+class PatternSweepResult:
+    """Averaged phasors of a sweep with ``n_exc = n_in`` excitation patterns, pattern ``e`` driving
+    input ``e`` alone (shapes: f points, n_exc patterns, n_in inputs, n_out outputs).
+
+    ``input_phasor`` (f, n_exc, n_in) N (0 for the undriven inputs); ``output_phasor``
+    (f, n_exc, n_out) m; ``output_var`` (f, n_exc, n_out) m^2 and ``input_var`` (f, n_exc, n_in)
+    N^2 (variance of the mean from the period scatter); ``n_periods`` (f, n_exc); ``t0_s``
+    (f, n_exc) absolute start time of each point; ``period_input`` (f, n_exc, p, n_in),
+    ``period_output`` (f, n_exc, p, n_out) per-period phasors (NaN padded) when kept.
+    """
+
+    frequency_hz: np.ndarray
+    input_phasor: np.ndarray
+    output_phasor: np.ndarray
+    output_var: np.ndarray
+    input_var: np.ndarray
+    n_periods: np.ndarray
+    t0_s: np.ndarray
+    period_input: np.ndarray | None = None
+    period_output: np.ndarray | None = None
+
+    def to_run(
+        self,
+        run_id: str,
+        speed_rpm: float,
+        channels: Sequence[Channel] | None = None,
+        notes: str = "",
+    ) -> Run:
+        """A version-2 :class:`~rotorcheck.sweep.format.Run` (:meth:`Run.from_patterns`: frf by
+        least squares, frf_var propagated); ``period_phasor`` columns follow ``channels``
+        (required when per-period phasors were kept)."""
+        pp = None
+        if self.period_input is not None and self.period_output is not None:
+            if channels is None:
+                raise ValueError("channels are needed to order period_phasor columns")
+            ins = [j for j, c in enumerate(channels) if c.role == "input"]
+            outs = [j for j, c in enumerate(channels) if c.role == "output"]
+            if len(ins) != self.period_input.shape[3] or len(outs) != self.period_output.shape[3]:
+                raise ValueError(
+                    f"channels have {len(ins)} inputs/{len(outs)} outputs, result has "
+                    f"{self.period_input.shape[3]}/{self.period_output.shape[3]}"
+                )
+            nf, ne, p = self.period_input.shape[:3]
+            pp = np.full((nf, ne, p, len(channels)), np.nan + 1j * np.nan, dtype=np.complex128)
+            pp[..., ins] = self.period_input
+            pp[..., outs] = self.period_output
+        return Run.from_patterns(
+            run_id,
+            speed_rpm,
+            self.frequency_hz,
+            self.input_phasor,
+            self.output_phasor,
+            self.output_var,
+            self.n_periods,
+            input_var=self.input_var,
+            period_phasor=pp,
+            notes=notes,
+        )
+
+
+def simulate_fast_patterns(
+    plants: Sequence[Plant],
+    frequency_hz: Sequence[float] | np.ndarray,
+    settings: StepSettings | None = None,
+    disturbances: Sequence[Tone] = (),
+    rng: np.random.Generator | int | None = 0,
+) -> PatternSweepResult:
+    """Stepped-sine sweep with several inputs driven one at a time (:func:`simulate_fast` per point).
+
+    ``plants[i]``: the response to input ``i`` (all with the same ``n_out``). At each frequency the
+    patterns ``e = 0 .. n_in - 1`` are measured in turn, pattern ``e`` driving input ``e`` with the
+    force ``settings.force_amplitude`` (the other inputs exactly 0), each point with its own settling
+    and ``n_periods`` periods on the shared timeline (frequency-major; ``settings.n_periods`` per
+    frequency applies to every pattern). Disturbances, noise and lock-in as in
+    :func:`simulate_fast`; input noise on the driven input only. ``rng``: a Generator or a seed;
+    draws in the order point by point (input noise, then output noise).
+    """
+    if len(plants) == 0:
+        raise ValueError("no plants (one per input)")
+    n_out = plants[0].n_out
+    if any(p.n_out != n_out for p in plants):
+        raise ValueError(f"plants have different output counts {[p.n_out for p in plants]}")
+    st = settings or StepSettings()
+    f = _freqs(frequency_hz)
+    n_in = ne = len(plants)
+    n = _n_periods(st, f.size)
+    f_pts = np.repeat(f, ne)
+    n_pts = np.repeat(n, ne)
+    t0 = point_start_times(f_pts, dataclasses.replace(st, n_periods=[int(v) for v in n_pts]))
+    settle = settle_counts(f_pts, st)
+    gen = _rng(rng)
+    m = st.samples_per_period
+    var_out = _phasor_noise_var(st.output_noise_std, st.output_phasor_noise_std, m, n_out, "output noise")
+    var_in = _phasor_noise_var(st.input_noise_std, st.input_phasor_noise_std, m, 1, "input noise")
+    d_freq, d_amp = _disturbance_arrays(disturbances, n_out)
+    nf = f.size
+    p_max = int(n.max())
+    mi = np.zeros((nf, ne, n_in), complex)
+    vi = np.zeros((nf, ne, n_in))
+    mo = np.empty((nf, ne, n_out), complex)
+    vo = np.empty((nf, ne, n_out))
+    pin = np.full((nf, ne, p_max, n_in), np.nan + 1j * np.nan) if st.keep_periods else None
+    pout = np.full((nf, ne, p_max, n_out), np.nan + 1j * np.nan) if st.keep_periods else None
+    for j, fj in enumerate(f):
+        force = _force(st.force_amplitude, fj)
+        nj = int(n[j])
+        for e, plant in enumerate(plants):
+            q = j * ne + e
+            inp, out = _point(plant, fj, force, t0[q], settle[q], nj, m, d_freq, d_amp, gen, var_in, var_out)
+            full_in = np.zeros((nj, n_in), complex)
+            full_in[:, e] = inp[:, 0]
+            mi[j, e], vi[j, e], _ = average_periods(full_in)
+            mo[j, e], vo[j, e], _ = average_periods(out)
+            if pin is not None and pout is not None:
+                pin[j, e, :nj] = full_in
+                pout[j, e, :nj] = out
+    return PatternSweepResult(
+        frequency_hz=f,
+        input_phasor=mi,
+        output_phasor=mo,
+        output_var=vo,
+        input_var=vi,
+        n_periods=np.repeat(n[:, None], ne, axis=1).astype(np.int32),
+        t0_s=t0.reshape(nf, ne),
+        period_input=pin,
+        period_output=pout,
+    )

@@ -5,7 +5,10 @@ Public entry points (re-exported here: ``Channel``, ``Run``, ``Sweep``, ``SweepF
 ``compare_sweeps``, ``read_sweep``, ``sweep_sha256``, ``write_sweep``):
 
 - :mod:`rotorcheck.sweep.format`: the data model: ``Channel``, ``Run``, ``Sweep``, ``FrfTable``,
-  ``SweepFormatError`` and the schema constants.
+  ``SweepFormatError`` and the schema constants. Version 1 (one excitation pattern) and version 2
+  (several inputs driven in ``n_exc`` patterns, frf by least squares; FRF-only runs with
+  ``noise_source``): ``Run`` holds the pattern axis (``input_phasor_exc`` ...) and keeps the
+  version-1 single-pattern views (``input_phasor`` ...).
 - :mod:`rotorcheck.sweep.validation`: checks of a sweep's content (``validate_sweep``).
 - :mod:`rotorcheck.sweep.hdf5io`: ``read_sweep``, ``write_sweep`` (atomic), ``sweep_sha256``.
 - :mod:`rotorcheck.sweep.compare`: ``compare_sweeps``, ``compare_sweep_files`` (bit for bit).

@@ -1,4 +1,9 @@
-"""Bit-for-bit comparison of two sweeps (in memory or as files)."""
+"""Bit-for-bit comparison of two sweeps (in memory or as files), versions 1 and 2.
+
+Arrays are compared under their file names (``/runs/<id>/input_phasor`` ...). When both runs have
+one pattern the single-pattern views are compared (indices as in a version-1 file); otherwise the
+pattern-axis arrays (a one-pattern run against a several-pattern run differs in shape).
+"""
 
 from __future__ import annotations
 
@@ -7,7 +12,7 @@ from collections.abc import Iterable
 
 import numpy as np
 
-from rotorcheck.sweep.format import RUN_DATASETS, Sweep
+from rotorcheck.sweep.format import PATTERN_ATTRS, RUN_DATASETS, RUN_OPTIONAL_V2, Run, Sweep
 from rotorcheck.sweep.hdf5io import read_sweep
 
 
@@ -84,9 +89,22 @@ def compare_sweeps(a: Sweep, b: Sweep, ignore: Iterable[str] = ()) -> list[str]:
             diffs.append(f"{base}@speed_rpm: {ra.speed_rpm!r} != {rb.speed_rpm!r}")
         if ra.notes != rb.notes:
             diffs.append(f"{base}@notes: {ra.notes!r} != {rb.notes!r}")
-        for name in (*RUN_DATASETS, "period_phasor"):
-            diffs += _compare_array(f"{base}/{name}", getattr(ra, name), getattr(rb, name))
+        if ra.noise_source != rb.noise_source:
+            diffs.append(f"{base}@noise_source: {ra.noise_source!r} != {rb.noise_source!r}")
+        single = ra.n_exc == 1 and rb.n_exc == 1
+        for name in (*RUN_DATASETS, *RUN_OPTIONAL_V2):
+            diffs += _compare_array(f"{base}/{name}", _array(ra, name, single), _array(rb, name, single))
     return diffs
+
+
+def _array(run: Run, name: str, single: bool) -> np.ndarray | None:
+    """Dataset ``name`` of ``run``: the pattern-axis array, or its single-pattern view."""
+    if name not in PATTERN_ATTRS:
+        return getattr(run, name)  # frequency, frf, frf_var
+    a = getattr(run, PATTERN_ATTRS[name])
+    if a is None or not single:
+        return a
+    return np.asarray(a)[:, 0]
 
 
 def compare_sweep_files(

@@ -1,9 +1,12 @@
-"""Reader and writer of the HDF5 sweep file (``rotorcheck.sweep`` version 1) and its SHA-256.
+"""Reader and writer of the HDF5 sweep file (``rotorcheck.sweep`` versions 1 and 2) and its SHA-256.
 
 The reader validates everything on open and raises :class:`SweepFormatError` naming the file, the
-path inside it and the reason; it never guesses (no dtype coercion, no reordering, no repair).
-The writer is atomic (:func:`rotorcheck.fileio.atomic_path`) and refuses to overwrite unless
-``force=True``.
+path inside it and the reason; it never guesses (no dtype coercion, no reordering, no repair). It
+reads version 1 (each run one pattern, ``n_exc = 1``) and version 2 (pattern axis, FRF-only runs).
+The writer writes version 1 exactly as before unless a run needs version 2
+(:attr:`~rotorcheck.sweep.format.Run.needs_v2`: several patterns, FRF-only, ``input_var``,
+``frf_var`` or ``noise_source``); it is atomic (:func:`rotorcheck.fileio.atomic_path`) and refuses
+to overwrite unless ``force=True``.
 """
 
 from __future__ import annotations
@@ -19,14 +22,18 @@ from rotorcheck.fileio import atomic_path
 from rotorcheck.sweep.format import (
     CHANNEL_FIELDS,
     EXCITATION,
+    PATTERN_ATTRS,
     PHASOR_CONVENTION,
     RUN_DATASETS,
+    RUN_OPTIONAL_V2,
     SCHEMA,
-    SCHEMA_VERSION,
+    SCHEMA_VERSION_V1,
+    SCHEMA_VERSIONS,
     Channel,
     Run,
     Sweep,
     SweepFormatError,
+    sweep_schema_version,
 )
 from rotorcheck.sweep.validation import (
     FRF_RTOL,
@@ -124,6 +131,30 @@ def _read_channels(file: str, h5: h5py.File) -> list[Channel]:
     return chans
 
 
+def _read_run_v2(file: str, g: h5py.Group, where: str, run_id: str, speed: Any, notes: str) -> Run:
+    """A version-2 run as stored: the datasets present (the validator names a missing one)."""
+    noise = None
+    if "noise_source" in g.attrs:
+        noise = check_text(file, f"{where}@noise_source", _attr(file, g, "noise_source", where), "noise_source")
+    names = (*RUN_DATASETS, *RUN_OPTIONAL_V2)
+    data = {name: _read_ds(file, g, name, where) for name in names if name in g}
+    if "frequency" not in data:
+        raise SweepFormatError(file, f"{where}/frequency", "missing dataset")
+    if "frf" not in data:
+        raise SweepFormatError(file, f"{where}/frf", "missing dataset")
+    return Run(
+        run_id=run_id,
+        speed_rpm=speed,
+        frequency=data["frequency"],
+        frf=data["frf"],
+        frf_var=data.get("frf_var"),
+        noise_source=noise,
+        notes=notes,
+        origin=file,
+        **{PATTERN_ATTRS[n]: data.get(n) for n in PATTERN_ATTRS},
+    )
+
+
 def read_sweep(
     path: str | os.PathLike[str],
     *,
@@ -155,12 +186,14 @@ def read_sweep(
             ver = ver.reshape(()).item() if ver.dtype.kind in "iu" else ver
         if isinstance(ver, bool) or not isinstance(ver, int | np.integer):
             raise SweepFormatError(file, "/@schema_version", f"schema_version {ver!r} is not an integer")
-        if int(ver) != SCHEMA_VERSION:
+        if int(ver) not in SCHEMA_VERSIONS:
             raise SweepFormatError(
                 file,
                 "/@schema_version",
-                f"unknown schema_version {int(ver)} (this reader knows {SCHEMA_VERSION})",
+                f"unknown schema_version {int(ver)} (this reader knows "
+                f"{', '.join(str(v) for v in SCHEMA_VERSIONS)})",
             )
+        version = int(ver)
         exc_attr = check_text(file, "/@excitation", _attr(file, h5, "excitation", ""), "excitation")
         if exc_attr != EXCITATION:
             raise SweepFormatError(file, "/@excitation", f"excitation {exc_attr!r}, expected {EXCITATION!r}")
@@ -201,20 +234,24 @@ def read_sweep(
             notes = ""
             if "notes" in g.attrs:
                 notes = check_text(file, f"{where}@notes", _attr(file, g, "notes", where), "notes")
-            data = {name: _read_ds(file, g, name, where) for name in RUN_DATASETS}
-            pp = _read_ds(file, g, "period_phasor", where) if "period_phasor" in g else None
-            run = Run(
-                run_id=run_id,
-                speed_rpm=speed,
-                frequency=data["frequency"],
-                input_phasor=data["input_phasor"],
-                output_phasor=data["output_phasor"],
-                output_var=data["output_var"],
-                n_periods=data["n_periods"],
-                frf=data["frf"],
-                period_phasor=pp,
-                notes=notes,
-            )
+            if version == SCHEMA_VERSION_V1:
+                data = {name: _read_ds(file, g, name, where) for name in RUN_DATASETS}
+                pp = _read_ds(file, g, "period_phasor", where) if "period_phasor" in g else None
+                run = Run.from_v1(
+                    run_id,
+                    speed,
+                    data["frequency"],
+                    data["input_phasor"],
+                    data["output_phasor"],
+                    data["output_var"],
+                    data["n_periods"],
+                    data["frf"],
+                    period_phasor=pp,
+                    notes=notes,
+                    origin=file,
+                )
+            else:
+                run = _read_run_v2(file, g, where, run_id, speed, notes)
             validate_run(
                 file,
                 run,
@@ -222,6 +259,7 @@ def read_sweep(
                 frf_rtol=frf_rtol,
                 period_rtol=period_rtol,
                 exact_dtypes=True,
+                version=version,
             )
             run.speed_rpm = float(speed)
             runs[run_id] = run
@@ -263,11 +301,12 @@ def write_sweep(sweep: Sweep, path: str | os.PathLike[str], force: bool = False)
     """
     target = os.fspath(path)
     validate_sweep(sweep, target)
+    version = sweep_schema_version(sweep)
     str_dt = h5py.string_dtype("utf-8")
     with atomic_path(target, overwrite=force) as tmp:
         with h5py.File(tmp, "w", track_order=True, libver=("earliest", "v110")) as h5:
             h5.attrs["schema"] = SCHEMA
-            h5.attrs["schema_version"] = np.int32(SCHEMA_VERSION)
+            h5.attrs["schema_version"] = np.int32(version)
             h5.attrs["rig_id"] = sweep.rig_id
             h5.attrs["created_utc"] = sweep.created_utc
             h5.attrs["excitation"] = EXCITATION
@@ -287,14 +326,37 @@ def write_sweep(sweep: Sweep, path: str | os.PathLike[str], force: bool = False)
                 g.attrs["speed_rpm"] = np.float64(run.speed_rpm)
                 if run.notes:
                     g.attrs["notes"] = run.notes
-                _put(g, "frequency", np.asarray(run.frequency, dtype=np.float64))
-                _put(g, "input_phasor", np.asarray(run.input_phasor, dtype=np.complex128))
-                _put(g, "output_phasor", np.asarray(run.output_phasor, dtype=np.complex128))
-                _put(g, "output_var", np.asarray(run.output_var, dtype=np.float64))
-                _put(g, "n_periods", np.asarray(run.n_periods, dtype=np.int32))
-                _put(g, "frf", np.asarray(run.frf, dtype=np.complex128))
-                if run.period_phasor is not None:
-                    _put(g, "period_phasor", np.asarray(run.period_phasor, dtype=np.complex128))
+                if version == SCHEMA_VERSION_V1:
+                    _put(g, "frequency", np.asarray(run.frequency, dtype=np.float64))
+                    _put(g, "input_phasor", np.asarray(run.input_phasor, dtype=np.complex128))
+                    _put(g, "output_phasor", np.asarray(run.output_phasor, dtype=np.complex128))
+                    _put(g, "output_var", np.asarray(run.output_var, dtype=np.float64))
+                    _put(g, "n_periods", np.asarray(run.n_periods, dtype=np.int32))
+                    _put(g, "frf", np.asarray(run.frf, dtype=np.complex128))
+                    if run.period_phasor is not None:
+                        _put(g, "period_phasor", np.asarray(run.period_phasor, dtype=np.complex128))
+                else:
+                    _write_run_v2(g, run)
+
+
+def _write_run_v2(g: h5py.Group, run: Run) -> None:
+    """A version-2 run: the phasors with the pattern axis, or an FRF-only run."""
+    if run.noise_source is not None:
+        g.attrs["noise_source"] = run.noise_source
+    _put(g, "frequency", np.asarray(run.frequency, dtype=np.float64))
+    arrays = (
+        ("input_phasor", run.input_phasor_exc, np.complex128),
+        ("output_phasor", run.output_phasor_exc, np.complex128),
+        ("output_var", run.output_var_exc, np.float64),
+        ("input_var", run.input_var_exc, np.float64),
+        ("n_periods", run.n_periods_exc, np.int32),
+        ("frf", run.frf, np.complex128),
+        ("frf_var", run.frf_var, np.float64),
+        ("period_phasor", run.period_phasor_exc, np.complex128),
+    )
+    for name, a, dt in arrays:
+        if a is not None:
+            _put(g, name, np.asarray(a, dtype=dt))
 
 
 def sweep_sha256(path: str | os.PathLike[str]) -> str:

@@ -3,13 +3,21 @@
 Columns (in this order)::
 
     run_id, speed_rpm, frequency_hz, output, input, frf_re, frf_im, output_var, n_periods
-    [, input_re, input_im, output_re, output_im]
+    [, input_re, input_im, output_re, output_im] [, frf_var, noise_source]
 
 ``frf`` in m/N, ``output_var`` in m^2 (variance of the mean output phasor), ``output``/``input``
 channel names. The four optional phasor columns (input force phasor in N, output displacement
 phasor in m; written by default) let :func:`import_tidy_csv` rebuild the sweep. Floats are written
 with ``repr`` (shortest round-trip form), so export/import is exact. Rows are ordered by run, then
 frequency, then output, then input.
+
+Version 2 (a sweep :func:`~rotorcheck.sweep.format.sweep_schema_version` puts in version 2) adds
+the columns ``frf_var`` ((m/N)^2, empty where not stored) and ``noise_source``. A row holds one
+output/input pair, so only a one-pattern run keeps its phasors, ``output_var`` and ``n_periods``;
+for a run of several patterns or an FRF-only run those cells are empty and the CSV carries its frf
+and frf_var, with ``noise_source`` the run's own or, for a run of several patterns whose frf_var
+comes from its period scatter, ``"measured"``. :func:`import_tidy_csv` turns a run without phasor
+cells into an FRF-only run; its ``noise_source`` is the caller's (when given) or the file's.
 """
 
 from __future__ import annotations
@@ -21,10 +29,18 @@ from collections.abc import Sequence
 import numpy as np
 
 from rotorcheck.fileio import atomic_path
-from rotorcheck.sweep.format import Channel, FrfTable, Run, Sweep, SweepFormatError
+from rotorcheck.sweep.format import (
+    Channel,
+    FrfTable,
+    Run,
+    Sweep,
+    SweepFormatError,
+    noise_source_problem,
+    sweep_schema_version,
+)
 from rotorcheck.sweep.validation import validate_sweep
 
-__all__ = ["COLUMNS", "PHASOR_COLUMNS", "export_tidy_csv", "import_tidy_csv", "read_tidy_csv"]
+__all__ = ["COLUMNS", "PHASOR_COLUMNS", "V2_COLUMNS", "export_tidy_csv", "import_tidy_csv", "read_tidy_csv"]
 
 COLUMNS = (
     "run_id",
@@ -38,6 +54,7 @@ COLUMNS = (
     "n_periods",
 )
 PHASOR_COLUMNS = ("input_re", "input_im", "output_re", "output_im")
+V2_COLUMNS = ("frf_var", "noise_source")
 
 
 def export_tidy_csv(
@@ -50,7 +67,8 @@ def export_tidy_csv(
     """Write the tidy CSV atomically; refuses to overwrite unless ``force``."""
     target = os.fspath(path)
     validate_sweep(sweep, target)
-    header = list(COLUMNS) + (list(PHASOR_COLUMNS) if include_phasors else [])
+    v2 = sweep_schema_version(sweep) == 2
+    header = list(COLUMNS) + (list(PHASOR_COLUMNS) if include_phasors else []) + (list(V2_COLUMNS) if v2 else [])
     ins, outs = sweep.inputs, sweep.outputs
     with atomic_path(target, overwrite=force) as tmp:
         with open(tmp, "w", newline="", encoding="utf-8") as fh:
@@ -58,6 +76,9 @@ def export_tidy_csv(
             w.writerow(header)
             for run in sweep.runs.values():
                 sp = repr(float(run.speed_rpm))
+                single = run.n_exc == 1
+                fv = None if run.frf_var is None else np.asarray(run.frf_var, dtype=np.float64)
+                noise = run.noise_source if run.noise_source is not None else ("" if single else "measured")
                 for k, fk in enumerate(np.asarray(run.frequency, dtype=np.float64)):
                     for o, co in enumerate(outs):
                         for i, ci in enumerate(ins):
@@ -70,13 +91,17 @@ def export_tidy_csv(
                                 ci.name,
                                 repr(h.real),
                                 repr(h.imag),
-                                repr(float(run.output_var[k, o])),
-                                str(int(run.n_periods[k])),
+                                repr(float(run.output_var[k, o])) if single else "",
+                                str(int(run.n_periods[k])) if single else "",
                             ]
-                            if include_phasors:
+                            if include_phasors and single:
                                 u = complex(run.input_phasor[k, i])
                                 y = complex(run.output_phasor[k, o])
                                 row += [repr(u.real), repr(u.imag), repr(y.real), repr(y.imag)]
+                            elif include_phasors:
+                                row += ["", "", "", ""]
+                            if v2:
+                                row += ["" if fv is None else repr(float(fv[k, o, i])), noise]
                             w.writerow(row)
 
 
@@ -111,16 +136,25 @@ def _num(file: str, lineno: int, row: dict[str, str], col: str) -> float:
         raise SweepFormatError(file, f"line {lineno}/{col}", f"not a number: {row[col]!r}") from None
 
 
+def _all_or_none(file: str, rid: str, col: str, filled: list[bool]) -> bool:
+    """True if every row of the run fills ``col``, False if none does; mixed is refused."""
+    if all(filled):
+        return True
+    if any(filled):
+        raise SweepFormatError(file, f"column {col}", f"run {rid!r}: filled in some rows only")
+    return False
+
+
 def _parse_tables(
     file: str, header: list[str], rows: list[tuple[int, dict[str, str]]], phasors: bool
-) -> tuple[dict[str, FrfTable], dict[str, tuple[np.ndarray, np.ndarray]]]:
+) -> tuple[dict[str, FrfTable], dict[str, tuple[np.ndarray, np.ndarray] | None]]:
     runs: dict[str, list[tuple[int, dict[str, str]]]] = {}
     for lineno, row in rows:
         if not row["run_id"]:
             raise SweepFormatError(file, f"line {lineno}/run_id", "empty run_id")
         runs.setdefault(row["run_id"], []).append((lineno, row))
     tables: dict[str, FrfTable] = {}
-    phas: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+    phas: dict[str, tuple[np.ndarray, np.ndarray] | None] = {}
     for rid, rr in runs.items():
         speeds = {_num(file, ln, r, "speed_rpm") for ln, r in rr}
         if len(speeds) != 1:
@@ -140,8 +174,18 @@ def _parse_tables(
                 outs.append(r["output"])
             if r["input"] not in ins:
                 ins.append(r["input"])
+        has_var = _all_or_none(file, rid, "output_var", [r["output_var"] != "" for _, r in rr])
+        has_n = _all_or_none(file, rid, "n_periods", [r["n_periods"] != "" for _, r in rr])
+        run_phasors = phasors and _all_or_none(
+            file, rid, "input_re", [all(r[c] != "" for c in PHASOR_COLUMNS) for _, r in rr]
+        )
+        has_fv = "frf_var" in header and _all_or_none(file, rid, "frf_var", [r["frf_var"] != "" for _, r in rr])
+        noises = {r["noise_source"] for _, r in rr} if "noise_source" in header else {""}
+        if len(noises) != 1:
+            raise SweepFormatError(file, "column noise_source", f"run {rid!r}: differs between rows")
         nf, no, ni = len(freqs), len(outs), len(ins)
         frf = np.full((nf, no, ni), np.nan + 1j * np.nan)
+        fvar = np.full((nf, no, ni), np.nan)
         var = np.full((nf, no), np.nan)
         nper = np.full(nf, -1, dtype=np.int64)
         u = np.full((nf, ni), np.nan + 1j * np.nan)
@@ -155,20 +199,24 @@ def _parse_tables(
                 raise SweepFormatError(file, f"line {ln}", f"run {rid!r}: duplicate row")
             seen.add((k, o, i))
             frf[k, o, i] = complex(_num(file, ln, r, "frf_re"), _num(file, ln, r, "frf_im"))
-            v = _num(file, ln, r, "output_var")
-            if not np.isnan(var[k, o]) and var[k, o] != v:
-                raise SweepFormatError(file, f"line {ln}/output_var", "differs between inputs")
-            var[k, o] = v
-            try:
-                n = int(r["n_periods"])
-            except ValueError:
-                raise SweepFormatError(
-                    file, f"line {ln}/n_periods", f"not an integer: {r['n_periods']!r}"
-                ) from None
-            if nper[k] not in (-1, n):
-                raise SweepFormatError(file, f"line {ln}/n_periods", "differs within a frequency")
-            nper[k] = n
-            if phasors:
+            if has_fv:
+                fvar[k, o, i] = _num(file, ln, r, "frf_var")
+            if has_var:
+                v = _num(file, ln, r, "output_var")
+                if not np.isnan(var[k, o]) and var[k, o] != v:
+                    raise SweepFormatError(file, f"line {ln}/output_var", "differs between inputs")
+                var[k, o] = v
+            if has_n:
+                try:
+                    n = int(r["n_periods"])
+                except ValueError:
+                    raise SweepFormatError(
+                        file, f"line {ln}/n_periods", f"not an integer: {r['n_periods']!r}"
+                    ) from None
+                if nper[k] not in (-1, n):
+                    raise SweepFormatError(file, f"line {ln}/n_periods", "differs within a frequency")
+                nper[k] = n
+            if run_phasors:
                 uu = complex(_num(file, ln, r, "input_re"), _num(file, ln, r, "input_im"))
                 yy = complex(_num(file, ln, r, "output_re"), _num(file, ln, r, "output_im"))
                 for arr, idx, val, col in ((u, (k, i), uu, "input_re"), (y, (k, o), yy, "output_re")):
@@ -181,6 +229,7 @@ def _parse_tables(
             raise SweepFormatError(
                 file, "/", f"run {rid!r}: {nf * no * ni - len(seen)} frequency/channel rows missing"
             )
+        noise = noises.pop()
         tables[rid] = FrfTable(
             run_id=rid,
             speed_rpm=speeds.pop(),
@@ -188,10 +237,12 @@ def _parse_tables(
             outputs=[Channel(n, "output", 1, "x", "displacement", "m") for n in outs],
             inputs=[Channel(n, "input", 1, "x", "force", "N") for n in ins],
             frf=frf,
-            output_var=var,
-            n_periods=nper.astype(np.int32),
+            output_var=var if has_var else None,
+            n_periods=nper.astype(np.int32) if has_n else None,
+            frf_var=fvar if has_fv else None,
+            noise_source=noise or None,
         )
-        phas[rid] = (u, y)
+        phas[rid] = (u, y) if run_phasors else None
     return tables, phas
 
 
@@ -212,18 +263,22 @@ def import_tidy_csv(
     source: str,
     created_utc: str,
     generator: str | None = None,
+    noise_source: str | None = None,
 ) -> Sweep:
-    """Rebuild a :class:`Sweep` from a tidy CSV with the phasor columns.
+    """Rebuild a :class:`Sweep` from a tidy CSV.
 
     The CSV carries no channel metadata or header fields, so the caller supplies them
-    (``channels`` matched by name). Validated like a sweep file.
+    (``channels`` matched by name). A run with the phasor cells comes back as a one-pattern run
+    (``frf_var`` kept where the file has it); a run without them becomes an FRF-only run
+    (version 2: frf, frf_var where the file has it), which needs a ``noise_source``
+    ("measured" or "assumed: <rule>"): the caller's when given (it overrides the file's), else the
+    file's ``noise_source`` column, else :class:`SweepFormatError` saying so. Validated like a
+    sweep file.
     """
     file = os.fspath(path)
     header, rows = _rows(file)
-    missing = [c for c in PHASOR_COLUMNS if c not in header]
-    if missing:
-        raise SweepFormatError(file, "line 1", f"missing columns {missing}: FRF-only CSV, use read_tidy_csv")
-    tables, phas = _parse_tables(file, header, rows, phasors=True)
+    phasor_cols = all(c in header for c in PHASOR_COLUMNS)
+    tables, phas = _parse_tables(file, header, rows, phasors=phasor_cols)
     chans = list(channels)
     ins = [c for c in chans if c.role == "input"]
     outs = [c for c in chans if c.role == "output"]
@@ -240,17 +295,40 @@ def import_tidy_csv(
             )
         oi = [names_o.index(c.name) for c in outs]
         ii = [names_i.index(c.name) for c in ins]
-        u, y = phas[rid]
-        runs[rid] = Run(
-            run_id=rid,
-            speed_rpm=tab.speed_rpm,
-            frequency=tab.frequency,
-            input_phasor=u[:, ii],
-            output_phasor=y[:, oi],
-            output_var=tab.output_var[:, oi],  # type: ignore[index]
-            n_periods=tab.n_periods,  # type: ignore[arg-type]
-            frf=tab.frf[:, oi][:, :, ii],
+        frf = tab.frf[:, oi][:, :, ii]
+        frf_var = None if tab.frf_var is None else tab.frf_var[:, oi][:, :, ii]
+        ph = phas[rid]
+        if ph is None:
+            ns = noise_source if noise_source is not None else tab.noise_source
+            if ns is None:
+                what = "no phasor columns" if not phasor_cols else "empty phasor cells"
+                raise SweepFormatError(
+                    file, "/",
+                    f"run {rid!r}: FRF-only content ({what}) and no noise_source: pass noise_source "
+                    "('measured' or 'assumed: <rule>', e.g. 'assumed: 1 % of |H| floor') to import it "
+                    "as an FRF-only run, or use read_tidy_csv",
+                )
+            why = noise_source_problem(ns)
+            if why is not None:
+                raise SweepFormatError(file, "/", f"run {rid!r}: {why}")
+            runs[rid] = Run.frf_only(rid, tab.speed_rpm, tab.frequency, frf, frf_var, noise_source=ns)
+            continue
+        if tab.output_var is None or tab.n_periods is None:
+            raise SweepFormatError(file, "/", f"run {rid!r}: phasor cells without output_var/n_periods")
+        u, y = ph
+        run = Run.from_v1(
+            rid,
+            tab.speed_rpm,
+            tab.frequency,
+            u[:, ii],
+            y[:, oi],
+            tab.output_var[:, oi],
+            tab.n_periods,
+            frf,
         )
+        run.frf_var = frf_var
+        run.noise_source = tab.noise_source
+        runs[rid] = run
     sweep = Sweep(
         rig_id=rig_id,
         source=source,

@@ -8,13 +8,27 @@ writes the input phasor (per input), output phasor and output variance (per outp
 ``n_periods`` as general records (function type 0), so :func:`import_uff58` rebuilds the whole
 sweep; ``period_phasor`` and run notes are not exported.
 
+Version 2 (a sweep that :func:`~rotorcheck.sweep.format.sweep_schema_version` puts in version 2):
+the phasor records are written per excitation pattern (token ``exc=<e>``), plus ``input_var`` when
+stored; ``frf_var`` (when stored) as one general record per output/input pair; a run's
+``noise_source`` travels as ``noise=`` on the FRF records. An FRF-only run has FRF (and
+``frf_var``) records only; :func:`import_uff58` turns a run without phasor records into an
+FRF-only run, which needs a ``noise_source`` (from the file or the caller). A version-1 sweep is
+exported exactly as before (no ``exc=`` tokens).
+
 Metadata travel in the ID lines as ``key=value`` tokens (values percent-encoded)::
 
-    id1  rotorcheck kind=<frf|input_phasor|output_phasor|output_var|n_periods>
+    id1  rotorcheck kind=<frf|frf_var|input_phasor|output_phasor|output_var|input_var|n_periods>
+         [noise=<noise_source>]                 (FRF and frf_var records of a run that states it)
     id2  run=<run_id> speed_rpm=<repr(float)>
     id3  created=<created_utc>
     id4  rig=<rig_id> source=<simulated|measured>
     id5  out=<output name> in=<input name>      (or chan=<name> for single-channel records)
+         [exc=<pattern>]                        (phasor records of a version-2 sweep)
+
+A foreign file (FRF records without these tokens) imports as FRF-only runs: the caller gives
+``run_id``, ``rig_id``, ``source``, ``created_utc`` and ``noise_source``; its other function types
+(coherence, spectra) are ignored.
 
 Precision: binary 58b (default) stores IEEE doubles, export/import is bit-exact. ASCII 58 keeps
 12 significant digits of the ordinate (``%20.11e``, relative error <= 5e-12) and only 6 of the
@@ -31,14 +45,23 @@ import numpy as np
 import pyuff
 
 from rotorcheck.fileio import atomic_path
-from rotorcheck.sweep.format import Channel, FrfTable, Run, Sweep, SweepFormatError
+from rotorcheck.sweep.format import (
+    Channel,
+    FrfTable,
+    Run,
+    Sweep,
+    SweepFormatError,
+    noise_source_problem,
+    sweep_schema_version,
+)
 from rotorcheck.sweep.validation import validate_sweep
 
 __all__ = ["export_uff58", "import_uff58", "read_uff58_frf"]
 
 _DIR_CODE = {"x": 1, "y": 2}
 _CODE_DIR = {1: "x", 2: "y"}
-_KINDS = ("frf", "input_phasor", "output_phasor", "output_var", "n_periods")
+_KINDS = ("frf", "frf_var", "input_phasor", "output_phasor", "output_var", "input_var", "n_periods")
+_PHASOR_KINDS = ("input_phasor", "output_phasor", "output_var", "n_periods")
 
 
 def _tok(**kv: object) -> str:
@@ -69,15 +92,24 @@ def _record(
     rsp: Channel | None,
     ref: Channel | None,
     binary: bool,
+    exc: int | None = None,
 ) -> dict:
-    if kind == "frf":
+    pair = kind in ("frf", "frf_var")
+    if pair:
         names = _tok(out=rsp.name, **{"in": ref.name})  # type: ignore[union-attr]
     elif rsp is not None:
         names = _tok(chan=rsp.name)
     else:
         names = "NONE"
-    ord_type = {"frf": 8, "input_phasor": 13, "output_phasor": 8, "output_var": 0, "n_periods": 0}
-    ord_unit = {"frf": "m", "input_phasor": "N", "output_phasor": "m", "output_var": "m^2", "n_periods": "1"}
+    if exc is not None:
+        names = _tok(exc=exc) if names == "NONE" else f"{names} {_tok(exc=exc)}"
+    id1 = "rotorcheck " + _tok(kind=kind)
+    if pair and run.noise_source is not None:
+        id1 += " " + _tok(noise=run.noise_source)
+    ord_type = {"frf": 8, "frf_var": 0, "input_phasor": 13, "output_phasor": 8, "output_var": 0,
+                "input_var": 0, "n_periods": 0}
+    ord_unit = {"frf": "m", "frf_var": "m^2/N^2", "input_phasor": "N", "output_phasor": "m",
+                "output_var": "m^2", "input_var": "N^2", "n_periods": "1"}
     return {
         "type": 58,
         "binary": 1 if binary else 0,
@@ -85,7 +117,7 @@ def _record(
         "func_id": 0,
         "ver_num": 0,
         "load_case_id": 0,
-        "id1": _line("rotorcheck " + _tok(kind=kind)),
+        "id1": _line(id1),
         "id2": _line(_tok(run=run.run_id, speed_rpm=repr(float(run.speed_rpm)))),
         "id3": _line(_tok(created=sweep.created_utc)),
         "id4": _line(_tok(rig=sweep.rig_id, source=sweep.source)),
@@ -112,12 +144,13 @@ def _record(
 
 def _records(sweep: Sweep, include_phasors: bool, binary: bool) -> list[dict]:
     ins, outs = sweep.inputs, sweep.outputs
+    v2 = sweep_schema_version(sweep) == 2
     recs: list[dict] = []
     for run in sweep.runs.values():
         x = np.asarray(run.frequency, dtype=np.float64)
         if x.size < 2:
             raise ValueError(f"run {run.run_id!r}: UFF58 export (pyuff) needs >= 2 frequency points")
-        if include_phasors:
+        if include_phasors and not run.is_frf_only and not v2:
             for i, ch in enumerate(ins):
                 d = np.asarray(run.input_phasor[:, i], dtype=np.complex128)
                 recs.append(_record("input_phasor", run, sweep, x, d, ch, None, binary))
@@ -129,10 +162,41 @@ def _records(sweep: Sweep, include_phasors: bool, binary: bool) -> list[dict]:
                 recs.append(_record("output_var", run, sweep, x, d, ch, None, binary))
             d = np.asarray(run.n_periods, dtype=np.float64)
             recs.append(_record("n_periods", run, sweep, x, d, None, None, binary))
+        elif include_phasors and not run.is_frf_only:
+            recs += _pattern_records(run, sweep, x, binary)
         for o, co in enumerate(outs):
             for i, ci in enumerate(ins):
                 d = np.asarray(run.frf[:, o, i], dtype=np.complex128)
                 recs.append(_record("frf", run, sweep, x, d, co, ci, binary))
+        if v2 and run.frf_var is not None:
+            fv = np.asarray(run.frf_var, dtype=np.float64)
+            for o, co in enumerate(outs):
+                for i, ci in enumerate(ins):
+                    recs.append(_record("frf_var", run, sweep, x, fv[:, o, i], co, ci, binary))
+    return recs
+
+
+def _pattern_records(run: Run, sweep: Sweep, x: np.ndarray, binary: bool) -> list[dict]:
+    """Version 2: the phasor records of every excitation pattern (token ``exc=<e>``)."""
+    ins, outs = sweep.inputs, sweep.outputs
+    assert run.input_phasor_exc is not None and run.output_phasor_exc is not None
+    assert run.output_var_exc is not None and run.n_periods_exc is not None
+    recs: list[dict] = []
+    for e in range(run.n_exc):
+        per = (
+            ("input_phasor", ins, run.input_phasor_exc, np.complex128),
+            ("output_phasor", outs, run.output_phasor_exc, np.complex128),
+            ("output_var", outs, run.output_var_exc, np.float64),
+            ("input_var", ins, run.input_var_exc, np.float64),
+        )
+        for kind, chans, arr, dt in per:
+            if arr is None:
+                continue
+            a = np.asarray(arr)
+            for c, ch in enumerate(chans):
+                recs.append(_record(kind, run, sweep, x, np.asarray(a[:, e, c], dtype=dt), ch, None, binary, e))
+        d = np.asarray(run.n_periods_exc[:, e], dtype=np.float64)
+        recs.append(_record("n_periods", run, sweep, x, d, None, None, binary, e))
     return recs
 
 
@@ -208,12 +272,16 @@ def read_uff58_frf(path: str | os.PathLike[str], run_id: str | None = None) -> d
     foreign file without it pass ``run_id`` and every FRF record is taken as that one run (speed
     from the z-axis value). Channel names come from the ``out=``/``in=`` tokens, else
     ``d<node><dir>``/``F<node><dir>``. All records of a run must share the abscissa exactly.
+    ``frf_var`` records and the ``noise=`` token (version 2) fill ``FrfTable.frf_var`` and
+    ``FrfTable.noise_source``.
     """
     file = os.fspath(path)
     sets = _load_sets(file)
     groups: dict[str, list[tuple[int, dict]]] = {}
+    var_groups: dict[str, list[tuple[int, dict]]] = {}
     for i, s in enumerate(sets):
-        if int(s.get("func_type", -1)) != 4:
+        kind = _parse(s.get("id1", "")).get("kind")
+        if int(s.get("func_type", -1)) != 4 and kind != "frf_var":
             continue
         tok = _parse(s.get("id2", ""))
         rid = tok.get("run", run_id)
@@ -221,22 +289,29 @@ def read_uff58_frf(path: str | os.PathLike[str], run_id: str | None = None) -> d
             raise SweepFormatError(
                 file, f"dataset #{i + 1}/id2", "no run= token; pass run_id to read a foreign file"
             )
-        groups.setdefault(rid, []).append((i, s))
+        (var_groups if kind == "frf_var" else groups).setdefault(rid, []).append((i, s))
     if not groups:
         raise SweepFormatError(file, "/", "no FRF (function type 4) records")
-    return {rid: _frf_table(file, rid, recs) for rid, recs in groups.items()}
+    for rid, recs in var_groups.items():
+        if rid not in groups:
+            raise SweepFormatError(
+                file, f"dataset #{recs[0][0] + 1}/id2", f"frf_var of run {rid!r} without FRF records"
+            )
+    return {rid: _frf_table(file, rid, recs, var_groups.get(rid, [])) for rid, recs in groups.items()}
 
 
-def _frf_table(file: str, rid: str, recs: list[tuple[int, dict]]) -> FrfTable:
+def _frf_table(file: str, rid: str, recs: list[tuple[int, dict]], var_recs: list[tuple[int, dict]]) -> FrfTable:
     outs: list[Channel] = []
     ins: list[Channel] = []
     cells: dict[tuple[int, int], np.ndarray] = {}
     x0: np.ndarray | None = None
     speed: float | None = None
+    noise: set[str | None] = set()
     for i, s in recs:
         where = f"dataset #{i + 1}"
         names = _parse(s.get("id5", ""))
         tok = _parse(s.get("id2", ""))
+        noise.add(_parse(s.get("id1", "")).get("noise"))
         sp = float(tok["speed_rpm"]) if "speed_rpm" in tok else float(s.get("z_axis_value", 0.0))
         if speed is None:
             speed = sp
@@ -258,13 +333,29 @@ def _frf_table(file: str, rid: str, recs: list[tuple[int, dict]]) -> FrfTable:
             raise SweepFormatError(file, f"{where}/abscissa", "frequency grid differs within run")
         cells[key] = np.asarray(s["data"], dtype=np.complex128)
     assert x0 is not None and speed is not None
+    if len(noise) != 1:
+        raise SweepFormatError(file, "/", f"run {rid!r}: noise= token differs between FRF records")
     frf = np.empty((x0.size, len(outs), len(ins)), dtype=np.complex128)
     for o in range(len(outs)):
         for i in range(len(ins)):
             if (o, i) not in cells:
                 raise SweepFormatError(file, "/", f"run {rid!r}: FRF {outs[o].name}/{ins[i].name} missing")
             frf[:, o, i] = cells[(o, i)]
-    return FrfTable(rid, speed, x0, outs, ins, frf)
+    frf_var = None
+    if var_recs:
+        frf_var = np.full(frf.shape, np.nan)
+        out_names, in_names = [c.name for c in outs], [c.name for c in ins]
+        for i, s in var_recs:
+            where = f"dataset #{i + 1}"
+            names = _parse(s.get("id5", ""))
+            if names.get("out") not in out_names or names.get("in") not in in_names:
+                raise SweepFormatError(file, f"{where}/id5", f"frf_var of a pair without FRF in run {rid!r}")
+            if not np.array_equal(np.asarray(s["x"], dtype=np.float64), x0):
+                raise SweepFormatError(file, f"{where}/abscissa", "frequency grid differs within run")
+            frf_var[:, out_names.index(names["out"]), in_names.index(names["in"])] = np.real(s["data"])
+        if np.any(np.isnan(frf_var)):
+            raise SweepFormatError(file, "/", f"run {rid!r}: frf_var records missing for some pairs")
+    return FrfTable(rid, speed, x0, outs, ins, frf, frf_var=frf_var, noise_source=noise.pop())
 
 
 def import_uff58(
@@ -272,20 +363,39 @@ def import_uff58(
     *,
     generator: str | None = None,
     channels: Sequence[Channel] | None = None,
+    noise_source: str | None = None,
+    run_id: str | None = None,
+    rig_id: str | None = None,
+    source: str | None = None,
+    created_utc: str | None = None,
 ) -> Sweep:
-    """Rebuild a :class:`Sweep` from a file written by :func:`export_uff58` with phasor records.
+    """Rebuild a :class:`Sweep` from a UFF58 file.
 
-    Header fields come from the ID lines; ``generator`` defaults to ``"uff58 import of <name>"``.
-    ``channels`` (optional) fixes the channel-table order; by default inputs then outputs in
-    file order. Raises :class:`SweepFormatError` if the phasor records are missing (then the
-    file holds FRFs only: use :func:`read_uff58_frf`).
+    A run with phasor records (written by :func:`export_uff58`) comes back whole: one pattern
+    (version 1) or, with ``exc=`` tokens, several (version 2; frf and frf_var as stored). A run
+    with FRF records only becomes an FRF-only run (version 2) with ``frf_var`` where the file has
+    it; it needs a ``noise_source`` ("measured" or "assumed: <rule>"): the caller's
+    ``noise_source`` when given (it overrides the file's), else the file's ``noise=`` token, else
+    :class:`SweepFormatError` saying so. Header fields come from the ID lines (a foreign file
+    without them: pass ``run_id``, ``rig_id``, ``source`` and ``created_utc``); ``generator``
+    defaults to ``"uff58 import of <name>"``. ``channels`` (optional) fixes the channel-table
+    order; by default inputs then outputs in file order.
     """
     file = os.fspath(path)
     sets = _load_sets(file)
-    frfs = read_uff58_frf(file)
+    foreign = not any("kind" in _parse(s.get("id1", "")) for s in sets)
+    frfs = read_uff58_frf(file, run_id=run_id if foreign else None)
     meta: dict[str, str] = {}
-    per_run: dict[str, dict[str, dict[str, np.ndarray]]] = {}
-    for i, s in enumerate(sets):
+    per_run: dict[str, dict[str, dict[tuple[str, int | None], np.ndarray]]] = {}
+    if foreign:
+        given = {"rig_id": rig_id, "source": source, "created_utc": created_utc}
+        missing_meta = [k for k, v in given.items() if v is None]
+        if missing_meta:
+            raise SweepFormatError(
+                file, "/", f"foreign UFF58 file (no rotorcheck ID tokens): pass {missing_meta} to import it"
+            )
+        meta = {"rig": str(rig_id), "source": str(source), "created": str(created_utc)}
+    for i, s in enumerate([] if foreign else sets):
         where = f"dataset #{i + 1}"
         kind = _parse(s.get("id1", "")).get("kind")
         if kind not in _KINDS:
@@ -297,16 +407,18 @@ def import_uff58(
                     raise SweepFormatError(file, f"{where}/{line}", f"missing {k}= token")
                 if meta.setdefault(k, tok[k]) != tok[k]:
                     raise SweepFormatError(file, f"{where}/{line}", f"{k} differs between records")
-        if kind == "frf":
+        if kind in ("frf", "frf_var"):
             continue
         run_ref = _parse(s.get("id2", "")).get("run")
         if run_ref is None or run_ref not in frfs:
             raise SweepFormatError(file, f"{where}/id2", f"run {run_ref!r} has no FRF records")
-        chan = _parse(s.get("id5", "")).get("chan", "")
+        names = _parse(s.get("id5", ""))
+        chan = names.get("chan", "")
+        exc = int(names["exc"]) if "exc" in names else None
         x = np.asarray(s["x"], dtype=np.float64)
         if not np.array_equal(x, frfs[run_ref].frequency):
             raise SweepFormatError(file, f"{where}/abscissa", "frequency grid differs within run")
-        per_run.setdefault(run_ref, {}).setdefault(kind, {})[chan] = np.asarray(s["data"])
+        per_run.setdefault(run_ref, {}).setdefault(kind, {})[(chan, exc)] = np.asarray(s["data"])
     first = next(iter(frfs.values()))
     chans = list(channels) if channels is not None else [*first.inputs, *first.outputs]
     ins = [c for c in chans if c.role == "input"]
@@ -322,37 +434,29 @@ def import_uff58(
             c.name for c in tab.outputs
         ] != [c.name for c in first.outputs]:
             raise SweepFormatError(file, "/", f"run {rid!r}: channels differ from the first run")
-        rec = per_run.get(rid, {})
-        need = ("input_phasor", "output_phasor", "output_var", "n_periods")
-        missing = [k for k in need if k not in rec]
-        if missing:
-            raise SweepFormatError(
-                file, "/", f"run {rid!r}: no {missing} records; FRF-only file, use read_uff58_frf"
-            )
-
-        def col(kind: str, ch: list[Channel], rid: str = rid, rec: dict = rec) -> np.ndarray:
-            try:
-                return np.stack([rec[kind][c.name] for c in ch], axis=1)
-            except KeyError as exc:
-                raise SweepFormatError(
-                    file, "/", f"run {rid!r}: {kind} record for channel {exc.args[0]!r} missing"
-                ) from None
-
         oi = [[c.name for c in tab.outputs].index(c.name) for c in outs]
         ii = [[c.name for c in tab.inputs].index(c.name) for c in ins]
-        nper = np.asarray(rec["n_periods"][""], dtype=np.float64)
-        if np.any(nper != np.round(nper)):
-            raise SweepFormatError(file, "/", f"run {rid!r}: n_periods not integer")
-        runs[rid] = Run(
-            run_id=rid,
-            speed_rpm=tab.speed_rpm,
-            frequency=tab.frequency,
-            input_phasor=col("input_phasor", ins).astype(np.complex128),
-            output_phasor=col("output_phasor", outs).astype(np.complex128),
-            output_var=np.real(col("output_var", outs)).astype(np.float64),
-            n_periods=nper.astype(np.int32),
-            frf=tab.frf[:, oi][:, :, ii],
-        )
+        frf = tab.frf[:, oi][:, :, ii]
+        frf_var = None if tab.frf_var is None else tab.frf_var[:, oi][:, :, ii]
+        rec = per_run.get(rid, {})
+        missing = [k for k in _PHASOR_KINDS if k not in rec]
+        if len(missing) == len(_PHASOR_KINDS):
+            ns = noise_source if noise_source is not None else tab.noise_source
+            if ns is None:
+                raise SweepFormatError(
+                    file, "/",
+                    f"run {rid!r}: FRF-only file (no {list(_PHASOR_KINDS)} records) and no noise_source: "
+                    "pass noise_source ('measured' or 'assumed: <rule>', e.g. 'assumed: 1 % of |H| floor') "
+                    "to import it as an FRF-only run, or use read_uff58_frf",
+                )
+            why = noise_source_problem(ns)
+            if why is not None:
+                raise SweepFormatError(file, "/", f"run {rid!r}: {why}")
+            runs[rid] = Run.frf_only(rid, tab.speed_rpm, tab.frequency, frf, frf_var, noise_source=ns)
+            continue
+        if missing:
+            raise SweepFormatError(file, "/", f"run {rid!r}: no {missing} records (phasor records incomplete)")
+        runs[rid] = _phasor_run(file, rid, tab, rec, ins, outs, frf, frf_var)
     sweep = Sweep(
         rig_id=meta["rig"],
         source=meta["source"],
@@ -363,3 +467,68 @@ def import_uff58(
     )
     validate_sweep(sweep, file)
     return sweep
+
+
+def _phasor_run(
+    file: str,
+    rid: str,
+    tab: FrfTable,
+    rec: dict[str, dict[tuple[str, int | None], np.ndarray]],
+    ins: list[Channel],
+    outs: list[Channel],
+    frf: np.ndarray,
+    frf_var: np.ndarray | None,
+) -> Run:
+    """A run from its phasor records: one pattern without ``exc=`` tokens, else the patterns."""
+    excs = {e for kind in rec.values() for (_, e) in kind}
+    if excs == {None}:
+        patterns: list[int | None] = [None]
+    elif None in excs or excs != set(range(len(excs))):
+        raise SweepFormatError(file, "/", f"run {rid!r}: exc= tokens {sorted(map(str, excs))} not 0..n_exc-1")
+    else:
+        patterns = list(range(len(excs)))
+
+    def col(kind: str, ch: list[Channel], e: int | None) -> np.ndarray:
+        try:
+            return np.stack([rec[kind][(c.name, e)] for c in ch], axis=1)
+        except KeyError as exc:
+            raise SweepFormatError(
+                file, "/", f"run {rid!r}: {kind} record for channel/pattern {exc.args[0]!r} missing"
+            ) from None
+
+    def nper(e: int | None) -> np.ndarray:
+        try:
+            n = np.asarray(rec["n_periods"][("", e)], dtype=np.float64)
+        except KeyError:
+            raise SweepFormatError(file, "/", f"run {rid!r}: n_periods record of pattern {e} missing") from None
+        if np.any(n != np.round(n)):
+            raise SweepFormatError(file, "/", f"run {rid!r}: n_periods not integer")
+        return n.astype(np.int32)
+
+    if patterns == [None]:
+        return Run.from_v1(
+            rid,
+            tab.speed_rpm,
+            tab.frequency,
+            col("input_phasor", ins, None).astype(np.complex128),
+            col("output_phasor", outs, None).astype(np.complex128),
+            np.real(col("output_var", outs, None)).astype(np.float64),
+            nper(None),
+            frf,
+        )
+    input_var = None
+    if "input_var" in rec:
+        input_var = np.stack([np.real(col("input_var", ins, e)) for e in patterns], axis=1).astype(np.float64)
+    return Run(
+        run_id=rid,
+        speed_rpm=tab.speed_rpm,
+        frequency=tab.frequency,
+        frf=frf,
+        frf_var=frf_var,
+        noise_source=tab.noise_source,
+        input_phasor_exc=np.stack([col("input_phasor", ins, e) for e in patterns], axis=1).astype(np.complex128),
+        output_phasor_exc=np.stack([col("output_phasor", outs, e) for e in patterns], axis=1).astype(np.complex128),
+        output_var_exc=np.stack([np.real(col("output_var", outs, e)) for e in patterns], axis=1).astype(np.float64),
+        n_periods_exc=np.stack([nper(e) for e in patterns], axis=1),
+        input_var_exc=input_var,
+    )

@@ -17,20 +17,30 @@ import numpy as np
 
 from rotorcheck.sweep.format import (
     DIRECTIONS,
+    FRF_ONLY_DATASETS,
     QUANTITY_UNIT,
     ROLE_QUANTITY,
     ROLES,
+    RUN_DATASETS,
+    SCHEMA_VERSION_V1,
+    SCHEMA_VERSION_V2,
     SOURCES,
     Channel,
     Run,
     Sweep,
     SweepFormatError,
+    ls_frf,
+    noise_source_problem,
+    sweep_schema_version,
 )
 
 #: Default relative tolerance of the ``frf == output / input`` consistency check.
 FRF_RTOL = 1e-9
 #: Default relative tolerance of the ``period_phasor`` vs. mean/variance consistency check.
 PERIOD_RTOL = 1e-9
+#: Version 2: X (n_in x n_exc) is rank-deficient where its smallest singular value is <= this times
+#: its largest (two patterns the same up to scale, or an input no pattern drives).
+RANK_RCOND = 1e-10
 
 _ISO_Z = re.compile(r"^\d{4}-\d{2}-\d{2}T\d{2}:\d{2}:\d{2}(\.\d{1,9})?Z$")
 _RUN_ID = re.compile(r"^[A-Za-z0-9_.+-]+$")
@@ -124,6 +134,24 @@ def dtype_name(a: np.ndarray) -> str:
     return str(a.dtype) if a.dtype.names is None else f"compound {a.dtype.names}"
 
 
+#: file dataset -> (Run attribute, dtype kind, dtype, has the pattern axis)
+_RUN_ARRAYS: dict[str, tuple[str, str, type, bool]] = {
+    "frequency": ("frequency", "f", np.float64, False),
+    "input_phasor": ("input_phasor_exc", "c", np.complex128, True),
+    "output_phasor": ("output_phasor_exc", "c", np.complex128, True),
+    "output_var": ("output_var_exc", "f", np.float64, True),
+    "input_var": ("input_var_exc", "f", np.float64, True),
+    "n_periods": ("n_periods_exc", "i", np.int32, True),
+    "frf": ("frf", "c", np.complex128, False),
+    "frf_var": ("frf_var", "f", np.float64, False),
+}
+_PHASOR_REQUIRED = ("input_phasor", "output_phasor", "output_var", "n_periods")
+
+
+def _drop_axis1(t: tuple[int, ...]) -> tuple[int, ...]:
+    return t[:1] + t[2:] if len(t) >= 2 else t
+
+
 def validate_run(
     file: str,
     run: Run,
@@ -132,9 +160,23 @@ def validate_run(
     frf_rtol: float,
     period_rtol: float,
     exact_dtypes: bool,
+    version: int | None = None,
 ) -> None:
-    """Check one run's arrays. ``exact_dtypes`` demands the file dtypes (reader)."""
+    """Check one run's arrays. ``exact_dtypes`` demands the file dtypes (reader).
+
+    ``version`` is the file's schema version (default: 2 if the run needs it, else 1). In version 1
+    the run has one pattern and shapes and indices are reported without the pattern axis; the frf
+    must equal ``output_phasor / input_phasor`` (relative ``frf_rtol``) and no input phasor may be
+    zero. In version 2 the input matrix X (n_in x n_exc) must have full row rank at every frequency
+    (smallest singular value > ``RANK_RCOND`` times the largest) and, per frequency ``k`` and output
+    ``o``, ``max_i |frf[k, o, i] - (Y X^+)[o, i]| <= frf_rtol cond(X_k) max(max_i |(Y X^+)[o, i]|,
+    max_i |frf[k, o, i]|)`` (the rounding of an independent least-squares solve grows with the
+    condition number of X; with one input and one pattern this is the version-1 rule).
+    """
     base = f"/runs/{run.run_id}"
+    if version is None:
+        version = SCHEMA_VERSION_V2 if run.needs_v2 else SCHEMA_VERSION_V1
+    v1 = version == SCHEMA_VERSION_V1
     if not isinstance(run.run_id, str) or not _RUN_ID.match(run.run_id):
         raise SweepFormatError(
             file, base, f"run id {run.run_id!r} must match [A-Za-z0-9_.+-]+ (it is a group name)"
@@ -150,20 +192,43 @@ def validate_run(
     n_out = sum(c.role == "output" for c in channels)
     n_chan = len(channels)
 
-    want = {
-        "frequency": ("f", np.float64),
-        "input_phasor": ("c", np.complex128),
-        "output_phasor": ("c", np.complex128),
-        "output_var": ("f", np.float64),
-        "n_periods": ("i", np.int32),
-        "frf": ("c", np.complex128),
-    }
-    arrays: dict[str, np.ndarray] = {}
-    for name, (kind, dt) in want.items():
-        a = getattr(run, name)
-        if a is None:
+    present = {name for name, (attr, *_rest) in _RUN_ARRAYS.items() if getattr(run, attr) is not None}
+    frf_only = not any(name in present for name in _PHASOR_REQUIRED)
+    if v1:
+        extra: list[str] = [n for n in ("input_var", "frf_var") if n in present]
+        if run.noise_source is not None:
+            extra.append("noise_source")
+        if extra and not frf_only:
+            raise SweepFormatError(file, f"{base}/{extra[0]}", "not part of schema_version 1 (needs version 2)")
+    if run.noise_source is not None:
+        ns = check_text(file, f"{base}@noise_source", run.noise_source, "noise_source")
+        why = noise_source_problem(ns)
+        if why is not None:
+            raise SweepFormatError(file, f"{base}@noise_source", why)
+    if frf_only and not v1:
+        if run.noise_source is None:
+            raise SweepFormatError(
+                file, f"{base}@noise_source",
+                "missing attribute: an FRF-only run (no phasors) must say where frf_var came from "
+                "('measured' or 'assumed: <rule>')",
+            )
+        for name, attr in (("input_var", "input_var_exc"), ("period_phasor", "period_phasor_exc")):
+            if getattr(run, attr) is not None:
+                raise SweepFormatError(
+                    file, f"{base}/{name}", "an FRF-only run (no input/output phasors) cannot hold it"
+                )
+        required: tuple[str, ...] = FRF_ONLY_DATASETS
+    else:
+        required = RUN_DATASETS
+    for name in required:
+        if name not in present:
             raise SweepFormatError(file, f"{base}/{name}", "missing dataset")
-        a = np.asarray(a)
+
+    arrays: dict[str, np.ndarray] = {}
+    for name, (attr, kind, dt, _pat) in _RUN_ARRAYS.items():
+        if name not in present:
+            continue
+        a = np.asarray(getattr(run, attr))
         if exact_dtypes:
             if a.dtype != dt:
                 raise SweepFormatError(
@@ -177,31 +242,52 @@ def validate_run(
                 )
         arrays[name] = a
 
+    def show(name: str, t: tuple[int, ...]) -> tuple[int, ...]:
+        """A shape or index as the file holds it (version 1: no pattern axis)."""
+        return _drop_axis1(t) if v1 and _RUN_ARRAYS.get(name, ("", "", float, False))[3] else t
+
     freq = arrays["frequency"]
     if freq.ndim != 1 or freq.shape[0] < 1:
         raise SweepFormatError(
             file, f"{base}/frequency", f"wrong shape {freq.shape}, expected (f,) with f >= 1"
         )
     nf = freq.shape[0]
-    shapes = {
-        "input_phasor": (nf, n_in),
-        "output_phasor": (nf, n_out),
-        "output_var": (nf, n_out),
-        "n_periods": (nf,),
+    n_exc = 0
+    if not frf_only:
+        ip = arrays["input_phasor"]
+        n_exc = int(ip.shape[1]) if ip.ndim == 3 and not v1 else 1
+        if not v1 and (ip.ndim != 3 or n_exc < 1):
+            raise SweepFormatError(
+                file, f"{base}/input_phasor",
+                f"wrong shape {ip.shape}, expected (f={nf}, n_exc >= 1, n_in={n_in}): schema_version 2 "
+                "stores the excitation-pattern axis second (a version-1 layout under schema_version 2?)",
+            )
+    shapes: dict[str, tuple[int, ...]] = {
+        "input_phasor": (nf, n_exc, n_in),
+        "output_phasor": (nf, n_exc, n_out),
+        "output_var": (nf, n_exc, n_out),
+        "input_var": (nf, n_exc, n_in),
+        "n_periods": (nf, n_exc),
         "frf": (nf, n_out, n_in),
+        "frf_var": (nf, n_out, n_in),
     }
     for name, shp in shapes.items():
-        if arrays[name].shape != shp:
+        if name in arrays and arrays[name].shape != shp:
+            if v1:
+                counts = f"f={nf}, n_in={n_in}, n_out={n_out} from /channels"
+            else:
+                counts = f"f={nf}, n_exc={n_exc} from input_phasor, n_in={n_in}, n_out={n_out} from /channels"
             raise SweepFormatError(
                 file,
                 f"{base}/{name}",
-                f"wrong shape {arrays[name].shape}, expected {shp} "
-                f"(f={nf}, n_in={n_in}, n_out={n_out} from /channels)",
+                f"wrong shape {show(name, arrays[name].shape)}, expected {show(name, shp)} ({counts})",
             )
-    for name in ("frequency", "input_phasor", "output_phasor", "output_var", "frf"):
+    for name in ("frequency", "input_phasor", "output_phasor", "output_var", "input_var", "frf", "frf_var"):
+        if name not in arrays:
+            continue
         bad = ~np.isfinite(arrays[name])
         if np.any(bad):
-            idx = tuple(int(i) for i in np.argwhere(bad)[0])
+            idx = show(name, tuple(int(i) for i in np.argwhere(bad)[0]))
             raise SweepFormatError(
                 file,
                 f"{base}/{name}",
@@ -221,7 +307,46 @@ def validate_run(
             f"frequency not strictly increasing at index {i + 1} "
             f"({float(freq[i]):.9g} Hz then {float(freq[i + 1]):.9g} Hz)",
         )
-    inp = arrays["input_phasor"]
+    for name in ("output_var", "input_var", "frf_var"):
+        if name not in arrays:
+            continue
+        var = arrays[name]
+        if np.any(var < 0):
+            idx = tuple(int(v) for v in np.argwhere(var < 0)[0])
+            raise SweepFormatError(
+                file, f"{base}/{name}", f"negative variance {float(var[idx]):.9g} at index {show(name, idx)}"
+            )
+    if frf_only:
+        return
+    nper = arrays["n_periods"]
+    if np.any(nper < 1):
+        idx = tuple(int(v) for v in np.argwhere(nper < 1)[0])
+        k = show("n_periods", idx)
+        shown = k[0] if len(k) == 1 else k
+        raise SweepFormatError(
+            file, f"{base}/n_periods", f"n_periods must be >= 1, got {int(nper[idx])} at index {shown}"
+        )
+    inp = arrays["input_phasor"].astype(np.complex128)
+    out = arrays["output_phasor"].astype(np.complex128)
+    frf = arrays["frf"].astype(np.complex128)
+    if v1:
+        _check_frf_v1(file, base, freq, inp[:, 0], out[:, 0], frf, frf_rtol)
+    else:
+        in_names = [c.name for c in channels if c.role == "input"]
+        cond = _check_rank(file, base, freq, inp, in_names)
+        _check_frf_ls(file, base, freq, inp, out, frf, cond, frf_rtol)
+
+    pp = run.period_phasor_exc
+    if pp is not None:
+        _validate_periods(
+            file, base, np.asarray(pp), arrays, n_chan, channels, exact_dtypes, period_rtol, v1
+        )
+
+
+def _check_frf_v1(
+    file: str, base: str, freq: np.ndarray, inp: np.ndarray, out: np.ndarray, frf: np.ndarray, frf_rtol: float
+) -> None:
+    """Version 1: no zero input phasor; ``frf == output / input`` entry by entry."""
     zero = inp == 0
     if np.any(zero):
         k, i = (int(v) for v in np.argwhere(zero)[0])
@@ -230,21 +355,7 @@ def validate_run(
             f"{base}/input_phasor",
             f"zero input phasor at index ({k}, {i}), frequency {float(freq[k]):.9g} Hz",
         )
-    var = arrays["output_var"]
-    if np.any(var < 0):
-        k, o = (int(v) for v in np.argwhere(var < 0)[0])
-        raise SweepFormatError(
-            file, f"{base}/output_var", f"negative variance {float(var[k, o]):.9g} at index ({k}, {o})"
-        )
-    nper = arrays["n_periods"]
-    if np.any(nper < 1):
-        k = int(np.argmax(nper < 1))
-        raise SweepFormatError(
-            file, f"{base}/n_periods", f"n_periods must be >= 1, got {int(nper[k])} at index {k}"
-        )
-    out = arrays["output_phasor"]
-    expected = out.astype(np.complex128)[:, :, None] / inp.astype(np.complex128)[:, None, :]
-    frf = arrays["frf"].astype(np.complex128)
+    expected = out[:, :, None] / inp[:, None, :]
     err = np.abs(frf - expected)
     tol = frf_rtol * np.maximum(np.abs(expected), np.abs(frf))
     bad = err > tol
@@ -258,9 +369,63 @@ def validate_run(
             f"frequency {float(freq[k]):.9g} Hz: relative difference {rel:.3g} > {frf_rtol:g}",
         )
 
-    if run.period_phasor is not None:
-        _validate_periods(
-            file, base, run.period_phasor, arrays, n_in, n_chan, channels, exact_dtypes, period_rtol
+
+def _check_rank(file: str, base: str, freq: np.ndarray, inp: np.ndarray, in_names: list[str]) -> np.ndarray:
+    """Version 2: X (n_in x n_exc) of full row rank at every frequency; returns cond(X) (f,)."""
+    _nf, n_exc, n_in = inp.shape
+    where = f"{base}/input_phasor"
+    if n_exc < n_in:
+        raise SweepFormatError(
+            file, where,
+            f"{n_exc} excitation pattern(s) for {n_in} inputs {in_names}: the input matrix X "
+            f"(n_in x n_exc) cannot have full row rank (need n_exc >= n_in)",
+        )
+    x = np.swapaxes(inp, 1, 2)  # (f, n_in, n_exc)
+    u, sv, _ = np.linalg.svd(x)  # sv (f, n_in) descending, u (f, n_in, n_in)
+    smax, s_min = sv[:, 0], sv[:, -1]
+    bad = ~(s_min > RANK_RCOND * smax)
+    if np.any(bad):
+        k = int(np.argmax(bad))
+        zero_rows = [in_names[i] for i in range(n_in) if np.all(x[k, i] == 0)]
+        zeros = [(e, in_names[i]) for e in range(n_exc) for i in range(n_in) if inp[k, e, i] == 0]
+        if zero_rows:
+            detail = f"input(s) {zero_rows} zero in every pattern (not driven)"
+        else:
+            null = np.abs(u[k, :, -1])
+            dep = [in_names[i] for i in range(n_in) if null[i] > 1e-3 * null.max()]
+            ratio = float(s_min[k] / smax[k]) if smax[k] > 0 else 0.0
+            detail = (f"the rows of inputs {dep} are linearly dependent (smallest/largest singular value "
+                      f"{ratio:.3g} <= {RANK_RCOND:g}): no pattern set separates them")
+        if zeros:
+            detail += "; zero input phasors at (pattern, input) " + ", ".join(f"({e}, {n!r})" for e, n in zeros)
+        raise SweepFormatError(
+            file, where,
+            f"input matrix X (n_in x n_exc = {n_in} x {n_exc}) rank-deficient at frequency "
+            f"{float(freq[k]):.9g} Hz (index {k}): {detail}",
+        )
+    return np.asarray(smax / s_min)
+
+
+def _check_frf_ls(
+    file: str, base: str, freq: np.ndarray, inp: np.ndarray, out: np.ndarray, frf: np.ndarray,
+    cond: np.ndarray, frf_rtol: float,
+) -> None:
+    """Version 2: frf against ``Y X^+`` row by row (tolerance in :func:`validate_run`)."""
+    expected = ls_frf(inp, out)
+    err = np.abs(frf - expected).max(axis=2)  # (f, n_out)
+    scale = np.maximum(np.abs(expected).max(axis=2), np.abs(frf).max(axis=2))
+    tol = frf_rtol * cond[:, None] * scale
+    bad = err > tol
+    if np.any(bad):
+        k, o = (int(v) for v in np.argwhere(bad)[0])
+        i = int(np.argmax(np.abs(frf[k, o] - expected[k, o])))
+        rel = err[k, o] / max(scale[k, o], 1e-300)
+        raise SweepFormatError(
+            file,
+            f"{base}/frf",
+            f"frf inconsistent with Y X^+ (output_phasor times the pseudo-inverse of input_phasor) at "
+            f"index ({k}, {o}, {i}), frequency {float(freq[k]):.9g} Hz: relative difference {rel:.3g} "
+            f"> {frf_rtol:g} x cond(X) = {float(frf_rtol * cond[k]):.3g}",
         )
 
 
@@ -269,13 +434,14 @@ def _validate_periods(
     base: str,
     pp_in: np.ndarray,
     arrays: dict[str, np.ndarray],
-    n_in: int,
     n_chan: int,
     channels: list[Channel],
     exact_dtypes: bool,
     rtol: float,
+    v1: bool,
 ) -> None:
-    """Check period_phasor: shape, NaN padding past n_periods, mean and variance vs. the stored ones."""
+    """Check period_phasor (f, n_exc, p, n_chan): shape, NaN padding past n_periods, mean and
+    variance vs. the stored ones (version 1: (f, p, n_chan), shown without the pattern axis)."""
     where = f"{base}/period_phasor"
     pp = np.asarray(pp_in)
     if exact_dtypes and pp.dtype != np.complex128:
@@ -283,27 +449,36 @@ def _validate_periods(
     if not exact_dtypes and not np.can_cast(pp.dtype, np.complex128, casting="safe"):
         raise SweepFormatError(file, where, f"dtype {dtype_name(pp)} cannot be stored as complex128")
     nf = arrays["frequency"].shape[0]
-    nper = arrays["n_periods"].astype(np.int64)
-    if pp.ndim != 3 or pp.shape[0] != nf or pp.shape[2] != n_chan or pp.shape[1] < nper.max():
-        raise SweepFormatError(
-            file,
-            where,
-            f"wrong shape {pp.shape}, expected ({nf}, p >= {int(nper.max())}, {n_chan})",
-        )
-    pp = pp.astype(np.complex128)
-    k_idx = np.arange(pp.shape[1])[None, :]
-    inside = k_idx < nper[:, None]  # (f, p)
+    ne = arrays["n_periods"].shape[1]
+    nper4 = arrays["n_periods"].astype(np.int64)  # (f, n_exc)
+    if pp.ndim != 4 or pp.shape[:2] != (nf, ne) or pp.shape[3] != n_chan or pp.shape[2] < nper4.max():
+        shown = _drop_axis1(pp.shape) if v1 else pp.shape
+        want = f"({nf}, p >= {int(nper4.max())}, {n_chan})" if v1 else (
+            f"({nf}, {ne}, p >= {int(nper4.max())}, {n_chan})")
+        raise SweepFormatError(file, where, f"wrong shape {shown}, expected {want}")
+
+    def at(j: int, *rest: str) -> str:
+        """Index of flat point j (= k n_exc + e) as the file shows it."""
+        k, e = divmod(j, ne)
+        head = [str(k)] if v1 else [str(k), str(e)]
+        return "(" + ", ".join([*head, *rest]) + ")"
+
+    p = pp.shape[2]
+    pp = pp.astype(np.complex128).reshape(nf * ne, p, n_chan)
+    nper = nper4.reshape(-1)
+    k_idx = np.arange(p)[None, :]
+    inside = k_idx < nper[:, None]  # (f n_exc, p)
     fin = np.isfinite(pp).all(axis=2)
     nan = (np.isnan(pp.real) | np.isnan(pp.imag)).all(axis=2)
     if np.any(inside & ~fin):
-        k, p = (int(v) for v in np.argwhere(inside & ~fin)[0])
+        j, q = (int(v) for v in np.argwhere(inside & ~fin)[0])
         raise SweepFormatError(
-            file, where, f"non-finite value at index ({k}, {p}, :) within n_periods={nper[k]}"
+            file, where, f"non-finite value at index {at(j, str(q), ':')} within n_periods={nper[j]}"
         )
     if np.any(~inside & ~nan):
-        k, p = (int(v) for v in np.argwhere(~inside & ~nan)[0])
+        j, q = (int(v) for v in np.argwhere(~inside & ~nan)[0])
         raise SweepFormatError(
-            file, where, f"padding at index ({k}, {p}, :) beyond n_periods={nper[k]} is not NaN"
+            file, where, f"padding at index {at(j, str(q), ':')} beyond n_periods={nper[j]} is not NaN"
         )
     in_cols = [j for j, c in enumerate(channels) if c.role == "input"]
     out_cols = [j for j, c in enumerate(channels) if c.role == "output"]
@@ -311,15 +486,15 @@ def _validate_periods(
     x = np.where(w, pp, 0)
     mean = x.sum(axis=1) / nper[:, None]
     for cols, name in ((in_cols, "input_phasor"), (out_cols, "output_phasor")):
-        stored = arrays[name].astype(np.complex128)
+        stored = arrays[name].astype(np.complex128).reshape(nf * ne, -1)
         scale = np.max(np.abs(x[:, :, cols]), axis=1)
         bad = np.abs(mean[:, cols] - stored) > rtol * scale + 1e-300
         if np.any(bad):
-            k, c = (int(v) for v in np.argwhere(bad)[0])
+            j, c = (int(v) for v in np.argwhere(bad)[0])
             raise SweepFormatError(
                 file,
                 where,
-                f"mean over periods at index ({k}, :, {cols[c]}) differs from {name} "
+                f"mean over periods at index {at(j, ':', str(cols[c]))} differs from {name} "
                 f"(relative tolerance {rtol:g})",
             )
     dev = np.where(w, pp - mean[:, None, :], 0)
@@ -327,17 +502,17 @@ def _validate_periods(
     n = nper[:, None].astype(float)
     with np.errstate(divide="ignore", invalid="ignore"):
         var = np.where(n > 1, ss / (n * (n - 1)), np.nan)
-    stored_var = arrays["output_var"].astype(np.float64)
+    stored_var = arrays["output_var"].astype(np.float64).reshape(nf * ne, -1)
     scale = (np.max(np.abs(x[:, :, out_cols]), axis=1) ** 2) / n
     check = n[:, 0] > 1
     bad = (np.abs(var - stored_var) > 1e3 * rtol * scale + 1e-300) & check[:, None]
     if np.any(bad):
-        k, o = (int(v) for v in np.argwhere(bad)[0])
+        j, o = (int(v) for v in np.argwhere(bad)[0])
         raise SweepFormatError(
             file,
             where,
-            f"period-to-period variance of the mean at index ({k}, {o}) = {float(var[k, o]):.9g} differs "
-            f"from output_var = {stored_var[k, o]!r}",
+            f"period-to-period variance of the mean at index {at(j, str(o))} = {float(var[j, o]):.9g} "
+            f"differs from output_var = {stored_var[j, o]!r}",
         )
 
 
@@ -348,12 +523,15 @@ def validate_sweep(
     frf_rtol: float = FRF_RTOL,
     period_rtol: float = PERIOD_RTOL,
 ) -> None:
-    """Validate an in-memory sweep; raise :class:`SweepFormatError` on the first problem."""
+    """Validate an in-memory sweep; raise :class:`SweepFormatError` on the first problem.
+
+    The runs are checked against the version a writer would use (:func:`sweep_schema_version`)."""
     f = str(file)
     validate_header(f, sweep.rig_id, sweep.source, sweep.generator, sweep.created_utc)
     validate_channels(f, "/channels", list(sweep.channels))
     if len(sweep.runs) == 0:
         raise SweepFormatError(f, "/runs", "no runs")
+    version = sweep_schema_version(sweep)
     for key, run in sweep.runs.items():
         if key != run.run_id:
             raise SweepFormatError(f, f"/runs/{key}", f"dict key {key!r} != run_id {run.run_id!r}")
@@ -364,11 +542,13 @@ def validate_sweep(
             frf_rtol=frf_rtol,
             period_rtol=period_rtol,
             exact_dtypes=False,
+            version=version,
         )
 
 __all__ = [
     "FRF_RTOL",
     "PERIOD_RTOL",
+    "RANK_RCOND",
     "check_text",
     "dtype_name",
     "validate_channels",

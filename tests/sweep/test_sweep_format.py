@@ -170,8 +170,14 @@ def test_frf_inconsistent(sweep_file: Path) -> None:
 
 def test_unknown_schema_version(sweep_file: Path) -> None:
     with h5py.File(sweep_file, "r+") as h5:
+        h5.attrs["schema_version"] = np.int32(3)
+    _refused(sweep_file, "/@schema_version", r"unknown schema_version 3 \(this reader knows 1, 2\)")
+
+
+def test_version_1_layout_under_schema_version_2(sweep_file: Path) -> None:
+    with h5py.File(sweep_file, "r+") as h5:
         h5.attrs["schema_version"] = np.int32(2)
-    _refused(sweep_file, "/@schema_version", "unknown schema_version 2")
+    _refused(sweep_file, f"{RUN}/input_phasor", r"wrong shape \(262, 1\), expected \(f=262, n_exc >= 1, n_in=1\)")
 
 
 def test_wrong_schema(sweep_file: Path) -> None:
