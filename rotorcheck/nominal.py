@@ -20,11 +20,12 @@ Structures (``uncertainty.structure`` in the rig file):
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
-from rotorcheck.config import RigConfig
+from rotorcheck.config import Port, RigConfig
 from rotorcheck.errors import InputError
 from rotorcheck.fe.assembly import build_system
 from rotorcheck.fe.frf import system_receptance
@@ -158,3 +159,63 @@ def nominal_model(
         structure=structure,
         parameter=config.uncertainty.parameter,
     )
+
+
+@dataclass(frozen=True)
+class ChannelPair:
+    """One measured FRF channel: the displacement at ``output`` per unit force at ``input`` (model ports:
+    a rotor station and direction, or a lumped mass); ``name`` as ``"<output channel>/<input channel>"``."""
+
+    output: Port
+    input: Port
+    name: str
+
+    def key(self) -> tuple[str, str]:
+        """``(output, input)`` as ``"s6.x"``-style labels (what a baseline stores and a new sweep must match)."""
+        return port_label(self.output), port_label(self.input)
+
+
+def port_label(port: Port) -> str:
+    """``"s<station>.<direction>"`` for a rotor port, the mass name for a lumped one."""
+    return str(port.mass) if port.mass is not None else f"s{port.station}.{port.direction}"
+
+
+def channel_port(config: RigConfig, node: int, direction: str) -> Port:
+    """The model port of a sweep channel (``node``: rotor station, or 1-based mass index of a lumped rig)."""
+    if config.kind == "rotor":
+        return Port(station=node, direction=direction)  # type: ignore[arg-type]
+    names = [m.name for m in config.masses]
+    if not 1 <= node <= len(names):
+        raise InputError(None, "/channels", f"node {node} is no mass of rig {config.rig_id!r} (1..{len(names)})")
+    return Port(mass=names[node - 1], direction=direction)  # type: ignore[arg-type]
+
+
+def primary_pair(config: RigConfig) -> ChannelPair:
+    """The rig's own actuator -> sensor channel (the ports section)."""
+    return ChannelPair(config.ports.sensor, config.ports.actuator, "sensor/actuator")
+
+
+def pair_receptance(config: RigConfig, freq_hz: np.ndarray, speed_rpm: float, pairs: Sequence[ChannelPair],
+                    system: MechanicalSystem | None = None) -> np.ndarray:
+    """The model's receptance of each channel pair (f, P), m/N, from one engine receptance."""
+    sys_ = system if system is not None else build_system(config)
+    f = np.atleast_1d(np.asarray(freq_hz, dtype=float))
+    outs = sorted({sys_.port_dof(p.output) for p in pairs})
+    ins = sorted({sys_.port_dof(p.input) for p in pairs})
+    band = float(np.max(np.abs(f))) if f.size else None
+    H = system_receptance(sys_, speed_rpm, outs, ins, band_hz=band).at_hz(f)  # (f, n_out, n_in)
+    return np.stack([H[:, outs.index(sys_.port_dof(p.output)), ins.index(sys_.port_dof(p.input))] for p in pairs],
+                    axis=1)
+
+
+def damage_direction(config: RigConfig, freq_hz: np.ndarray, speed_rpm: float, pairs: Sequence[ChannelPair],
+                     system: MechanicalSystem | None = None) -> np.ndarray:
+    """First-order change of each channel pair per unit damage-port stiffness change (f, P):
+    ``E21_o E12_i`` (the damage port's receptance to the output times the input's to the damage port)."""
+    if config.damage is None:
+        raise InputError(None, "damage", "the rig has no damage port")
+    d = config.damage.port
+    cross = [ChannelPair(p.output, d, "") for p in pairs] + [ChannelPair(d, p.input, "") for p in pairs]
+    H = pair_receptance(config, freq_hz, speed_rpm, cross, system)
+    n = len(pairs)
+    return H[:, :n] * H[:, n:]

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rotorcheck.config import RigConfig
-from rotorcheck.nominal import nominal_model
+from rotorcheck.nominal import ChannelPair, nominal_model, pair_receptance
 from rotorcheck.robust.real_box import AffineModel, AffineParameter
 from rotorcheck.variability import BenignParameter, benign_parameters, with_benign
 
@@ -26,9 +26,19 @@ SIGNATURE_LOSS = 1e-3
 VISIBLE = 1e-4
 
 
-def io_frf(config: RigConfig, freq_hz: np.ndarray, speed_rpm: float) -> np.ndarray:
-    """The model's receptance actuator -> sensor (f,), m/N."""
-    return nominal_model(config, freq_hz, speed_rpm).frf
+def io_frf(config: RigConfig, freq_hz: np.ndarray, speed_rpm: float,
+           pairs: Sequence[ChannelPair] | None = None) -> np.ndarray:
+    """The model's receptance actuator -> sensor (f,), m/N; with ``pairs`` every channel pair's (f, P)."""
+    if pairs is not None and len(pairs) > 1:
+        return pair_receptance(config, freq_hz, speed_rpm, pairs)
+    g = nominal_model(config, freq_hz, speed_rpm).frf
+    return g[:, None] if pairs is not None else g
+
+
+def stacked(x: np.ndarray) -> np.ndarray:
+    """An (f, P) array as one vector, channel pair after channel pair (P f,); an (f,) array as it is."""
+    x = np.asarray(x)
+    return x.T.ravel() if x.ndim == 2 else x
 
 
 def with_element_loss(config: RigConfig, element: int, loss: float) -> RigConfig:
@@ -44,15 +54,18 @@ def candidate_elements(config: RigConfig) -> tuple[int, ...]:
 
 
 def crack_signatures(config: RigConfig, freq_hz: np.ndarray, speed_rpm: float, healthy_frf: np.ndarray,
-                     elements: Sequence[int] | None = None, loss: float = SIGNATURE_LOSS
-                     ) -> tuple[tuple[int, ...], np.ndarray]:
+                     elements: Sequence[int] | None = None, loss: float = SIGNATURE_LOSS,
+                     pairs: Sequence[ChannelPair] | None = None) -> tuple[tuple[int, ...], np.ndarray]:
     """``(elements, S)``: S (n_e, f) complex, the FRF change per unit stiffness loss (m/N per 1) of
-    each element, re-solved at ``loss`` and anchored at ``healthy_frf``."""
+    each element, re-solved at ``loss`` and anchored at ``healthy_frf``; with ``pairs`` (``healthy_frf``
+    (f, P)) each row is stacked over the pairs (P f,), pair after pair."""
     f = np.asarray(freq_hz, dtype=float)
     els = tuple(elements) if elements is not None else candidate_elements(config)
-    g0 = io_frf(config, f, speed_rpm)
-    S = np.array([healthy_frf * (io_frf(with_element_loss(config, e, loss), f, speed_rpm) / g0 - 1.0) / loss
-                  for e in els], dtype=complex).reshape(len(els), f.size)
+    g0 = io_frf(config, f, speed_rpm, pairs)
+    th = np.asarray(healthy_frf).reshape(g0.shape)
+    S = np.array([stacked(th * (io_frf(with_element_loss(config, e, loss), f, speed_rpm, pairs) / g0 - 1.0) / loss)
+                  for e in els], dtype=complex).reshape(len(els), th.size)
+    healthy_frf = stacked(th)
     # an element the channel cannot see (an overhang with a free end carries no bending moment): its
     # "signature" is round-off, not a shape; it is no candidate
     norms = np.linalg.norm(S / np.abs(healthy_frf), axis=1) if S.size else np.zeros(0)
@@ -82,12 +95,15 @@ class BenignPrediction:
 
 
 def benign_prediction(config: RigConfig, freq_hz: np.ndarray, speed_rpm: float, healthy_frf: np.ndarray,
-                      parameters: Sequence[BenignParameter] | None = None) -> BenignPrediction:
+                      parameters: Sequence[BenignParameter] | None = None,
+                      pairs: Sequence[ChannelPair] | None = None) -> BenignPrediction:
     """The model's benign change around ``config`` at ``speed_rpm``, anchored at ``healthy_frf``:
-    ``T_h (g_s g_a G(theta) / G - 1)`` with the model re-solved at ``theta`` (gains multiply)."""
+    ``T_h (g_s g_a G(theta) / G - 1)`` with the model re-solved at ``theta`` (gains multiply); with
+    ``pairs`` (``healthy_frf`` (f, P)) stacked over the pairs (P f,)."""
     f = np.asarray(freq_hz, dtype=float)
     params = tuple(parameters) if parameters is not None else benign_parameters(config)
-    g0 = io_frf(config, f, speed_rpm)
+    g0 = io_frf(config, f, speed_rpm, pairs)
+    th = np.asarray(healthy_frf).reshape(g0.shape)
     cache: dict[tuple[float, ...], np.ndarray] = {}
 
     def predict(theta: np.ndarray) -> np.ndarray:
@@ -96,8 +112,8 @@ def benign_prediction(config: RigConfig, freq_hz: np.ndarray, speed_rpm: float, 
             values = {p.name: float(x) for p, x in zip(params, theta)}
             cfg, d_rpm, g_s, g_a = with_benign(config, values)
             resolve = d_rpm != 0.0 or any(x != 0.0 for p, x in zip(params, theta) if p.changes_model)
-            g = io_frf(cfg, f, speed_rpm + d_rpm) if resolve else g0
-            cache[key] = healthy_frf * (g_s * g_a * g / g0 - 1.0)
+            g = io_frf(cfg, f, speed_rpm + d_rpm, pairs) if resolve else g0
+            cache[key] = stacked(th * (g_s * g_a * g / g0 - 1.0))
             if len(cache) > 256:
                 cache.pop(next(iter(cache)))
         return cache[key]
@@ -118,7 +134,7 @@ class BenignBox:
 
 
 def benign_box(config: RigConfig, speed_rpm: float, parameters: Sequence[BenignParameter] | None = None,
-               speed_offset: float = 0.0) -> BenignBox:
+               speed_offset: float = 0.0, pair: ChannelPair | None = None) -> BenignBox:
     """The benign parameters of ``config`` at ``speed_rpm`` as real parameters entering the dynamic
     stiffness affinely: each parameter by the exact change of M, C and K per unit (checked affine at its
     range's ends and centre), the speed tolerance by ``Omega G`` (range moved by ``speed_offset`` rpm), the
@@ -167,7 +183,7 @@ def benign_box(config: RigConfig, speed_rpm: float, parameters: Sequence[BenignP
              "modes is not affine in the parameter)"] if held else []
     b = np.zeros(sys0.n_dof)
     c = np.zeros(sys0.n_dof)
-    b[sys0.port_dof(config.ports.actuator)] = 1.0
-    c[sys0.port_dof(config.ports.sensor)] = 1.0
+    b[sys0.port_dof(config.ports.actuator if pair is None else pair.input)] = 1.0
+    c[sys0.port_dof(config.ports.sensor if pair is None else pair.output)] = 1.0
     model = AffineModel(M, C + speed_rpm * RPM_TO_RAD_S * G, K, b, c, tuple(affine))
     return BenignBox(model, (g_lo, g_hi), tuple(a.name for a in affine), tuple(notes))

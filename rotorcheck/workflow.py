@@ -131,6 +131,19 @@ class MeasuredRun:
     n_dropped: int = 0  # points of the run outside the band
     dof: np.ndarray | None = None  # (f,) real degrees of freedom of output_var (2 (N - q))
     harmonics_removed: int = 0  # shaft-speed orders removed from the per-period phasors (0: none)
+    # every measured channel pair (output <- input), the rig's own actuator -> sensor first; W, Zt and
+    # output_var above are that first pair's phasors. Several pairs: their FRFs (f, P) m/N, the
+    # variances of those FRFs (f, P) m^2/N^2 and the variances' real degrees of freedom (f, P)
+    pairs: tuple[Any, ...] = ()
+    frf_pairs: np.ndarray | None = None
+    var_pairs: np.ndarray | None = None
+    dof_pairs: np.ndarray | None = None
+    noise_source: str = ""  # an FRF-only run: where its variance came from ("measured" | "assumed: ...")
+
+    @property
+    def n_pairs(self) -> int:
+        """Measured channel pairs (1 for a one-actuator, one-sensor sweep)."""
+        return max(len(self.pairs), 1)
 
     @property
     def frf(self) -> np.ndarray:
@@ -186,20 +199,16 @@ def measured_run(sweep: Any, config: RigConfig, run_id: str | None = None, path:
     if run_id not in sweep.runs:
         raise InputError(p, f"/runs/{run_id}", f"no such run (runs: {', '.join(sweep.runs)})")
     run = sweep.runs[run_id]
-    if len(sweep.inputs) != 1 or len(sweep.outputs) != 1:
-        raise InputError(p, "/channels", "rotorcheck validates one actuator and one sensor channel per sweep")
-    for ch, port, name in ((sweep.inputs[0], config.ports.actuator, "actuator"),
-                           (sweep.outputs[0], config.ports.sensor, "sensor")):
-        expected = (port.station, port.direction) if config.kind == "rotor" else (
-            [m.name for m in config.masses].index(str(port.mass)) + 1, ch.direction)
-        if (ch.node, ch.direction) != expected:
-            raise InputError(p, "/channels", f"channel {ch.name!r} is at node {ch.node} {ch.direction}, the rig's "
-                             f"{name} port is at {expected[0]} {expected[1]}")
+    pairs, cols = _channel_pairs(sweep, config, p)
     lo, hi = config.analysis.band_hz
     f = run.frequency
     keep = (f >= lo - 1e-9) & (f <= hi + 1e-9)
     if not np.any(keep):
         raise InputError(p, f"/runs/{run_id}/frequency", f"no point inside the analysis band {lo:g}-{hi:g} Hz")
+    if run.is_frf_only:
+        return _frf_only_run(run, pairs, cols, p, sha256, sweep.rig_id, keep, (lo, hi))
+    if len(pairs) > 1 or run.n_exc > 1:
+        return _multi_pair_run(sweep, run, pairs, cols, p, sha256, keep, (lo, hi), shaft_orders)
     W, Z, var = run.input_phasor[:, 0], run.output_phasor[:, 0], run.output_var[:, 0]
     dof = 2.0 * (run.n_periods.astype(float) - 1.0)
     removed = 0
@@ -215,7 +224,110 @@ def measured_run(sweep: Any, config: RigConfig, run_id: str | None = None, path:
         path=p, sha256=sha256, rig_id=sweep.rig_id, run_id=run_id, speed_rpm=float(run.speed_rpm),
         frequency_hz=f[keep], W=W[keep], Zt=Z[keep],
         output_var=var[keep], n_periods=run.n_periods[keep], band_hz=(lo, hi),
-        n_dropped=int(np.count_nonzero(~keep)), dof=dof[keep], harmonics_removed=removed,
+        n_dropped=int(np.count_nonzero(~keep)), dof=dof[keep], harmonics_removed=removed, pairs=tuple(pairs),
+    )
+
+
+def _channel_pairs(sweep: Any, config: RigConfig, p: Path) -> tuple[list[Any], list[tuple[int, int]]]:
+    """Every (output, input) channel pair of ``sweep`` as model ports, the rig's actuator -> sensor first,
+    and each pair's (output, input) column. A channel off the model, or a sweep without the rig's own
+    actuator and sensor, is refused naming the channel."""
+    from rotorcheck.nominal import ChannelPair, channel_port, port_label
+
+    def port(ch: Any) -> Any:
+        try:
+            prt = channel_port(config, int(ch.node), ch.direction)
+            if config.kind == "rotor":
+                from rotorcheck.fe.assembly import build_system
+
+                build_system(config).port_dof(prt)
+        except (KeyError, InputError) as exc:
+            raise InputError(p, "/channels", f"channel {ch.name!r} (node {ch.node} {ch.direction}) is not on rig "
+                             f"{config.rig_id!r}: {exc}") from None
+        return prt
+
+    ins = [port(c) for c in sweep.inputs]
+    outs = [port(c) for c in sweep.outputs]
+    if not ins or not outs:
+        raise InputError(p, "/channels", "a sweep needs at least one input and one output channel")
+    act, sen = config.ports.actuator, config.ports.sensor
+    same = [port_label(x) for x in ins].count(port_label(act)), [port_label(x) for x in outs].count(port_label(sen))
+    if same[0] != 1 or same[1] != 1:
+        what = "actuator" if same[0] != 1 else "sensor"
+        prt = act if what == "actuator" else sen
+        chans, ports = (sweep.inputs, ins) if what == "actuator" else (sweep.outputs, outs)
+        raise InputError(p, "/channels", f"the rig's {what} port ({port_label(prt)}) must be exactly one of the "
+                         f"sweep's {'inputs' if what == 'actuator' else 'outputs'} ("
+                         + ", ".join(f"{c.name} {port_label(x)}" for c, x in zip(chans, ports)) + ")")
+    i0 = [port_label(x) for x in ins].index(port_label(act))
+    o0 = [port_label(x) for x in outs].index(port_label(sen))
+    order = [(o0, i0)] + [(o, i) for o in range(len(outs)) for i in range(len(ins)) if (o, i) != (o0, i0)]
+    pairs = [ChannelPair(outs[o], ins[i], f"{sweep.outputs[o].name}/{sweep.inputs[i].name}") for o, i in order]
+    return pairs, order
+
+
+def _frf_only_run(run: Any, pairs: list[Any], cols: list[tuple[int, int]], p: Path, sha256: str, rig_id: str,
+                  keep: np.ndarray, band: tuple[float, float]) -> MeasuredRun:
+    """An FRF-only run (UFF58, a spreadsheet): its FRFs and stated variances (dof inf: treated as known);
+    the first pair as a unit force so the one-channel steps run."""
+    if run.frf_var is None:
+        raise InputError(p, f"/runs/{run.run_id}/frf_var", "an FRF-only run needs frf_var (the FRF's variance) to "
+                         "detect against; convert the file with --noise-var or --noise-source 'assumed: ...'")
+    frf = np.stack([run.frf[:, o, i] for o, i in cols], axis=1)[keep]
+    var = np.stack([run.frf_var[:, o, i] for o, i in cols], axis=1)[keep]
+    nf = int(np.count_nonzero(keep))
+    return MeasuredRun(
+        path=p, sha256=sha256, rig_id=rig_id, run_id=run.run_id, speed_rpm=float(run.speed_rpm),
+        frequency_hz=run.frequency[keep], W=np.ones(nf, complex), Zt=frf[:, 0], output_var=var[:, 0],
+        n_periods=np.zeros(nf, dtype=np.int32), band_hz=band, n_dropped=int(np.count_nonzero(~keep)),
+        dof=np.full(nf, np.inf), pairs=tuple(pairs), frf_pairs=frf, var_pairs=var, dof_pairs=np.full(var.shape, np.inf),
+        noise_source=str(run.noise_source or ""),
+    )
+
+
+def _multi_pair_run(sweep: Any, run: Any, pairs: list[Any], cols: list[tuple[int, int]], p: Path, sha256: str,
+                    keep: np.ndarray, band: tuple[float, float], shaft_orders: int) -> MeasuredRun:
+    """Several channel pairs: per excitation pattern and channel the phasors (shaft harmonics fitted out of
+    the per-period phasors where stored), the FRF matrix ``Y X^+`` per frequency and each entry's
+    variance ``sum_e var(Y_eo) |X^+_ei|^2``, dof the smallest of the patterns that enter."""
+    from rotorcheck.sweep.format import ls_frf, ls_frf_var
+
+    f = run.frequency
+    X = np.array(run.input_phasor_exc, dtype=complex)  # (f, n_exc, n_in)
+    Y = np.array(run.output_phasor_exc, dtype=complex)  # (f, n_exc, n_out)
+    V = np.array(run.output_var_exc, dtype=float)
+    n_per = np.asarray(run.n_periods_exc)
+    D = 2.0 * (n_per.astype(float) - 1.0)[:, :, None] * np.ones(V.shape[2])  # (f, n_exc, n_out)
+    removed = 0
+    pp = run.period_phasor_exc
+    if pp is not None and run.speed_rpm != 0.0 and shaft_orders > 0:
+        from rotorcheck.signal.lockin import remove_shaft_harmonics
+
+        in_cols = [j for j, c in enumerate(sweep.channels) if c.role == "input"]
+        out_cols = [j for j, c in enumerate(sweep.channels) if c.role == "output"]
+        shaft = abs(run.speed_rpm) / 60.0
+        for e in range(X.shape[1]):
+            for o, oc in enumerate(out_cols):
+                for i, ic in enumerate(in_cols):
+                    w, z, v, d = remove_shaft_harmonics(pp[:, e], n_per[:, e], f, shaft, ic, oc, shaft_orders)
+                    X[:, e, i] = w
+                Y[:, e, o], V[:, e, o], D[:, e, o] = z, v, d
+        removed = shaft_orders
+    H = ls_frf(X, Y)  # (f, n_out, n_in)
+    Hv = ls_frf_var(X, V)
+    pinv_used = np.abs(np.linalg.pinv(np.swapaxes(X, 1, 2))) > 0  # (f, n_exc, n_in): patterns entering input i
+    frf = np.stack([H[:, o, i] for o, i in cols], axis=1)[keep]
+    var = np.stack([Hv[:, o, i] for o, i in cols], axis=1)[keep]
+    dof = np.stack([np.min(np.where(pinv_used[:, :, i], D[:, :, o], np.inf), axis=1) for o, i in cols], axis=1)[keep]
+    i0 = cols[0][1]
+    e0 = np.argmax(np.abs(X[:, :, i0]), axis=1)  # the pattern that drives the actuator most: its phasors
+    rows = np.arange(f.size)
+    return MeasuredRun(
+        path=p, sha256=sha256, rig_id=sweep.rig_id, run_id=run.run_id, speed_rpm=float(run.speed_rpm),
+        frequency_hz=f[keep], W=X[rows, e0, i0][keep], Zt=(frf[:, 0] * X[rows, e0, i0][keep]),
+        output_var=var[:, 0] * np.abs(X[rows, e0, i0][keep]) ** 2, n_periods=n_per[rows, e0][keep], band_hz=band,
+        n_dropped=int(np.count_nonzero(~keep)), dof=dof[:, 0], harmonics_removed=removed, pairs=tuple(pairs),
+        frf_pairs=frf, var_pairs=var, dof_pairs=dof,
     )
 
 
@@ -419,6 +531,11 @@ def validate(
         benign_kappa=learning.kappa if learning is not None else None, n_healthy=len(runs),
         benign_correction=learning.correction if learning is not None else None,
     )
+    base.extra["channel_pairs"] = json.dumps(pair_keys(first))
+    for r in runs[1:]:
+        if pair_keys(r) != pair_keys(first):
+            raise InputError(r.path, "/channels", f"channel pairs differ from {first.path}'s (healthy sweeps must "
+                             "share their channels)")
     if upd is not None:
         base.extra["updated_parameters"] = json.dumps(upd.as_dict(), sort_keys=True)
     if learning is not None and learning.model_share:
@@ -500,9 +617,13 @@ def _own_v(run: MeasuredRun, confidence: float) -> np.ndarray:
 
 
 def frf_estimate(run: MeasuredRun) -> Any:
-    """The run's FRF with its noise (variance of the mean FRF and its dof) for measured detection."""
+    """The run's FRF with its noise (variance of the mean FRF and its dof) for measured detection: one
+    column per channel pair (f, P), the rig's actuator -> sensor first."""
+    from rotorcheck.robust.measured import FrfEstimate
     from rotorcheck.robust.measured import frf_estimate as _est
 
+    if run.frf_pairs is not None and run.var_pairs is not None and run.dof_pairs is not None:
+        return FrfEstimate(run.frf_pairs, run.var_pairs, run.dof_pairs)
     return _est(run.W, run.Zt, run.output_var, _dof(run))
 
 
@@ -573,6 +694,7 @@ class DetectionOutcome:
             damage_bound_max_abs=ds.max_abs, damage_bound_phase_min_deg=np.degrees(ds.phase_min),
             damage_bound_phase_max_deg=np.degrees(ds.phase_max),
         )
+        rep.channel_pairs = [f"{o}<-{i}" for o, i in pair_keys(self.run)] or None
         if m is not None:
             rep.confidence, rep.n_tests, rep.point_miss_probability = m.confidence, m.n_tests, m.point_miss
             rep.p_value, rep.point_p_value, rep.variance_dof = m.family_p_value, m.p_value, m.dof[:, 0]
@@ -605,7 +727,7 @@ class DetectionOutcome:
             rep.detectable_stiffness_loss = [float(x) for x in j.detectable]
             rep.benign_parameters = benign_table(j, self.rig)
             rep.benign_model_error, rep.learned_benign_directions = j.kappa, j.learned
-            rem = np.asarray(j.remaining, dtype=bool)
+            rem = np.asarray(np.asarray(j.remaining, dtype=bool).reshape(-1, f.size).any(axis=0))  # any channel pair
             rep.fault_beyond_benign = rem
             rep.fault_beyond_benign_frequencies_hz = [float(x) for x in f[rem]]
         c = self.beyond_benign
@@ -658,6 +780,25 @@ def check_baseline(baseline: Any, rig: RigConfig, run: MeasuredRun, baseline_pat
         raise InputError(run.path, f"/runs/{run.run_id}/frequency",
                          f"grid ({run.frequency_hz.size} points in band) differs from the baseline's "
                          f"({baseline.frequency_hz.size} points); detection compares point by point")
+    have, want = pair_keys(run), baseline_pairs(baseline)
+    if want is not None and have != want:
+        raise InputError(run.path, "/channels", f"channel pairs {_show_pairs(have)} differ from the baseline's "
+                         f"({_show_pairs(want)}); detection compares the same channels")
+
+
+def _show_pairs(keys: list[list[str]]) -> str:
+    return ", ".join(f"{o}<-{i}" for o, i in keys)
+
+
+def pair_keys(run: MeasuredRun) -> list[list[str]]:
+    """The run's channel pairs as [output, input] port labels (the rig's actuator -> sensor first)."""
+    return [list(p.key()) for p in run.pairs]
+
+
+def baseline_pairs(baseline: Any) -> list[list[str]] | None:
+    """The channel pairs a baseline was validated on (None: made before channel pairs were stored)."""
+    text = baseline.extra.get("channel_pairs")
+    return None if text is None else [list(x) for x in json.loads(text)]
 
 
 def detect(
@@ -698,7 +839,14 @@ def detect(
         if not 0.0 < confidence < 1.0:
             raise InputError(None, "--confidence", f"must be in (0, 1), got {confidence}")
         healthy = FrfEstimate(baseline.healthy_frf, baseline.healthy_frf_var, baseline.healthy_frf_dof)
-        measured = measured_detect(frf_estimate(run), healthy, confidence, e21=E[:, 1:, 0])
+        new_est = frf_estimate(run)
+        _per_pair(healthy.frf, run.frequency_hz, new_est.frf.shape[1], run)
+        e21 = E[:, 1:, 0]
+        if run.n_pairs > 1 and rig.damage is not None:
+            from rotorcheck.nominal import damage_direction
+
+            e21 = damage_direction(rig, run.frequency_hz, run.speed_rpm, run.pairs)
+        measured = measured_detect(new_est, healthy, confidence, e21=e21)
         fault = measured.fault.copy()
         status = measured.status.astype("<U13")
         dist = measured.distance[:, 0].copy()
@@ -719,6 +867,9 @@ def detect(
                                       baseline.noise_bound_m, run.W, kind=model.structure)
     else:
         dset = identify.damage_set(model.P, T, baseline.gamma)
+    if run.n_pairs > 1:
+        notes.append(f"{run.n_pairs} channel pairs: detection and the joint test use all of them; the damage dynamics "
+                     "D_u are identified from the rig's actuator -> sensor pair alone")
     notes.append("damage_dynamics_* (eq. 3.11 with the nominal E22) carries the nominal model's error of E22 "
                  "(its size on a healthy shaft is the model error, not damage); damage_dynamics_anchored_* "
                  "anchors E22 at the measured healthy FRF and is the estimate to read")
@@ -753,13 +904,14 @@ def detect(
     beyond = None
     if use_joint and Th is not None:
         kappa = KAPPA_NOMINAL if baseline.benign_kappa is None else float(baseline.benign_kappa)
-        joint = joint_detection(updated_rig(rig, baseline_updates(baseline)), Th,
-                                np.asarray(baseline.healthy_frf_var)[:, 0], run, kappa, _learned(baseline),
+        joint = joint_detection(updated_rig(rig, baseline_updates(baseline)), np.asarray(baseline.healthy_frf),
+                                np.asarray(baseline.healthy_frf_var), run, kappa, _learned(baseline),
                                 false_alarm, baseline.speed_rpm, baseline.benign_correction)
         ver = joint_verdict(joint, ver)
         notes.extend(joint.notes)
-        certified = certify_beyond_benign(updated_rig(rig, baseline_updates(baseline)), Th,
-                                          np.asarray(baseline.healthy_frf_var)[:, 0], run, joint, baseline.speed_rpm)
+        certified = certify_beyond_benign(updated_rig(rig, baseline_updates(baseline)),
+                                          np.asarray(baseline.healthy_frf), np.asarray(baseline.healthy_frf_var), run,
+                                          joint, baseline.speed_rpm)
         if certified is not None:
             beyond = certified[0]
             notes.extend(certified[1])
@@ -824,7 +976,7 @@ KAPPA_GRID = (KAPPA_NOMINAL, 3.5)
 
 
 def _benign_model(rig: RigConfig, f: np.ndarray, speed_rpm: float, Th: np.ndarray, kappa: float,
-                  speed_offset: float = 0.0, correction: np.ndarray | None = None) -> Any:
+                  speed_offset: float = 0.0, correction: np.ndarray | None = None, pairs: Any = None) -> Any:
     """The model's benign change (re-solved, anchored at ``Th``) for the joint test; None without a
     ``variability`` section. A recorded speed offset shifts the speed parameter's range. ``correction``
     (p, f) m/N per unit parameter, learned from healthy sweeps, is added: ``b(theta) + theta C``."""
@@ -837,7 +989,8 @@ def _benign_model(rig: RigConfig, f: np.ndarray, speed_rpm: float, Th: np.ndarra
     params = benign_at(rig, speed_rpm)
     if not params:  # at standstill a speed tolerance changes nothing
         return None
-    pred = benign_prediction(rig, f, speed_rpm, Th, params)
+    pred = benign_prediction(rig, f, speed_rpm, Th, params, pairs)
+    n = int(np.asarray(Th).size)  # points of every channel pair
     lo, hi = pred.lo.copy(), pred.hi.copy()
     step = np.array([1e-4 if p.kind == "factor" else 1e-3 * max(p.hi - p.lo, 1e-9) for p in pred.parameters])
     for i, prm in enumerate(pred.parameters):
@@ -847,9 +1000,9 @@ def _benign_model(rig: RigConfig, f: np.ndarray, speed_rpm: float, Th: np.ndarra
     predict = pred.predict
     if correction is not None:
         C = np.asarray(correction, dtype=complex)
-        if C.shape != (len(params), f.size):
+        if C.shape != (len(params), n):
             raise InputError(None, "benign_correction", f"shape {C.shape} does not match the rig's {len(params)} "
-                             f"benign parameters at {f.size} points")
+                             f"benign parameters at {n} points")
 
         def predict(theta: np.ndarray, base: Any = pred.predict) -> np.ndarray:
             return base(theta) + np.asarray(theta, dtype=float) @ C
@@ -857,7 +1010,7 @@ def _benign_model(rig: RigConfig, f: np.ndarray, speed_rpm: float, Th: np.ndarra
     # range, magnitudes added (the triangle inequality over the parameters)
     # a gain's change is exact (T_h g): it carries no model error; the envelope covers the rest
     exact = np.array([p.is_gain for p in params], dtype=bool)
-    envelope = np.zeros(f.size)
+    envelope = np.zeros(n)
     for i in range(len(params)):
         if exact[i]:
             continue
@@ -882,26 +1035,40 @@ def _learned(baseline: Any) -> Any:
 def joint_detection(rig: RigConfig, Th: np.ndarray, var_h: np.ndarray, run: MeasuredRun, kappa: float,
                     learned: Any = None, false_alarm: float = 0.01, speed_rpm: float | None = None,
                     correction: np.ndarray | None = None) -> Any:
-    """The joint test (:mod:`rotorcheck.robust.joint`) of ``run`` against the healthy FRF ``Th`` (f,)
-    with the variance of its mean ``var_h`` (f,), m^2/N^2; ``correction``: see :func:`learn_benign`."""
+    """The joint test (:mod:`rotorcheck.robust.joint`) of ``run`` against the healthy FRF ``Th`` (f,) or
+    (f, P), one column per channel pair, with the variance of its mean ``var_h`` (same shape), m^2/N^2;
+    every point of every pair enters one statistic. ``correction``: see :func:`learn_benign`."""
     from rotorcheck.robust.joint import joint_test
-    from rotorcheck.signatures import crack_signatures
+    from rotorcheck.signatures import crack_signatures, stacked
 
     f = run.frequency_hz
     speed = run.speed_rpm if speed_rpm is None else speed_rpm
     est = frf_estimate(run)
-    els, S = crack_signatures(rig, f, speed, Th)
-    benign = _benign_model(rig, f, speed, Th, kappa, run.speed_rpm - speed, correction)
-    return joint_test(est.frf[:, 0] - Th, est.var[:, 0] + var_h, S, els, benign, learned, false_alarm)
+    th, vh = _per_pair(Th, f, est.frf.shape[1], run), _per_pair(var_h, f, est.frf.shape[1], run)
+    pairs = run.pairs if run.n_pairs > 1 else None
+    els, S = crack_signatures(rig, f, speed, th, pairs=pairs)
+    benign = _benign_model(rig, f, speed, th, kappa, run.speed_rpm - speed, correction, pairs)
+    return joint_test(stacked(est.frf - th), stacked(est.var + vh), S, els, benign, learned, false_alarm)
+
+
+def _per_pair(x: np.ndarray, f: np.ndarray, n_pairs: int, run: MeasuredRun) -> np.ndarray:
+    """A healthy array as (f, P), checked against the run's channel pairs."""
+    a = np.asarray(x)
+    a = a.reshape(f.size, -1) if a.size % max(f.size, 1) == 0 else a
+    if a.shape != (f.size, n_pairs):
+        raise InputError(run.path, "/channels", f"the sweep has {n_pairs} channel pairs on {f.size} points, the "
+                         f"healthy baseline {a.shape[1] if a.ndim == 2 else '?'} on {a.shape[0]}")
+    return a
 
 
 def certify_beyond_benign(rig: RigConfig, Th: np.ndarray, var_h: np.ndarray, run: MeasuredRun, joint: Any,
                           speed_rpm: float | None = None, max_boxes: int = 200) -> tuple[Any, list[str]] | None:
     """Per point: is the change certified beyond every benign change inside the ranges (the parameters
     real, branch and bound; :mod:`rotorcheck.robust.real_box`), given both sweeps' noise and the joint
-    test's model-error allowance at that point? None without benign parameters that change the model.
-    Returns the certificate and notes."""
-    from rotorcheck.robust.real_box import certify_points
+    test's model-error allowance at that point? With several channel pairs each is certified on its own
+    and a point counts when any pair is (the quantile is Sidak over every point of every pair). None
+    without benign parameters that change the model. Returns the certificate and notes."""
+    from rotorcheck.robust.real_box import certify_points, merge_certificates
     from rotorcheck.signatures import benign_box
     from rotorcheck.variability import benign_at
 
@@ -909,16 +1076,21 @@ def certify_beyond_benign(rig: RigConfig, Th: np.ndarray, var_h: np.ndarray, run
     params = benign_at(rig, speed) if rig.variability else ()
     if not params or rig.kind != "rotor":
         return None
-    box = benign_box(rig, speed, params, run.speed_rpm - speed)
     est = frf_estimate(run)
+    nf, n_pairs = est.frf.shape
+    th, vh = _per_pair(Th, run.frequency_hz, n_pairs, run), _per_pair(var_h, run.frequency_hz, n_pairs, run)
     z = float(np.sqrt(joint.point_threshold / 2.0))  # |r|^2 / sigma^2 ~ Exp(1): chi2_2 / 2
-    cert = certify_points(box.model, 2.0 * np.pi * run.frequency_hz, est.frf[:, 0], Th, est.var[:, 0], var_h, z,
-                          joint.model_error, box.gain, max_boxes)
-    notes = list(box.notes)
+    certs, notes = [], []
+    for k in range(n_pairs):
+        box = benign_box(rig, speed, params, run.speed_rpm - speed, run.pairs[k] if n_pairs > 1 else None)
+        certs.append(certify_points(box.model, 2.0 * np.pi * run.frequency_hz, est.frf[:, k], th[:, k],
+                                    est.var[:, k], vh[:, k], z, joint.model_error[k * nf:(k + 1) * nf], box.gain,
+                                    max_boxes))
+        notes = list(box.notes)
     if joint.learned:
         notes.append("the per-point certificate beyond benign change uses the model's parameters only (the "
                      "learned benign directions are no parameters of the model)")
-    return cert, notes
+    return merge_certificates(certs), notes
 
 
 @dataclass
@@ -966,12 +1138,15 @@ def learn_benign(rig: RigConfig, runs: list[MeasuredRun], false_alarm: float = 0
 
     if len(runs) < 2:
         return BenignLearning(KAPPA_NOMINAL)
+    from rotorcheck.signatures import stacked
+
     speed = runs[0].speed_rpm
     ests = [frf_estimate(r) for r in runs]
-    frfs = [e.frf[:, 0] for e in ests]
+    frfs = [e.frf for e in ests]  # (f, P) each
     mean = np.mean(frfs, axis=0)
-    var_mean = np.sum([e.var[:, 0] for e in ests], axis=0) / len(ests) ** 2
-    var_one = np.mean([e.var[:, 0] for e in ests], axis=0)
+    var_mean = np.sum([e.var for e in ests], axis=0) / len(ests) ** 2
+    var_one = np.mean([e.var for e in ests], axis=0)
+    var_flat = stacked(var_one)
 
     def fits(C: np.ndarray | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         js = [joint_detection(rig, mean, var_mean, r, 0.0, None, false_alarm, speed, C) for r in runs]
@@ -998,11 +1173,12 @@ def learn_benign(rig: RigConfig, runs: list[MeasuredRun], false_alarm: float = 0
         for _ in range(iterations):
             C = regress(th, raw)
             th, left, raw = fits(C)
-    learned = learn_directions(list(left), 2.0 * var_one)
-    wgt = 1.0 / var_one  # whitening of a difference of two sweeps (real parts): 2 / (2 var)
+    learned = learn_directions(list(left), 2.0 * var_flat)
+    wgt = 1.0 / var_flat  # whitening of a difference of two sweeps (real parts): 2 / (2 var)
     share: dict[str, tuple[float, float]] = {}
     if C is not None:
-        bm = _benign_model(rig, runs[0].frequency_hz, speed, mean, 0.0)
+        bm = _benign_model(rig, runs[0].frequency_hz, speed, mean, 0.0,
+                           pairs=runs[0].pairs if runs[0].n_pairs > 1 else None)
         zero = np.zeros(len(params))
         for j, prm in enumerate(params):
             if not keep[j]:
@@ -1014,16 +1190,17 @@ def learn_benign(rig: RigConfig, runs: list[MeasuredRun], false_alarm: float = 0
             inner = np.sum(wgt * s_m.conj() * s_d)
             nd, nm = np.sum(wgt * np.abs(s_d) ** 2), np.sum(wgt * np.abs(s_m) ** 2)
             share[prm.name] = (float(abs(inner) / nd), float(abs(inner) / np.sqrt(nd * nm)))
-    explained = 1.0 - float(np.sum(wgt * np.abs(left) ** 2) / np.sum(wgt * np.abs(np.array(frfs) - mean) ** 2))
+    spread = np.array([stacked(x - mean) for x in frfs])
+    explained = 1.0 - float(np.sum(wgt * np.abs(left) ** 2) / np.sum(wgt * np.abs(spread) ** 2))
     if len(runs) < 3:
         return BenignLearning(KAPPA_NOMINAL, C, learned, th, share, explained)
 
     def left_out_called_damage(i: int, kappa: float) -> bool:
         rest = [j for j in range(len(runs)) if j != i]
         c = np.mean([frfs[j] for j in rest], axis=0)
-        v = np.sum([ests[j].var[:, 0] for j in rest], axis=0) / len(rest) ** 2
+        v = np.sum([ests[j].var for j in rest], axis=0) / len(rest) ** 2
         Ci = regress(th[rest], raw[rest]) if C is not None else None
-        lrn = learn_directions([left[j] for j in rest], 2.0 * var_one)
+        lrn = learn_directions([left[j] for j in rest], 2.0 * var_flat)
         return bool(joint_detection(rig, c, v, runs[i], kappa, lrn, false_alarm, speed, Ci).damage)
 
     kappa = next((k for k in KAPPA_GRID if not any(left_out_called_damage(i, k) for i in range(len(runs)))),

@@ -88,7 +88,9 @@ def render_markdown(report: dict[str, Any], plots: list[str]) -> str:
         f"({report['noise_method']})"
         + (f"; family-wise confidence {report['confidence']:.0%}, sweep p-value {report['p_value']:.3g}"
            if "confidence" in report else ""),
-        f"- band {report['band_hz'][0]:g}-{report['band_hz'][1]:g} Hz, {report['n_points']} points",
+        f"- band {report['band_hz'][0]:g}-{report['band_hz'][1]:g} Hz, {report['n_points']} points"
+        + (f"; {len(report['channel_pairs'])} channel pairs (output<-input): {', '.join(report['channel_pairs'])}"
+           if len(report.get("channel_pairs") or []) > 1 else ""),
         "",
         "## Verdict",
         "",

@@ -271,3 +271,15 @@ def certify_points(model: AffineModel, omega: np.ndarray, t_new: np.ndarray, t_h
         if wit is not None:
             witness[k] = wit
     return BoxCertificate(status, witness, wgain, boxes, root)
+
+
+def merge_certificates(certs: list[BoxCertificate]) -> BoxCertificate:
+    """One per-point certificate from several channels' on the same points: a point is unexplained when
+    any channel's is, else undecided when any is, else explained (the first channel's witness)."""
+    if len(certs) == 1:
+        return certs[0]
+    st = np.array([c.status for c in certs])
+    status = np.where(np.any(st == "unexplained", axis=0), "unexplained",
+                      np.where(np.any(st == "undecided", axis=0), "undecided", "explained")).astype("<U11")
+    return BoxCertificate(status, certs[0].witness, certs[0].witness_gain, np.sum([c.boxes for c in certs], axis=0),
+                          np.any([c.complex_unexplained for c in certs], axis=0))
