@@ -397,10 +397,16 @@ def simulate(
     crack_depth: Annotated[float | None, typer.Option(
         "--crack-depth", help="Depth of the --fault crack as a fraction of the shaft diameter (e.g. 0.1).")] = None,
     keep_periods: Annotated[bool, typer.Option(help="Store the per-period phasors.")] = True,
+    actuator: Annotated[list[str] | None, typer.Option(
+        "--actuator", help="A force input at a station and direction, e.g. 8x (repeat for several; driven one at a "
+                           "time). Default: the rig's actuator.")] = None,
+    sensor: Annotated[list[str] | None, typer.Option(
+        "--sensor", help="A displacement output, e.g. 6y (repeat for several). Default: the rig's sensor.")] = None,
     force: ForceOpt = False,
     as_json: JsonOpt = False,
 ) -> int:
-    """Simulate a stepped-sine sweep of a (truth) rig, healthy or with a named fault."""
+    """Simulate a stepped-sine sweep of a (truth) rig, healthy or with a named fault; several --actuator /
+    --sensor give an x/y sweep (format version 2)."""
     import dataclasses
 
     from rotorcheck import workflow
@@ -425,8 +431,16 @@ def simulate(
     if noise is not None:
         st = dataclasses.replace(st, output_noise_std=noise)
     grid = np.linspace(f_min, f_max, points)
-    sw = simulate_rig(cfg, grid, speed, fault=fault, seed=seed, n_harmonics=harmonics, settings=st,
-                      created_utc=_utc_now(), shaft_angle_rad=angle)
+    if actuator or sensor:
+        from rotorcheck.sim.rig_sim import simulate_rig_patterns
+
+        acts = [workflow.parse_port(a, "--actuator") for a in actuator] if actuator else [cfg.ports.actuator]
+        sens = [workflow.parse_port(x, "--sensor") for x in sensor] if sensor else [cfg.ports.sensor]
+        sw = simulate_rig_patterns(cfg, grid, acts, sens, speed_rpm=speed, fault=fault, seed=seed,
+                                   n_harmonics=harmonics, settings=st, created_utc=_utc_now(), shaft_angle_rad=angle)
+    else:
+        sw = simulate_rig(cfg, grid, speed, fault=fault, seed=seed, n_harmonics=harmonics, settings=st,
+                          created_utc=_utc_now(), shaft_angle_rad=angle)
     write_sweep(sw, output, force=force)
     err.print(f"wrote {output}: {sw.generator}; {points} points {f_min:g}-{f_max:g} Hz at {speed:g} rpm")
     if as_json:

@@ -790,6 +790,18 @@ def _show_pairs(keys: list[list[str]]) -> str:
     return ", ".join(f"{o}<-{i}" for o, i in keys)
 
 
+def parse_port(text: str, option: str = "--port") -> Any:
+    """A rotor port from text: ``8x``, ``s8.x`` or ``8:y`` (station, direction)."""
+    import re
+
+    from rotorcheck.config import Port
+
+    m = re.fullmatch(r"\s*s?(\d+)\s*[.:]?\s*([xyXY])\s*", text)
+    if m is None:
+        raise InputError(None, option, f"{text!r} is no station and direction (e.g. 8x, s6.y)")
+    return Port(station=int(m.group(1)), direction=m.group(2).lower())  # type: ignore[arg-type]
+
+
 def pair_keys(run: MeasuredRun) -> list[list[str]]:
     """The run's channel pairs as [output, input] port labels (the rig's actuator -> sensor first)."""
     return [list(p.key()) for p in run.pairs]

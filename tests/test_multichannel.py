@@ -101,3 +101,21 @@ def test_a_sweep_without_the_rigs_actuator_is_refused(rigs, tmp_path: Path) -> N
     write_sweep(sw, path)
     with pytest.raises(workflow.InputError, match=r"actuator port \(s8.x\)"):
         workflow.load_run(path, load_config(configs_dir() / "crack_rig.yaml"))
+
+
+def test_simulate_several_actuators_and_sensors(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    """`simulate --actuator 8x --actuator 8y --sensor 6x --sensor s2.y`: a version-2 sweep with two patterns,
+    each driving one actuator only; a malformed port exits 2 naming the option."""
+    from rotorcheck.sweep import read_sweep
+
+    out = tmp_path / "xy.h5"
+    assert main(["simulate", str(out), "--speed", "1000", "--actuator", "8x", "--actuator", "8y", "--sensor", "6x",
+                 "--sensor", "s2.y", "--points", "12", "--periods", "4"]) == EXIT_OK
+    sw = read_sweep(out)
+    run = next(iter(sw.runs.values()))
+    assert [c.name for c in sw.inputs] == ["force_s8_x", "force_s8_y"] and len(sw.outputs) == 2
+    assert run.n_exc == 2
+    X = run.input_phasor_exc
+    assert np.all(np.abs(X[:, 0, 1]) == 0) and np.all(np.abs(X[:, 1, 0]) == 0) and np.all(np.abs(X[:, 0, 0]) > 0)
+    assert main(["simulate", str(tmp_path / "bad.h5"), "--actuator", "8q"]) == EXIT_INPUT
+    assert "--actuator" in capsys.readouterr().err
