@@ -339,6 +339,8 @@ def detect(
     ] = None,
     false_alarm: Annotated[float, typer.Option(
         "--false-alarm", help="False-alarm probability per sweep of the joint test.")] = 0.01,
+    resample: Annotated[bool, typer.Option(
+        "--resample", help="Interpolate the new sweep onto the baseline's frequency grid when they differ.")] = False,
     plot_format: PlotFormatOpt = "png",
     fail_at: FailAtOpt = "",
     as_json: JsonOpt = False,
@@ -356,6 +358,11 @@ def detect(
                    + (workflow.plot_paths(out, workflow.PLOT_STEMS_DETECT, formats) if plots else []), force)
     base = read_baseline(base_path)
     cfg, mrun = workflow.load_rig_and_run(sweep, rig, run)
+    if resample and base.frequency_hz is not None and workflow.grid_mismatch(mrun.frequency_hz,
+                                                                             base.frequency_hz) is not None:
+        mrun = workflow.resample_run(mrun, base.frequency_hz)
+        err.print(f"resampled {sweep} ({mrun.resampled_from} points) onto the baseline's grid "
+                  f"({base.frequency_hz.size} points, linear interpolation)")
     workflow.check_baseline(base, cfg, mrun, base_path)
     outcome = workflow.detect(cfg, base, mrun, fail_at=_fail_at(fail_at), confidence=confidence, rule=rule,
                               false_alarm=false_alarm)

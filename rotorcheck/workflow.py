@@ -7,6 +7,7 @@ port with its exact bound). Frequencies in Hz, receptances in m/N, D_u in N/m.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -139,6 +140,7 @@ class MeasuredRun:
     var_pairs: np.ndarray | None = None
     dof_pairs: np.ndarray | None = None
     noise_source: str = ""  # an FRF-only run: where its variance came from ("measured" | "assumed: ...")
+    resampled_from: int = 0  # points of the file's grid when interpolated onto another grid (0: not)
 
     @property
     def n_pairs(self) -> int:
@@ -448,8 +450,48 @@ class ValidationOutcome:
                                 self.model.structure, int(res.gamma.size), self.n_not_enclosed, str(baseline_path))
 
 
+#: two frequency grids are the same when every point agrees within this (Hz): an ASCII UFF58 file keeps
+#: 6 significant digits of the abscissa (up to 5e-4 Hz at 600 Hz)
+GRID_TOLERANCE_HZ = 1e-3
+
+
+def grid_mismatch(a: np.ndarray, b: np.ndarray, tolerance_hz: float = GRID_TOLERANCE_HZ) -> str | None:
+    """Why grid ``a`` is not grid ``b`` (the size of the difference), or None when they match within
+    ``tolerance_hz``."""
+    if a.shape != b.shape:
+        return (f"{a.size} points {a.min():g}-{a.max():g} Hz against {b.size} points {b.min():g}-{b.max():g} Hz"
+                if a.size and b.size else f"{a.size} points against {b.size}")
+    d = np.abs(a - b)
+    k = int(np.argmax(d)) if d.size else 0
+    if d.size and d[k] > tolerance_hz:
+        return f"points differ by up to {d[k]:.3g} Hz (at {b[k]:g} Hz; tolerance {tolerance_hz:g} Hz)"
+    return None
+
+
 def _same_grid(a: np.ndarray, b: np.ndarray) -> bool:
-    return a.shape == b.shape and bool(np.all(np.abs(a - b) <= 1e-9 * np.maximum(1.0, np.abs(a))))
+    return grid_mismatch(a, b) is None
+
+
+def resample_run(run: MeasuredRun, grid_hz: np.ndarray) -> MeasuredRun:
+    """``run`` interpolated onto ``grid_hz`` (linear in the real and imaginary parts of each channel pair's
+    FRF; an interpolated point's variance ``(1-t)^2 v_0 + t^2 v_1``, independent neighbours; dof the
+    smaller). The result carries FRFs at a unit force. Points outside the run's range are refused."""
+    f = run.frequency_hz
+    g = np.asarray(grid_hz, dtype=float)
+    if g.min() < f.min() - GRID_TOLERANCE_HZ or g.max() > f.max() + GRID_TOLERANCE_HZ:
+        raise InputError(run.path, f"/runs/{run.run_id}/frequency", f"cannot resample {f.min():g}-{f.max():g} Hz "
+                         f"onto {g.min():g}-{g.max():g} Hz without extrapolating")
+    est = frf_estimate(run)
+    j = np.clip(np.searchsorted(f, g, side="right") - 1, 0, f.size - 2)
+    t = np.clip((g - f[j]) / (f[j + 1] - f[j]), 0.0, 1.0)[:, None]
+    frf = (1 - t) * est.frf[j] + t * est.frf[j + 1]
+    var = (1 - t) ** 2 * est.var[j] + t**2 * est.var[j + 1]
+    dof = np.minimum(est.dof[j], est.dof[j + 1])
+    n = g.size
+    return dataclasses.replace(
+        run, frequency_hz=g, W=np.ones(n, complex), Zt=frf[:, 0], output_var=var[:, 0],
+        n_periods=np.minimum(run.n_periods[j], run.n_periods[j + 1]), dof=dof[:, 0], frf_pairs=frf, var_pairs=var,
+        dof_pairs=dof, resampled_from=int(f.size))
 
 
 #: Detection modes (``--enclose``): ``measured`` (default: the healthy set centred on the measured
@@ -485,9 +527,10 @@ def validate(
         raise InputError(None, "--enclose", f"must be one of {', '.join(ENCLOSE_MODES)}, got {enclose!r}")
     first = runs[0]
     for r in runs[1:]:
-        if not _same_grid(r.frequency_hz, first.frequency_hz):
+        why = grid_mismatch(r.frequency_hz, first.frequency_hz)
+        if why is not None:
             raise InputError(r.path, f"/runs/{r.run_id}/frequency",
-                             f"grid differs from {first.path} (healthy sweeps must share the frequency grid)")
+                             f"grid differs from {first.path}: {why} (healthy sweeps must share the frequency grid)")
         if r.speed_rpm != first.speed_rpm:
             raise InputError(r.path, f"/runs/{r.run_id}/@speed_rpm",
                              f"{r.speed_rpm:g} rpm differs from {first.path} ({first.speed_rpm:g} rpm)")
@@ -776,10 +819,11 @@ def check_baseline(baseline: Any, rig: RigConfig, run: MeasuredRun, baseline_pat
     if why:
         raise InputError(run.path, f"/runs/{run.run_id}/@speed_rpm",
                          f"{run.speed_rpm:g} rpm, the baseline is at {baseline.speed_rpm:g} rpm: {why}")
-    if not _same_grid(run.frequency_hz, baseline.frequency_hz):
+    grid = grid_mismatch(run.frequency_hz, baseline.frequency_hz)
+    if grid is not None:
         raise InputError(run.path, f"/runs/{run.run_id}/frequency",
-                         f"grid ({run.frequency_hz.size} points in band) differs from the baseline's "
-                         f"({baseline.frequency_hz.size} points); detection compares point by point")
+                         f"grid differs from the baseline's: {grid}; detection compares point by point "
+                         "(--resample interpolates the new sweep onto the baseline's grid)")
     have, want = pair_keys(run), baseline_pairs(baseline)
     if want is not None and have != want:
         raise InputError(run.path, "/channels", f"channel pairs {_show_pairs(have)} differ from the baseline's "
@@ -879,6 +923,11 @@ def detect(
                                       baseline.noise_bound_m, run.W, kind=model.structure)
     else:
         dset = identify.damage_set(model.P, T, baseline.gamma)
+    if run.resampled_from:
+        notes.append(f"the sweep was resampled from its {run.resampled_from} points onto the baseline's grid "
+                     "(linear interpolation of the FRF; variances combined as for independent neighbours)")
+    if run.noise_source:
+        notes.append(f"FRF-only sweep: its noise is {run.noise_source}")
     if run.n_pairs > 1:
         notes.append(f"{run.n_pairs} channel pairs: detection and the joint test use all of them; the damage dynamics "
                      "D_u are identified from the rig's actuator -> sensor pair alone")

@@ -199,7 +199,47 @@ def test_detect_refuses_another_grid(tmp_path: Path, capsys: pytest.CaptureFixtu
     assert main(["detect", str(other), "--out", str(out)]) == EXIT_INPUT
     err = capsys.readouterr().err
     assert "other_grid.h5" in err and "frequency" in err and "grid" in err
+    assert "200 points 30-600 Hz against 262 points" in err and "--resample" in err
     assert _no_reports(out)
+    # --resample: interpolated onto the baseline's grid, said on the terminal and in the report
+    assert main(["detect", str(other), "--out", str(out), "--resample", "--no-plots", "--json"]) in (0, 1)
+    captured = capsys.readouterr()
+    assert "resampled" in captured.err and "200 points" in captured.err
+    assert any("resampled from its 200 points" in n for n in json.loads(captured.out)["notes"])
+
+
+def test_grids_match_within_the_stated_tolerance() -> None:
+    """An ASCII UFF58 grid (6 significant digits: up to 5e-4 Hz off) is the same grid; 2e-3 Hz is not, and
+    the message gives the size and the place of the difference."""
+    from rotorcheck.workflow import GRID_TOLERANCE_HZ, grid_mismatch
+
+    f = np.linspace(30.0, 600.0, 262)
+    rounded = np.array([float(f"{x:.5e}") for x in f])
+    assert np.max(np.abs(rounded - f)) > 1e-4 and grid_mismatch(rounded, f) is None
+    off = f.copy()
+    off[100] += 2 * GRID_TOLERANCE_HZ
+    why = grid_mismatch(off, f)
+    assert why is not None and "0.002 Hz" in why and f"{f[100]:g} Hz" in why
+
+
+def test_resampling_is_linear_interpolation_with_its_variance() -> None:
+    """A run whose FRF is linear in frequency is resampled exactly; midway between two points the variance
+    is (v0 + v1) / 4 and the dof the smaller of the two."""
+    from rotorcheck.workflow import MeasuredRun, resample_run
+
+    f = np.linspace(30.0, 40.0, 11)
+    frf = (1e-6 + 2e-8 * (f - 30)) * (1 + 0.5j)
+    var = np.linspace(1e-18, 2e-18, 11)
+    run = MeasuredRun(Path("x.h5"), "", "r", "1", 0.0, f, np.ones(11, complex), frf, var, np.full(11, 8), (30.0, 40.0),
+                      dof=np.arange(11.0) + 10)
+    g = f[:-1] + 0.5
+    out = resample_run(run, g)
+    np.testing.assert_allclose(out.frf_pairs[:, 0], (1e-6 + 2e-8 * (g - 30)) * (1 + 0.5j), rtol=1e-12)
+    np.testing.assert_allclose(out.var_pairs[:, 0], (var[:-1] + var[1:]) / 4, rtol=1e-12)
+    np.testing.assert_array_equal(out.dof_pairs[:, 0], run.dof[:-1])
+    assert out.resampled_from == 11 and np.array_equal(out.frequency_hz, g)
+    with pytest.raises(Exception, match="extrapolating"):
+        resample_run(run, np.array([29.0, 35.0]))
 
 
 def test_detect_refuses_a_baseline_of_another_rig(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
