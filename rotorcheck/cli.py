@@ -23,6 +23,8 @@ from rich.table import Table
 from rotorcheck.errors import InputError, UserInputError
 
 EXIT_OK, EXIT_DAMAGE, EXIT_INPUT, EXIT_INCONCLUSIVE = 0, 1, 2, 3
+#: frequency points of a simulated sweep when neither --points nor the rig's analysis.n_points sets them
+DEFAULT_POINTS = 262
 
 app = typer.Typer(
     add_completion=False,
@@ -243,9 +245,12 @@ def fit_noise(
         raise InputError(None, "--confidence", f"must be in (0, 1), got {confidence}")
     target = out / "baseline.h5"
     check_writable([target], force)
-    cfg, mrun = workflow.load_rig_and_run(sweep_path, rig, run)
+    rig_path = workflow.resolve_rig(workflow.rig_for(rig, sweep_path, target), sweep_path)
+    cfg, mrun = workflow.load_rig_and_run(sweep_path, rig_path, run)
     nb = workflow.fit_noise(mrun, method=method, confidence=confidence, manual_m=value)
-    write_baseline(workflow.noise_baseline(cfg, mrun, nb), target)
+    base = workflow.noise_baseline(cfg, mrun, nb)
+    base.extra["rig_path"] = str(Path(rig_path).resolve())  # later commands need no --rig
+    write_baseline(base, target)
     conf = f", {nb.confidence:.0%} family-wise over {mrun.frequency_hz.size} points" if nb.confidence else ""
     err.print(f"noise bound V = {nb.value_m * 1e6:.4g} um ({nb.method}{conf}) from {sweep_path}")
     excess = nb.details.get("excess_scatter_hz", [])
@@ -287,9 +292,10 @@ def validate(
     from rotorcheck.fileio import check_writable
 
     formats = workflow.plot_formats(plot_format)
-    cfg, first = workflow.load_rig_and_run(sweeps[0], rig, run)
-    runs = [first] + [workflow.load_run(p, cfg, run) for p in sweeps[1:]]
     target = out / "baseline.h5"
+    rig_path = workflow.resolve_rig(workflow.rig_for(rig, sweeps[0], target), sweeps[0])
+    cfg, first = workflow.load_rig_and_run(sweeps[0], rig_path, run)
+    runs = [first] + [workflow.load_run(p, cfg, run) for p in sweeps[1:]]
     noise = workflow.prior_noise(target, cfg, force)
     if noise is not None:
         err.print(f"noise bound V = {noise.value_m * 1e6:.4g} um from {target} ({noise.method})")
@@ -300,6 +306,7 @@ def validate(
                   f"{noise.confidence:.0%}) from {runs[0].path}")
     outcome = workflow.validate(cfg, runs, noise, enclose=enclose, fail_at=_fail_at(fail_at), update=update,
                                 learn_drift=learn_drift)
+    outcome.baseline.extra["rig_path"] = str(Path(rig_path).resolve())  # later commands need no --rig
     write_baseline(outcome.baseline, target)
     for line in (workflow.update_summary(outcome), workflow.learning_summary(outcome)):
         if line:
@@ -357,7 +364,7 @@ def detect(
     check_writable([out / f for f in REPORT_FILES]
                    + (workflow.plot_paths(out, workflow.PLOT_STEMS_DETECT, formats) if plots else []), force)
     base = read_baseline(base_path)
-    cfg, mrun = workflow.load_rig_and_run(sweep, rig, run)
+    cfg, mrun = workflow.load_rig_and_run(sweep, workflow.rig_for(rig, sweep, base_path), run)
     if resample and base.frequency_hz is not None and workflow.grid_mismatch(mrun.frequency_hz,
                                                                              base.frequency_hz) is not None:
         mrun = workflow.resample_run(mrun, base.frequency_hz)
@@ -391,9 +398,13 @@ def simulate(
     rig: Annotated[Path | None, typer.Option("--rig", help="Truth rig (default configs/crack_rig_truth.yaml).")] = None,
     speed: Annotated[float, typer.Option("--speed", help="Spin speed, rpm.")] = 0.0,
     fault: Annotated[str | None, typer.Option("--fault", help="A fault named in the rig's faults section.")] = None,
-    f_min: Annotated[float, typer.Option("--f-min", help="First frequency, Hz.")] = 30.0,
-    f_max: Annotated[float, typer.Option("--f-max", help="Last frequency, Hz.")] = 600.0,
-    points: Annotated[int, typer.Option("--points", help="Number of frequency points (linear grid).")] = 262,
+    f_min: Annotated[float | None, typer.Option(
+        "--f-min", help="First frequency, Hz (default: the rig's analysis.band_hz).")] = None,
+    f_max: Annotated[float | None, typer.Option(
+        "--f-max", help="Last frequency, Hz (default: the rig's analysis.band_hz).")] = None,
+    points: Annotated[int | None, typer.Option(
+        "--points", help="Number of frequency points, linear grid (default: the rig's analysis.n_points, else "
+                         f"{DEFAULT_POINTS}).")] = None,
     periods: Annotated[int | None, typer.Option("--periods", help="Periods averaged per point.")] = None,
     noise: Annotated[float | None, typer.Option("--noise", help="Output noise std per sample, m.")] = None,
     seed: Annotated[int, typer.Option("--seed", help="Random seed.")] = 0,
@@ -422,11 +433,20 @@ def simulate(
     from rotorcheck.sim.rig_sim import shaft_angle_from, simulate_rig, step_settings
     from rotorcheck.sweep.hdf5io import write_sweep
 
-    if points < 2 or not (0 < f_min < f_max):
-        raise InputError(None, "--points/--f-min/--f-max", "need 0 < f-min < f-max and at least 2 points")
     check_writable([output], force)
     rig_path = rig if rig is not None else configs_dir() / "crack_rig_truth.yaml"
     cfg = workflow.load_rig(rig_path)
+    f_min = cfg.analysis.band_hz[0] if f_min is None else f_min
+    f_max = cfg.analysis.band_hz[1] if f_max is None else f_max
+    if points is None:
+        points = cfg.analysis.n_points or DEFAULT_POINTS
+        if cfg.analysis.n_points is None:
+            err.print(f"{rig_path}: no analysis.n_points; simulating {points} points (default)")
+    if points < 2 or not (0 < f_min < f_max):
+        raise InputError(None, "--points/--f-min/--f-max", "need 0 < f-min < f-max and at least 2 points")
+    if cfg.measurement.output_noise_std == 0.0 and (noise is None or noise == 0.0):
+        err.print(f"[yellow]warning[/]: {rig_path} sets no measurement noise (measurement.output_noise_std): the "
+                  "simulated sweep is noise-free")
     angle = shaft_angle_from(shaft_angle, seed)
     if crack_depth is not None:
         if fault is None:

@@ -375,6 +375,7 @@ class Measurement(Strict):
 
 class Analysis(Strict):
     band_hz: tuple[FrequencyHz, FrequencyHz] = (30.0, 600.0)
+    n_points: int | None = Field(default=None, ge=2, description="points of a simulated sweep, linear over band_hz")
     speeds_rpm: list[SpeedRpm] = Field(default_factory=lambda: [0.0])
     campbell_max_rpm: SpeedRpm = Field(default=10000.0, gt=0)
     n_modes: int = Field(default=6, ge=1)
@@ -670,6 +671,8 @@ class RigConfig(Strict):
         data = self.model_dump(mode="json", by_alias=True)
         if not data.get("variability"):  # absent and empty hash alike (hashes from before the section)
             data.pop("variability", None)
+        if data.get("analysis", {}).get("n_points") is None:  # likewise the simulation grid's point count
+            data.get("analysis", {}).pop("n_points", None)
         doc = json.dumps(data, sort_keys=True)
         return hashlib.sha256(doc.encode()).hexdigest()
 

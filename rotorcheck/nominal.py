@@ -110,14 +110,14 @@ def nominal_model(
     One receptance of the engine (:mod:`rotorcheck.fe.frf`) at the outputs [damage port, sensor
     (, R)] for the inputs [damage port, actuator (, r)] gives every entry.
     """
-    if config.damage is None:
-        raise InputError(None, "damage", "the rig has no damage port; identification needs one")
     sys_ = system if system is not None else build_system(config)
     f = np.atleast_1d(np.asarray(freq_hz, dtype=float))
     n = sys_.n_dof
     i_in = sys_.port_dof(config.ports.actuator)
     i_out = sys_.port_dof(config.ports.sensor)
-    i_d = sys_.port_dof(config.damage.port)
+    # no damage port (validation and detection need none): the damage channel is computed at the sensor
+    # and then set to NaN, so that no identification is read from it
+    i_d = sys_.port_dof(config.damage.port) if config.damage is not None else i_out
     structure = config.uncertainty.structure
 
     outputs = np.zeros((2, n))
@@ -151,6 +151,9 @@ def nominal_model(
         P[:, 0, 2] = H[:, 2, 1]
         P[:, 1, 0] = -a * H[:, 0, 2]
         P[:, 2, 0] = -a * H[:, 1, 2]
+    if config.damage is None:
+        P[:, 1, :] = np.nan
+        P[:, :, 1] = np.nan
     return NominalModel(
         rig_id=config.rig_id,
         speed_rpm=float(speed_rpm),

@@ -121,6 +121,14 @@ class DamageSet:
         return np.zeros(z.shape, dtype=bool)
 
 
+
+def undecided_set(n: int) -> DamageSet:
+    """A damage set with nothing identified at ``n`` points (kind 'undecided', all numbers NaN): a rig with
+    no damage port."""
+    nan = np.full(n, np.nan)
+    return DamageSet(nan + 0j, np.full(n, "undecided", dtype="<U9"), nan + 0j, nan.copy(), nan + 0j, nan.copy(),
+                     nan.copy(), nan.copy(), nan.copy(), nan.copy())
+
 def _fit_moebius(d: np.ndarray, z: np.ndarray) -> tuple[np.ndarray, float]:
     """Coefficients (a, b, c, d) of ``z = (a D + b) / (c D + d)`` through the sample pairs, by the
     null vector of ``[D, 1, -z D, -z]``; returns them (unit norm) and the relative fit residual."""
