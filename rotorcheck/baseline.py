@@ -85,32 +85,46 @@ _DATASETS = ("frequency_hz", "gamma", "gamma_lower", "model_frf", "input_phasor"
              "benign_direction_bound", "benign_correction")
 
 
-def write_baseline(baseline: Baseline, path: str | Path) -> None:
-    """Write atomically (temp file in the same folder, then rename). Overwrite policy is the caller's."""
+def _write_into(h5: h5py.Group, baseline: Baseline) -> None:
+    for name in _ATTRS:
+        h5.attrs[name] = getattr(baseline, name)
+    h5.attrs["sweep_sha256"] = ",".join(baseline.sweep_sha256)
+    h5.attrs["shaft_orders_removed"] = int(baseline.shaft_orders_removed)
+    h5.attrs["n_healthy"] = int(baseline.n_healthy)
+    if baseline.benign_kappa is not None:
+        h5.attrs["benign_kappa"] = float(baseline.benign_kappa)
+    for k, v in baseline.extra.items():
+        h5.attrs[f"x_{k}"] = v
+    for name in _DATASETS:
+        value = getattr(baseline, name)
+        if value is not None:
+            h5.create_dataset(name, data=value)
+    if baseline.gamma_status is not None:
+        h5.create_dataset("gamma_status", data=np.asarray(baseline.gamma_status, dtype="S"))
+
+
+def write_baseline(baseline: Baseline, path: str | Path, others: list[Baseline] | None = None) -> None:
+    """Write atomically (temp file in the same folder, then rename). Overwrite policy is the caller's.
+    ``others``: the validated sets of a file's further runs (speeds), each in ``/runs/<run_id>``."""
     if not baseline.created_utc:
         baseline.created_utc = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
     with atomic_path(path) as tmp, h5py.File(tmp, "w") as h5:
         h5.attrs["schema"] = SCHEMA
         h5.attrs["schema_version"] = SCHEMA_VERSION
-        for name in _ATTRS:
-            h5.attrs[name] = getattr(baseline, name)
-        h5.attrs["sweep_sha256"] = ",".join(baseline.sweep_sha256)
-        h5.attrs["shaft_orders_removed"] = int(baseline.shaft_orders_removed)
-        h5.attrs["n_healthy"] = int(baseline.n_healthy)
-        if baseline.benign_kappa is not None:
-            h5.attrs["benign_kappa"] = float(baseline.benign_kappa)
-        for k, v in baseline.extra.items():
-            h5.attrs[f"x_{k}"] = v
-        for name in _DATASETS:
-            value = getattr(baseline, name)
-            if value is not None:
-                h5.create_dataset(name, data=value)
-        if baseline.gamma_status is not None:
-            h5.create_dataset("gamma_status", data=np.asarray(baseline.gamma_status, dtype="S"))
+        _write_into(h5, baseline)
+        for b in others or []:
+            b.created_utc = b.created_utc or baseline.created_utc
+            _write_into(h5.require_group("runs").create_group(b.run_id), b)
 
 
 def read_baseline(path: str | Path) -> Baseline:
-    """Read and check a baseline; raises InputError naming the file and the field."""
+    """Read and check a baseline (its first run); raises InputError naming the file and the field."""
+    return read_baselines(path)[0]
+
+
+def read_baselines(path: str | Path) -> list[Baseline]:
+    """Every validated set of a baseline file, the first run first (a file of several speeds holds one
+    set per run)."""
     p = Path(path)
     if not p.exists():
         raise InputError(p, "", "baseline not found (run 'rotorcheck validate' first, or pass --baseline)")
@@ -124,53 +138,62 @@ def read_baseline(path: str | Path) -> Baseline:
         if int(h5.attrs.get("schema_version", -1)) != SCHEMA_VERSION:
             version = h5.attrs.get("schema_version")
             raise InputError(p, "/@schema_version", f"unknown schema_version {version}")
-        values: dict[str, object] = {}
-        for name in _ATTRS:
-            if name not in h5.attrs:
-                raise InputError(p, f"/@{name}", "missing attribute")
-            v = h5.attrs[name]
-            values[name] = v.decode() if isinstance(v, bytes) else (v.item() if hasattr(v, "item") else v)
-        sweeps = str(h5.attrs.get("sweep_sha256", ""))
-        b = Baseline(sweep_sha256=[s for s in sweeps.split(",") if s], **values)  # type: ignore[arg-type]
-        b.extra = {k[2:]: str(v) for k, v in h5.attrs.items() if k.startswith("x_")}
-        b.shaft_orders_removed = int(h5.attrs.get("shaft_orders_removed", 0))
-        b.n_healthy = int(h5.attrs.get("n_healthy", 1))
-        if "benign_kappa" in h5.attrs:
-            b.benign_kappa = float(h5.attrs["benign_kappa"])
-        for name in _DATASETS:
-            if name in h5:
-                setattr(b, name, h5[name][()])
-        if "gamma_status" in h5:
-            b.gamma_status = np.char.decode(h5["gamma_status"][()], "utf-8")
+        out = [_read_from(h5, p, "")]
+        if "runs" in h5:
+            out += [_read_from(h5["runs"][rid], p, f"/runs/{rid}") for rid in h5["runs"]]
+    return out
+
+
+def _read_from(h5: h5py.Group, p: Path, where: str) -> Baseline:
+    """One validated set from a group of the baseline file (``where``: its path, for messages)."""
+    values: dict[str, object] = {}
+    for name in _ATTRS:
+        if name not in h5.attrs:
+            raise InputError(p, f"{where}/@{name}", "missing attribute")
+        v = h5.attrs[name]
+        values[name] = v.decode() if isinstance(v, bytes) else (v.item() if hasattr(v, "item") else v)
+    sweeps = str(h5.attrs.get("sweep_sha256", ""))
+    b = Baseline(sweep_sha256=[s for s in sweeps.split(",") if s], **values)  # type: ignore[arg-type]
+    b.extra = {k[2:]: str(v) for k, v in h5.attrs.items() if k.startswith("x_")}
+    b.shaft_orders_removed = int(h5.attrs.get("shaft_orders_removed", 0))
+    b.n_healthy = int(h5.attrs.get("n_healthy", 1))
+    if "benign_kappa" in h5.attrs:
+        b.benign_kappa = float(h5.attrs["benign_kappa"])
+    for name in _DATASETS:
+        if name in h5:
+            setattr(b, name, h5[name][()])
+    if "gamma_status" in h5:
+        b.gamma_status = np.char.decode(h5["gamma_status"][()], "utf-8")
     if b.validated:
         for name in ("frequency_hz", "gamma", "model_frf"):
             if getattr(b, name) is None:
-                raise InputError(p, f"/{name}", "missing dataset in a validated baseline")
+                raise InputError(p, f"{where}/{name}", "missing dataset in a validated baseline")
         n = len(b.frequency_hz)  # type: ignore[arg-type]
         if b.gamma.shape != (n,):  # type: ignore[union-attr]
-            raise InputError(p, "/gamma", f"shape {b.gamma.shape} does not match frequency_hz ({n},)")  # type: ignore[union-attr]
+            raise InputError(p, f"{where}/gamma",
+                             f"shape {b.gamma.shape} does not match frequency_hz ({n},)")  # type: ignore[union-attr]
         if b.enclose == "measured":
             for name in ("healthy_frf", "healthy_frf_var", "healthy_frf_dof"):
                 arr = getattr(b, name)
                 if arr is None:
-                    raise InputError(p, f"/{name}", "missing dataset in a baseline for measured detection")
+                    raise InputError(p, f"{where}/{name}", "missing dataset in a baseline for measured detection")
                 if arr.shape[0] != n:
-                    raise InputError(p, f"/{name}", f"shape {arr.shape} does not match frequency_hz ({n},)")
+                    raise InputError(p, f"{where}/{name}", f"shape {arr.shape} does not match frequency_hz ({n},)")
             var = b.healthy_frf_var
             if var is not None and np.any((var < 0) | np.isinf(var)):
-                raise InputError(p, "/healthy_frf_var", "variances must be >= 0 and finite (NaN: no estimate)")
+                raise InputError(p, f"{where}/healthy_frf_var", "variances must be >= 0 and finite (NaN: no estimate)")
     bd, bb = b.benign_directions, b.benign_direction_bound
     if (bd is None) != (bb is None):
-        raise InputError(p, "/benign_directions", "benign_directions and benign_direction_bound go together")
+        raise InputError(p, f"{where}/benign_directions", "benign_directions and benign_direction_bound go together")
     if bd is not None and bb is not None and b.frequency_hz is not None and (
-            bd.ndim != 2 or bd.shape[1] != len(b.frequency_hz) or bb.shape != (bd.shape[0],)):
-        raise InputError(p, "/benign_directions", f"shape {bd.shape} (bound {bb.shape}) does not match "
+            bd.ndim != 2 or bd.shape[1] % max(len(b.frequency_hz), 1) != 0 or bb.shape != (bd.shape[0],)):
+        raise InputError(p, f"{where}/benign_directions", f"shape {bd.shape} (bound {bb.shape}) does not match "
                          f"frequency_hz ({len(b.frequency_hz)},)")
     if b.benign_kappa is not None and not (np.isfinite(b.benign_kappa) and b.benign_kappa >= 0):
-        raise InputError(p, "/@benign_kappa", f"must be finite and >= 0, got {b.benign_kappa}")
+        raise InputError(p, f"{where}/@benign_kappa", f"must be finite and >= 0, got {b.benign_kappa}")
     per = b.noise_bound_per_point_m
     if per is not None and (per.ndim != 1 or np.any(per < 0) or np.any(np.isinf(per))):
-        raise InputError(p, "/noise_bound_per_point_m", "must be a 1-D array of values >= 0 (NaN: no estimate)")
+        raise InputError(p, f"{where}/noise_bound_per_point_m", "must be a 1-D array of values >= 0 (NaN: no estimate)")
     if not np.isfinite(b.noise_bound_m) or b.noise_bound_m < 0:
-        raise InputError(p, "/@noise_bound_m", f"must be finite and >= 0, got {b.noise_bound_m}")
+        raise InputError(p, f"{where}/@noise_bound_m", f"must be finite and >= 0, got {b.noise_bound_m}")
     return b

@@ -35,6 +35,13 @@ app = typer.Typer(
 )
 err = Console(stderr=True, highlight=False, soft_wrap=True)  # never break paths in messages
 
+
+def _progress(text: str) -> Any:
+    """A spinner with ``text`` on stderr while a step runs (rich); nothing when stderr is not a terminal."""
+    import contextlib
+
+    return err.status(text, spinner="dots") if err.is_terminal else contextlib.nullcontext()
+
 RigOpt = Annotated[
     Path | None,
     typer.Option("--rig", help="Rig YAML (default: the bundled rig named by the sweep's rig_id)."),
@@ -286,46 +293,62 @@ def validate(
     as_json: JsonOpt = False,
     force: ForceOpt = False,
 ) -> int:
-    """Step 3: bound the model error per frequency (gamma) so the uncertain model encloses the healthy data."""
+    """Step 3: bound the model error per frequency (gamma) so the uncertain model encloses the healthy data
+    (a file of several runs, one per speed: every run, one validated set each)."""
     from rotorcheck import workflow
-    from rotorcheck.baseline import write_baseline
+    from rotorcheck.baseline import read_baseline, write_baseline
     from rotorcheck.fileio import check_writable
 
     formats = workflow.plot_formats(plot_format)
     target = out / "baseline.h5"
     rig_path = workflow.resolve_rig(workflow.rig_for(rig, sweeps[0], target), sweeps[0])
-    cfg, first = workflow.load_rig_and_run(sweeps[0], rig_path, run)
-    runs = [first] + [workflow.load_run(p, cfg, run) for p in sweeps[1:]]
+    cfg = workflow.load_rig(rig_path)
+    run_ids = [run] if run is not None else workflow.run_ids(sweeps[0])
     noise = workflow.prior_noise(target, cfg, force)
+    prior_run = read_baseline(target).run_id if noise is not None else None
     if noise is not None:
-        err.print(f"noise bound V = {noise.value_m * 1e6:.4g} um from {target} ({noise.method})")
-    check_writable(workflow.plot_paths(out, workflow.PLOT_STEMS_VALIDATE, formats) if plots else [], force)
-    if noise is None:
-        noise = workflow.fit_noise(runs[0])
-        err.print(f"no noise fit in {out}: fitted V = {noise.value_m * 1e6:.4g} um ({noise.method}, "
-                  f"{noise.confidence:.0%}) from {runs[0].path}")
-    outcome = workflow.validate(cfg, runs, noise, enclose=enclose, fail_at=_fail_at(fail_at), update=update,
-                                learn_drift=learn_drift)
-    outcome.baseline.extra["rig_path"] = str(Path(rig_path).resolve())  # later commands need no --rig
-    write_baseline(outcome.baseline, target)
-    for line in (workflow.update_summary(outcome), workflow.learning_summary(outcome)):
-        if line:
-            err.print(line)
-    files = workflow.validation_plots(outcome, out, at, formats) if plots else []
-    res = outcome.result
-    n_bad = outcome.n_not_enclosed
-    g = res.gamma[np.isfinite(res.gamma)]
-    unit = "m/N" if outcome.model.structure == "additive" else (
-        "(relative)" if outcome.model.structure == "multiplicative" else f"({outcome.model.parameter})")
-    err.print(f"gamma over {res.gamma.size} points ({enclose}): median {np.median(g):.3g}, max {np.max(g):.3g} {unit}")
-    if n_bad:
-        bad = np.flatnonzero(res.status != "ok")
-        err.print(f"[yellow]{n_bad} points not enclosed[/]: " + ", ".join(
-            f"{runs[0].frequency_hz[i]:.1f} Hz ({res.status[i]})" for i in bad[:10]))
-    for p_ in [str(target), *files]:
-        err.print(f"wrote {p_}")
+        err.print(f"noise bound V = {noise.value_m * 1e6:.4g} um from {target} ({noise.method}, run {prior_run})")
+    several = len(run_ids) > 1  # a file of several runs (speeds): one validated set per run
+    plot_dirs = [out / rid if several else out for rid in run_ids]
+    check_writable([p for d in plot_dirs for p in workflow.plot_paths(d, workflow.PLOT_STEMS_VALIDATE, formats)]
+                   if plots else [], force)
+    outcomes, n_bad, docs = [], 0, []
+    for rid, plot_dir in zip(run_ids, plot_dirs):
+        first = workflow.load_run(sweeps[0], cfg, rid)
+        runs = [first] + [workflow.load_run(p, cfg, rid) for p in sweeps[1:]]
+        nb = noise if noise is not None and (not several or prior_run == first.run_id) else None
+        if nb is None:
+            nb = workflow.fit_noise(runs[0])
+            err.print(f"run {first.run_id}: fitted V = {nb.value_m * 1e6:.4g} um ({nb.method}, "
+                      f"{nb.confidence:.0%}) from {runs[0].path}")
+        with _progress(f"validating run {first.run_id} ({len(runs)} healthy sweeps, {first.frequency_hz.size} points)"):
+            outcome = workflow.validate(cfg, runs, nb, enclose=enclose, fail_at=_fail_at(fail_at), update=update,
+                                        learn_drift=learn_drift)
+        outcome.baseline.extra["rig_path"] = str(Path(rig_path).resolve())  # later commands need no --rig
+        outcomes.append(outcome)
+        for line in (workflow.update_summary(outcome), workflow.learning_summary(outcome)):
+            if line:
+                err.print(line)
+        with _progress("writing plots"):
+            files = workflow.validation_plots(outcome, plot_dir, at, formats) if plots else []
+        res = outcome.result
+        n_bad += outcome.n_not_enclosed
+        g = res.gamma[np.isfinite(res.gamma)]
+        unit = "m/N" if outcome.model.structure == "additive" else (
+            "(relative)" if outcome.model.structure == "multiplicative" else f"({outcome.model.parameter})")
+        err.print(f"{f'run {first.run_id} ({first.speed_rpm:g} rpm): ' if several else ''}gamma over {res.gamma.size} "
+                  f"points ({enclose}): median {np.median(g):.3g}, max {np.max(g):.3g} {unit}")
+        if outcome.n_not_enclosed:
+            bad = np.flatnonzero(res.status != "ok")
+            err.print(f"[yellow]{outcome.n_not_enclosed} points not enclosed[/]: " + ", ".join(
+                f"{runs[0].frequency_hz[i]:.1f} Hz ({res.status[i]})" for i in bad[:10]))
+        for p_ in files:
+            err.print(f"wrote {p_}")
+        docs.append(outcome.typed_report(nb, target).to_dict())
+    write_baseline(outcomes[0].baseline, target, [o.baseline for o in outcomes[1:]])
+    err.print(f"wrote {target}" + (f" ({len(outcomes)} runs: {', '.join(run_ids)})" if several else ""))
     if as_json:
-        _emit_json(outcome.typed_report(noise, target).to_dict())
+        _emit_json(docs[0] if not several else {"runs": docs})
     return EXIT_INCONCLUSIVE if n_bad else EXIT_OK
 
 
@@ -353,7 +376,8 @@ def detect(
     as_json: JsonOpt = False,
     force: ForceOpt = False,
 ) -> int:
-    """Steps 4-5: verdict (joint test or certified fault points) and the damage with its bound."""
+    """Steps 4-5: verdict (joint test or certified fault points) and the damage with its bound; a file of
+    several runs: each run against the baseline's run at its speed, one verdict for the file."""
     from rotorcheck import workflow
     from rotorcheck.baseline import read_baseline
     from rotorcheck.fileio import check_writable
@@ -361,35 +385,97 @@ def detect(
 
     formats = workflow.plot_formats(plot_format)
     base_path = baseline if baseline is not None else out / "baseline.h5"
+    ids = [run] if run is not None else workflow.run_ids(sweep)
+    if len(ids) > 1:
+        return _detect_runs(sweep, ids, rig, out, base_path, at, plots, confidence, rule, false_alarm, resample,
+                            formats, fail_at, as_json, force)
     check_writable([out / f for f in REPORT_FILES]
                    + (workflow.plot_paths(out, workflow.PLOT_STEMS_DETECT, formats) if plots else []), force)
     base = read_baseline(base_path)
     cfg, mrun = workflow.load_rig_and_run(sweep, workflow.rig_for(rig, sweep, base_path), run)
+    with _progress(f"detecting {sweep.name} against {base_path}"):
+        outcome = _detect_one(base, cfg, mrun, sweep, base_path, confidence, rule, false_alarm, resample, fail_at)
+        report = outcome.report()
+    with _progress("writing reports and plots"):
+        plot_files = workflow.detection_plots(outcome, out, at, formats) if plots else []
+        files = write_reports(report, out, plot_files)
+    _print_outcome(outcome, report)
+    for p_ in [*map(str, files), *plot_files]:
+        err.print(f"wrote {p_}")
+    if as_json:
+        _emit_json(report)
+    return outcome.exit_code
+
+
+def _detect_one(base: Any, cfg: Any, mrun: Any, sweep: Path, base_path: Path, confidence: float,
+                rule: str | None, false_alarm: float, resample: bool, fail_at: str) -> Any:
+    """One run against its baseline: resample when asked, check, detect."""
+    from rotorcheck import workflow
+
     if resample and base.frequency_hz is not None and workflow.grid_mismatch(mrun.frequency_hz,
                                                                              base.frequency_hz) is not None:
         mrun = workflow.resample_run(mrun, base.frequency_hz)
         err.print(f"resampled {sweep} ({mrun.resampled_from} points) onto the baseline's grid "
                   f"({base.frequency_hz.size} points, linear interpolation)")
     workflow.check_baseline(base, cfg, mrun, base_path)
-    outcome = workflow.detect(cfg, base, mrun, fail_at=_fail_at(fail_at), confidence=confidence, rule=rule,
-                              false_alarm=false_alarm)
-    report = outcome.report()
-    plot_files = workflow.detection_plots(outcome, out, at, formats) if plots else []
-    files = write_reports(report, out, plot_files)
+    return workflow.detect(cfg, base, mrun, fail_at=_fail_at(fail_at), confidence=confidence, rule=rule,
+                           false_alarm=false_alarm)
+
+
+def _print_outcome(outcome: Any, report: dict[str, Any], prefix: str = "") -> None:
+    from rotorcheck import workflow
+
     v = outcome.verdict
     colour = {"damage": "bold red", "healthy": "bold green", "inconclusive": "bold yellow"}[v.verdict]
-    err.print(f"[{colour}]{v.verdict.upper()}[/]: {v.reason}")
+    err.print(f"{prefix}[{colour}]{v.verdict.upper()}[/]: {v.reason}")
     err.print(f"{report['n_fault_points']} of {report['n_points']} points are fault points"
               + (f" (sweep p-value {report['p_value']:.3g}, {report['confidence']:.0%} family-wise)"
                  if "p_value" in report else ""))
     for line in (workflow.joint_summary(outcome), workflow.anchored_summary(outcome)):
         if line:
             err.print(line)
-    for p_ in [*map(str, files), *plot_files]:
-        err.print(f"wrote {p_}")
+
+
+def _detect_runs(sweep: Path, ids: list[str], rig: Path | None, out: Path, base_path: Path, at: float | None,
+                 plots: bool, confidence: float, rule: str | None, false_alarm: float, resample: bool,
+                 formats: tuple[str, ...], fail_at: str, as_json: bool, force: bool) -> int:
+    """Every run of a file of several runs against the baseline's run at the same speed (within the rig's
+    speed tolerance; the closest): reports in <out>/<run_id>/, one summary <out>/report.json; the file is
+    damage when any run is, inconclusive when none is but one is inconclusive, else healthy."""
+    from rotorcheck import workflow
+    from rotorcheck.baseline import read_baselines
+    from rotorcheck.fileio import atomic_write_text, check_writable
+    from rotorcheck.report.reports import REPORT_FILES, render_json, write_reports
+
+    check_writable([out / "report.json"] + [out / rid / f for rid in ids for f in REPORT_FILES]
+                   + ([p for rid in ids for p in workflow.plot_paths(out / rid, workflow.PLOT_STEMS_DETECT, formats)]
+                      if plots else []), force)
+    bases = read_baselines(base_path)
+    rig_path = workflow.rig_for(rig, sweep, base_path)
+    summary: list[dict[str, Any]] = []
+    codes = []
+    for rid in ids:
+        cfg, mrun = workflow.load_rig_and_run(sweep, rig_path, rid)
+        base = workflow.baseline_for_speed(bases, cfg, mrun, base_path)
+        with _progress(f"run {rid}: detecting against the baseline's run {base.run_id}"):
+            outcome = _detect_one(base, cfg, mrun, sweep, base_path, confidence, rule, false_alarm, resample, fail_at)
+            report = outcome.report()
+            plot_files = workflow.detection_plots(outcome, out / rid, at, formats) if plots else []
+            write_reports(report, out / rid, plot_files)
+        _print_outcome(outcome, report, prefix=f"run {rid} ({mrun.speed_rpm:g} rpm): ")
+        codes.append(outcome.exit_code)
+        summary.append({"run_id": rid, "speed_rpm": mrun.speed_rpm, "baseline_run_id": base.run_id,
+                        "verdict": report["verdict"], "verdict_reason": report["verdict_reason"],
+                        "report": str(out / rid / "report.json")})
+    verdicts = [r["verdict"] for r in summary]
+    verdict = "damage" if "damage" in verdicts else ("inconclusive" if "inconclusive" in verdicts else "healthy")
+    doc = {"sweep": str(sweep), "verdict": verdict, "verdict_rule": "the file: damage if any run is damage, else "
+           "inconclusive if any run is, else healthy; each run by its own rule (its report)", "runs": summary}
+    atomic_write_text(out / "report.json", render_json(doc))
+    err.print(f"file verdict: {verdict.upper()} ({len(ids)} runs); wrote {out / 'report.json'}")
     if as_json:
-        _emit_json(report)
-    return outcome.exit_code
+        _emit_json(doc)
+    return {"damage": EXIT_DAMAGE, "inconclusive": EXIT_INCONCLUSIVE, "healthy": EXIT_OK}[verdict]
 
 
 @app.command()
@@ -458,16 +544,18 @@ def simulate(
     if noise is not None:
         st = dataclasses.replace(st, output_noise_std=noise)
     grid = np.linspace(f_min, f_max, points)
-    if actuator or sensor:
-        from rotorcheck.sim.rig_sim import simulate_rig_patterns
+    with _progress(f"simulating {points} points at {speed:g} rpm" + (f" with {fault}" if fault else "")):
+        if actuator or sensor:
+            from rotorcheck.sim.rig_sim import simulate_rig_patterns
 
-        acts = [workflow.parse_port(a, "--actuator") for a in actuator] if actuator else [cfg.ports.actuator]
-        sens = [workflow.parse_port(x, "--sensor") for x in sensor] if sensor else [cfg.ports.sensor]
-        sw = simulate_rig_patterns(cfg, grid, acts, sens, speed_rpm=speed, fault=fault, seed=seed,
-                                   n_harmonics=harmonics, settings=st, created_utc=_utc_now(), shaft_angle_rad=angle)
-    else:
-        sw = simulate_rig(cfg, grid, speed, fault=fault, seed=seed, n_harmonics=harmonics, settings=st,
-                          created_utc=_utc_now(), shaft_angle_rad=angle)
+            acts = [workflow.parse_port(a, "--actuator") for a in actuator] if actuator else [cfg.ports.actuator]
+            sens = [workflow.parse_port(x, "--sensor") for x in sensor] if sensor else [cfg.ports.sensor]
+            sw = simulate_rig_patterns(cfg, grid, acts, sens, speed_rpm=speed, fault=fault, seed=seed,
+                                       n_harmonics=harmonics, settings=st, created_utc=_utc_now(),
+                                       shaft_angle_rad=angle)
+        else:
+            sw = simulate_rig(cfg, grid, speed, fault=fault, seed=seed, n_harmonics=harmonics, settings=st,
+                              created_utc=_utc_now(), shaft_angle_rad=angle)
     write_sweep(sw, output, force=force)
     err.print(f"wrote {output}: {sw.generator}; {points} points {f_min:g}-{f_max:g} Hz at {speed:g} rpm")
     if as_json:

@@ -162,6 +162,13 @@ def resolve_rig(rig_path: str | Path | None, sweep_path: str | Path) -> Path:
     return default_rig_path(read_sweep(sweep_path).rig_id)
 
 
+def run_ids(sweep_path: str | Path) -> list[str]:
+    """The run ids of a sweep file, in file order."""
+    from rotorcheck.sweep.hdf5io import read_sweep
+
+    return list(read_sweep(sweep_path).runs)
+
+
 def rig_for(rig_path: str | Path | None, sweep_path: str | Path, baseline_path: str | Path | None = None
             ) -> Path | None:
     """The rig file for a command: ``--rig``; else the one a baseline at ``baseline_path`` was made with
@@ -856,6 +863,18 @@ def check_baseline(baseline: Any, rig: RigConfig, run: MeasuredRun, baseline_pat
 
 def _show_pairs(keys: list[list[str]]) -> str:
     return ", ".join(f"{o}<-{i}" for o, i in keys)
+
+
+def baseline_for_speed(bases: list[Any], rig: RigConfig, run: MeasuredRun, baseline_path: str | Path) -> Any:
+    """The validated set of a several-run baseline at ``run``'s speed (the closest within the rig's speed
+    tolerance; exact at standstill), refused naming the speeds it holds."""
+    tol = speed_tolerance(rig)
+    ok = [b for b in bases if abs(b.speed_rpm - run.speed_rpm) <= (tol if b.speed_rpm and run.speed_rpm else 1e-9)]
+    if not ok:
+        raise InputError(run.path, f"/runs/{run.run_id}/@speed_rpm", f"{run.speed_rpm:g} rpm: the baseline "
+                         f"{baseline_path} holds " + ", ".join(f"{b.run_id} ({b.speed_rpm:g} rpm)" for b in bases)
+                         + f" (speed tolerance +-{tol:g} rpm)")
+    return min(ok, key=lambda b: abs(b.speed_rpm - run.speed_rpm))
 
 
 def parse_port(text: str, option: str = "--port") -> Any:

@@ -1,0 +1,23 @@
+"""Progress on stderr (rich) for the steps that take a second or more: shown on a terminal, quiet otherwise."""
+
+from __future__ import annotations
+
+import io
+from pathlib import Path
+
+import pytest
+from rich.console import Console
+
+from rotorcheck import cli
+from rotorcheck.cli import EXIT_OK, main
+
+
+@pytest.mark.parametrize("terminal", [True, False])
+def test_simulate_shows_progress_only_on_a_terminal(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+                                                    terminal: bool) -> None:
+    buf = io.StringIO()
+    monkeypatch.setattr(cli, "err", Console(file=buf, force_terminal=terminal, highlight=False, soft_wrap=True))
+    assert main(["simulate", str(tmp_path / "s.h5"), "--points", "20", "--periods", "4"]) == EXIT_OK
+    text = buf.getvalue()
+    assert "wrote" in text
+    assert ("simulating 20 points" in text) is terminal
