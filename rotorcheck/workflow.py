@@ -1242,8 +1242,8 @@ def learn_benign(rig: RigConfig, runs: list[MeasuredRun], false_alarm: float = 0
     3. kappa: the smallest of :data:`KAPPA_GRID` under which no sweep, left out and tested against the
        others (correction and directions learned without it), is called damage (the largest if none);
        the grid starts at :data:`KAPPA_NOMINAL`: sweeps drawn inside the ranges do not show their
-       corners (on the crack rig 8 training sweeps gave 1.0, and 4 of 10 benign corners were then
-       called damage; at 1.5, 1).
+       corners (on the crack rig, with an earlier allowance, 8 training sweeps gave 1.0 and 4 of 10
+       benign corners were then called damage).
 
     One sweep: kappa = :data:`KAPPA_NOMINAL`, nothing learned; two: directions only (no leave-one-out)."""
     from rotorcheck.robust.joint import learn_directions
