@@ -46,7 +46,7 @@ from rotorcheck.sim.simulator import (
     simulate_fast,
     simulate_fast_patterns,
 )
-from rotorcheck.sweep.format import Channel, Sweep
+from rotorcheck.sweep.format import Channel, Run, Sweep
 
 
 @dataclass(frozen=True)
@@ -279,24 +279,28 @@ def simulate_rig(
     rp = at_shaft_angle(rig_plant(config, speed_rpm, fault, n_harmonics, band), speed_rpm, shaft_angle_rad)
     st = settings if settings is not None else step_settings(config)
     res = simulate_fast(rp.plant, f, st, rp.disturbances, rng=seed)
-    rid = run_id or f"{speed_rpm:g}rpm"
-    what = f"fault {fault!r}" if fault else "healthy"
-    n_per = st.n_periods if isinstance(st.n_periods, int) else f"{min(st.n_periods)}-{max(st.n_periods)}"
+    what, n_per = _what(fault), _periods(st)
     notes = (f"{what}; seed {seed}; {n_per} periods; noise std {st.output_noise_std} m/sample; "
              f"shaft angle at start {np.degrees(shaft_angle_rad):.6g} deg")
     channels = rig_channels(config)
+    rid = run_id or f"{speed_rpm:g}rpm"
     run = res.to_run(rid, speed_rpm, channels=channels if st.keep_periods else None, notes=notes)
-    generator = (
-        f"rotorcheck {__version__} simulate (rig {config.rig_id} sha256 {config.sha256()[:12]}, {what})"
-    )
-    return Sweep(
-        rig_id=config.rig_id,
-        source="simulated",
-        generator=generator,
-        created_utc=created_utc,
-        channels=channels,
-        runs={rid: run},
-    )
+    return _simulated(config, channels, run, created_utc, what)
+
+
+def _what(fault: str | None) -> str:
+    return f"fault {fault!r}" if fault else "healthy"
+
+
+def _periods(st: StepSettings) -> str:
+    return str(st.n_periods) if isinstance(st.n_periods, int) else f"{min(st.n_periods)}-{max(st.n_periods)}"
+
+
+def _simulated(config: RigConfig, channels: list[Channel], run: Run, created_utc: str, what: str) -> Sweep:
+    """A one-run simulated Sweep; its generator string names the rig, its hash and ``what``."""
+    generator = f"rotorcheck {__version__} simulate (rig {config.rig_id} sha256 {config.sha256()[:12]}, {what})"
+    return Sweep(rig_id=config.rig_id, source="simulated", generator=generator, created_utc=created_utc,
+                 channels=channels, runs={run.run_id: run})
 
 
 def simulate_rig_patterns(
@@ -332,23 +336,11 @@ def simulate_rig_patterns(
         dist = _turned_tones(dist, speed_rpm, shaft_angle_rad)
     st = settings if settings is not None else step_settings(config)
     res = simulate_fast_patterns(plants, f, st, dist, rng=seed)
-    rid = run_id or f"{speed_rpm:g}rpm"
-    what = f"fault {fault!r}" if fault else "healthy"
-    n_per = st.n_periods if isinstance(st.n_periods, int) else f"{min(st.n_periods)}-{max(st.n_periods)}"
+    what, n_per = _what(fault), _periods(st)
     channels = port_channels(config, actuators, sens)
     notes = (f"{what}; seed {seed}; {len(actuators)} actuators driven one at a time "
              f"({', '.join(c.name for c in channels if c.role == 'input')}); {n_per} periods; "
              f"noise std {st.output_noise_std} m/sample; shaft angle at start {np.degrees(shaft_angle_rad):.6g} deg")
+    rid = run_id or f"{speed_rpm:g}rpm"
     run = res.to_run(rid, speed_rpm, channels=channels if st.keep_periods else None, notes=notes)
-    generator = (
-        f"rotorcheck {__version__} simulate (rig {config.rig_id} sha256 {config.sha256()[:12]}, {what}, "
-        f"{len(actuators)} actuators)"
-    )
-    return Sweep(
-        rig_id=config.rig_id,
-        source="simulated",
-        generator=generator,
-        created_utc=created_utc,
-        channels=channels,
-        runs={rid: run},
-    )
+    return _simulated(config, channels, run, created_utc, f"{what}, {len(actuators)} actuators")

@@ -136,6 +136,18 @@ class TimeRecord:
     y: np.ndarray
 
 
+def _channel_columns(channels: Sequence[Channel] | None, n_in: int, n_out: int) -> tuple[list[int], list[int]]:
+    """The columns of the inputs and of the outputs in the channel table (the last axis of
+    ``period_phasor``), checked against a result's ``n_in`` inputs and ``n_out`` outputs."""
+    if channels is None:
+        raise ValueError("channels are needed to order period_phasor columns")
+    ins = [j for j, c in enumerate(channels) if c.role == "input"]
+    outs = [j for j, c in enumerate(channels) if c.role == "output"]
+    if len(ins) != n_in or len(outs) != n_out:
+        raise ValueError(f"channels have {len(ins)} inputs/{len(outs)} outputs, result has {n_in}/{n_out}")
+    return ins, outs
+
+
 @dataclass
 class SteppedSineResult:
     """Averaged phasors per point (shapes: f points, n_out outputs, one input).
@@ -169,15 +181,8 @@ class SteppedSineResult:
         (required when per-period phasors were kept)."""
         pp = None
         if self.period_input is not None and self.period_output is not None:
-            if channels is None:
-                raise ValueError("channels are needed to order period_phasor columns")
-            ins = [j for j, c in enumerate(channels) if c.role == "input"]
-            outs = [j for j, c in enumerate(channels) if c.role == "output"]
-            if len(ins) != self.period_input.shape[2] or len(outs) != self.period_output.shape[2]:
-                raise ValueError(
-                    f"channels have {len(ins)} inputs/{len(outs)} outputs, result has "
-                    f"{self.period_input.shape[2]}/{self.period_output.shape[2]}"
-                )
+            ins, outs = _channel_columns(channels, self.period_input.shape[2], self.period_output.shape[2])
+            assert channels is not None  # refused above
             nf, p = self.period_input.shape[:2]
             pp = np.full((nf, p, len(channels)), np.nan + 1j * np.nan, dtype=np.complex128)
             pp[:, :, ins] = self.period_input
@@ -501,15 +506,8 @@ class PatternSweepResult:
         (required when per-period phasors were kept)."""
         pp = None
         if self.period_input is not None and self.period_output is not None:
-            if channels is None:
-                raise ValueError("channels are needed to order period_phasor columns")
-            ins = [j for j, c in enumerate(channels) if c.role == "input"]
-            outs = [j for j, c in enumerate(channels) if c.role == "output"]
-            if len(ins) != self.period_input.shape[3] or len(outs) != self.period_output.shape[3]:
-                raise ValueError(
-                    f"channels have {len(ins)} inputs/{len(outs)} outputs, result has "
-                    f"{self.period_input.shape[3]}/{self.period_output.shape[3]}"
-                )
+            ins, outs = _channel_columns(channels, self.period_input.shape[3], self.period_output.shape[3])
+            assert channels is not None  # refused above
             nf, ne, p = self.period_input.shape[:3]
             pp = np.full((nf, ne, p, len(channels)), np.nan + 1j * np.nan, dtype=np.complex128)
             pp[..., ins] = self.period_input
