@@ -1270,7 +1270,8 @@ def learn_benign(rig: RigConfig, runs: list[MeasuredRun], false_alarm: float = 0
     C: np.ndarray | None = None
     th, left, raw = fits(None)
     # the speed tolerance is corrected by nothing: its effect (gyroscopics) is small beside the others
-    # and its training values are barely identifiable, so a regression on it learns noise
+    # and its training values are barely identifiable, so a regression on it learns noise (leaving the
+    # gain out of the correction too was tried: bearing me -2 % at 0 rpm then called damage 5 of 10)
     from rotorcheck.variability import benign_at
 
     params = benign_at(rig, speed)
