@@ -189,6 +189,48 @@ def info(
 
 
 @app.command()
+def convert(
+    source: Annotated[Path, typer.Argument(help="File to read: .h5/.hdf5, .uff/.unv (UFF58), .csv (tidy; wide with "
+                                                "--wide).")],
+    target: Annotated[Path, typer.Argument(help="File to write; format from its extension (or --to).")],
+    from_format: Annotated[str | None, typer.Option("--from", help="SOURCE format: hdf5 | uff | csv | wide.")] = None,
+    to_format: Annotated[str | None, typer.Option("--to", help="TARGET format: hdf5 | uff | csv | wide.")] = None,
+    wide: Annotated[bool, typer.Option("--wide", help="The .csv side is a wide CSV (one row per frequency).")] = False,
+    column_map: Annotated[Path | None, typer.Option(
+        "--column-map", help="Column map (YAML/JSON) of a wide CSV read (default <stem>.columns.yaml beside it; "
+                             "the side file of a tidy CSV), or where a written wide CSV's map goes.")] = None,
+    ascii_58: Annotated[bool, typer.Option("--ascii", help="Write ASCII UFF 58 (default binary 58b, bit-exact; ASCII "
+                                                           "keeps 6 digits of the frequency).")] = False,
+    speed: Annotated[float | None, typer.Option("--speed", help="Speed, rpm, where the file states none.")] = None,
+    noise_source: Annotated[str | None, typer.Option(
+        "--noise-source", help="Where an FRF-only run's variance comes from: 'measured' or 'assumed: <rule>' ('X % "
+                               "of |H|', 'X % of max |H|' are computed).")] = None,
+    noise_var: Annotated[float | None, typer.Option(
+        "--noise-var", help="Assumed variance of every FRF entry of an FRF-only run, (m/N)^2.")] = None,
+    rig_id: Annotated[str | None, typer.Option("--rig-id", help="Rig id where the file states none.")] = None,
+    run_id: Annotated[str | None, typer.Option(
+        "--run-id", help="Name of the run of a file without run ids; else the one run to convert.")] = None,
+    force: ForceOpt = False,
+    as_json: JsonOpt = False,
+) -> int:
+    """Convert a sweep between HDF5, UFF58, tidy CSV and wide CSV (FRF-only data need a noise statement)."""
+    from rotorcheck.sweep.convert import ConvertOptions
+    from rotorcheck.sweep.convert import convert as convert_files
+
+    opts = ConvertOptions(speed_rpm=speed, noise_source=noise_source, noise_var=noise_var, rig_id=rig_id,
+                          run_id=run_id, column_map=column_map, ascii=ascii_58, force=force)
+    doc = convert_files(source, target, from_format=from_format, to_format=to_format, wide=wide, options=opts)
+    for r in doc["runs"]:
+        what = f"FRF only, noise: {r['noise_source']}" if r["frf_only"] else "phasors"
+        err.print(f"run {r['run_id']}: {r['speed_rpm']:g} rpm, {r['n_points']} points {r['f_min_hz']:g}-"
+                  f"{r['f_max_hz']:g} Hz, {what}")
+    err.print(f"{source} ({doc['format_in']}) -> {doc['format_out']}: wrote {', '.join(doc['files'])}")
+    if as_json:
+        _emit_json(doc)
+    return EXIT_OK
+
+
+@app.command()
 def crack(
     rig: Annotated[Path | None, typer.Argument(help="Rig YAML (default: the truth rig).")] = None,
     fault: Annotated[str, typer.Option("--fault", help="Breathing crack in the rig.")] = "breathing_crack",

@@ -35,6 +35,20 @@ def io_frf(config: RigConfig, freq_hz: np.ndarray, speed_rpm: float,
     return g[:, None] if pairs is not None else g
 
 
+#: a channel pair whose model receptance is below this fraction of the largest pair's is one the model
+#: says does not respond (x force -> y probe at standstill: the planes decouple); its predicted relative
+#: change is taken as none
+SILENT = 1e-9
+
+
+def relative(g: np.ndarray, g0: np.ndarray) -> np.ndarray:
+    """``g / g0`` per point and pair, 1 where the model's ``g0`` is silent (:data:`SILENT`)."""
+    g0 = np.asarray(g0)
+    scale = np.max(np.abs(g0)) if g0.size else 0.0
+    quiet = np.abs(g0) <= SILENT * scale
+    return np.where(quiet, 1.0, np.asarray(g) / np.where(quiet, 1.0, g0))
+
+
 def stacked(x: np.ndarray) -> np.ndarray:
     """An (f, P) array as one vector, channel pair after channel pair (P f,); an (f,) array as it is."""
     x = np.asarray(x)
@@ -63,7 +77,8 @@ def crack_signatures(config: RigConfig, freq_hz: np.ndarray, speed_rpm: float, h
     els = tuple(elements) if elements is not None else candidate_elements(config)
     g0 = io_frf(config, f, speed_rpm, pairs)
     th = np.asarray(healthy_frf).reshape(g0.shape)
-    S = np.array([stacked(th * (io_frf(with_element_loss(config, e, loss), f, speed_rpm, pairs) / g0 - 1.0) / loss)
+    S = np.array([stacked(th * (relative(io_frf(with_element_loss(config, e, loss), f, speed_rpm, pairs), g0) - 1.0)
+                          / loss)
                   for e in els], dtype=complex).reshape(len(els), th.size)
     healthy_frf = stacked(th)
     # an element the channel cannot see (an overhang with a free end carries no bending moment): its
@@ -113,7 +128,7 @@ def benign_prediction(config: RigConfig, freq_hz: np.ndarray, speed_rpm: float, 
             cfg, d_rpm, g_s, g_a = with_benign(config, values)
             resolve = d_rpm != 0.0 or any(x != 0.0 for p, x in zip(params, theta) if p.changes_model)
             g = io_frf(cfg, f, speed_rpm + d_rpm, pairs) if resolve else g0
-            cache[key] = stacked(th * (g_s * g_a * g / g0 - 1.0))
+            cache[key] = stacked(th * (g_s * g_a * relative(g, g0) - 1.0))
             if len(cache) > 256:
                 cache.pop(next(iter(cache)))
         return cache[key]

@@ -1180,8 +1180,8 @@ def certify_beyond_benign(rig: RigConfig, Th: np.ndarray, var_h: np.ndarray, run
     test's model-error allowance at that point? With several channel pairs each is certified on its own
     and a point counts when any pair is (the quantile is Sidak over every point of every pair). None
     without benign parameters that change the model. Returns the certificate and notes."""
-    from rotorcheck.robust.real_box import certify_points, merge_certificates
-    from rotorcheck.signatures import benign_box
+    from rotorcheck.robust.real_box import BoxCertificate, certify_points, merge_certificates
+    from rotorcheck.signatures import SILENT, benign_box, io_frf
     from rotorcheck.variability import benign_at
 
     speed = run.speed_rpm if speed_rpm is None else speed_rpm
@@ -1193,7 +1193,13 @@ def certify_beyond_benign(rig: RigConfig, Th: np.ndarray, var_h: np.ndarray, run
     th, vh = _per_pair(Th, run.frequency_hz, n_pairs, run), _per_pair(var_h, run.frequency_hz, n_pairs, run)
     z = float(np.sqrt(joint.point_threshold / 2.0))  # |r|^2 / sigma^2 ~ Exp(1): chi2_2 / 2
     certs, notes = [], []
+    g0 = io_frf(rig, run.frequency_hz, speed, run.pairs if n_pairs > 1 else None).reshape(nf, n_pairs)
     for k in range(n_pairs):
+        if np.max(np.abs(g0[:, k])) <= SILENT * np.max(np.abs(g0)):
+            # the model says this pair does not respond (its planes decouple): nothing benign to predict
+            certs.append(BoxCertificate(np.full(nf, "explained", dtype="<U11"), np.full((nf, len(params)), np.nan),
+                                        np.full(nf, np.nan), np.zeros(nf, dtype=int), np.zeros(nf, dtype=bool)))
+            continue
         box = benign_box(rig, speed, params, run.speed_rpm - speed, run.pairs[k] if n_pairs > 1 else None)
         certs.append(certify_points(box.model, 2.0 * np.pi * run.frequency_hz, est.frf[:, k], th[:, k],
                                     est.var[:, k], vh[:, k], z, joint.model_error[k * nf:(k + 1) * nf], box.gain,

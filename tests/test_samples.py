@@ -35,7 +35,10 @@ CLI_MD_SAMPLES = (
     "three_mass/damaged.h5",
 )
 #: beyond the contract: the free-running (random start angle) healthy pair at 2000 rpm (issue 9)
-EXTRA_SAMPLES = ("crack_rig/healthy_2000rpm.h5", "crack_rig/healthy_2000rpm_repeat.h5")
+EXTRA_SAMPLES = ("crack_rig/healthy_2000rpm.h5", "crack_rig/healthy_2000rpm_repeat.h5",
+                 # issue 12: x/y probes at stations 6 and 2, forces in x and y at station 8
+                 "crack_rig_xy/healthy_0rpm.h5", "crack_rig_xy/open_crack_0rpm.h5", "crack_rig_xy/healthy_1000rpm.h5",
+                 "crack_rig_xy/breathing_crack_1000rpm.h5", "crack_rig_xy/healthy_1000rpm_repeat.h5")
 
 # what each bundled file must hold: (speed rpm, grid, seed named in the run notes, fault)
 EXPECTED = {
@@ -46,6 +49,11 @@ EXPECTED = {
     "crack_rig/healthy_1000rpm_repeat.h5": (1000.0, samples.GRID_1000RPM, 105, None),
     "crack_rig/healthy_2000rpm.h5": (2000.0, samples.GRID_1000RPM, 106, None),
     "crack_rig/healthy_2000rpm_repeat.h5": (2000.0, samples.GRID_1000RPM, 107, None),
+    "crack_rig_xy/healthy_0rpm.h5": (0.0, samples.GRID_0RPM, 101, None),
+    "crack_rig_xy/open_crack_0rpm.h5": (0.0, samples.GRID_0RPM, 102, "open_crack"),
+    "crack_rig_xy/healthy_1000rpm.h5": (1000.0, samples.GRID_1000RPM, 108, None),
+    "crack_rig_xy/breathing_crack_1000rpm.h5": (1000.0, samples.GRID_1000RPM, 104, "breathing_crack"),
+    "crack_rig_xy/healthy_1000rpm_repeat.h5": (1000.0, samples.GRID_1000RPM, 105, None),
     "three_mass/healthy.h5": (0.0, samples.GRID_THREE_MASS, 0, None),
     "three_mass/damaged.h5": (0.0, samples.GRID_THREE_MASS, 0, "stiffness_loss"),
 }

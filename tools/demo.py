@@ -10,7 +10,8 @@ names (``--rig`` defaults to the bundled rig named by the sweep, ``--out`` to ``
     rotorcheck detect     <new sweep>
 
 Cases: the open crack at 0 rpm, the breathing crack at 1000 rpm, the repeat healthy sweep at
-1000 rpm and a free-running (random start angle) healthy pair at 2000 rpm (false-alarm checks).
+1000 rpm and a free-running (random start angle) healthy pair at 2000 rpm (false-alarm checks); with
+x/y probes (8 channel pairs): the open crack at 0 rpm and the repeat healthy sweep at 1000 rpm.
 Previous demo output is replaced (it is the demo's own folder).
 """
 
@@ -29,6 +30,9 @@ CASES = (
     ("breathing_crack_1000rpm", "crack_rig/healthy_1000rpm.h5", "crack_rig/breathing_crack_1000rpm.h5"),
     ("repeat_healthy_1000rpm", "crack_rig/healthy_1000rpm.h5", "crack_rig/healthy_1000rpm_repeat.h5"),
     ("free_running_healthy_2000rpm", "crack_rig/healthy_2000rpm.h5", "crack_rig/healthy_2000rpm_repeat.h5"),
+    # x and y probes at stations 6 and 2, forces in x and y at station 8 (8 channel pairs)
+    ("xy_open_crack_0rpm", "crack_rig_xy/healthy_0rpm.h5", "crack_rig_xy/open_crack_0rpm.h5"),
+    ("xy_repeat_healthy_1000rpm", "crack_rig_xy/healthy_1000rpm.h5", "crack_rig_xy/healthy_1000rpm_repeat.h5"),
 )
 VERDICTS = {0: "healthy", 1: "DAMAGE", 2: "error", 3: "inconclusive"}
 

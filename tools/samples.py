@@ -16,9 +16,9 @@ from pathlib import Path
 
 import numpy as np
 
-from rotorcheck.config import load_config
+from rotorcheck.config import Port, load_config
 from rotorcheck.resources import configs_dir
-from rotorcheck.sim.rig_sim import shaft_angle_from, simulate_rig, step_settings
+from rotorcheck.sim.rig_sim import shaft_angle_from, simulate_rig, simulate_rig_patterns, step_settings
 from rotorcheck.sweep import Sweep, compare_sweeps, read_sweep, write_sweep
 
 CREATED_UTC = "2026-01-01T00:00:00Z"
@@ -52,6 +52,25 @@ def _crack_rig(fault: str | None, speed: float, grid: np.ndarray, seed: int,
     return make
 
 
+#: the x/y set (issue 12): forces in x and y at station 8, x and y probes at stations 6 and 2
+XY_ACTUATORS = (("8", "x"), ("8", "y"))
+XY_SENSORS = (("6", "x"), ("6", "y"), ("2", "x"), ("2", "y"))
+
+
+def _crack_rig_xy(fault: str | None, speed: float, grid: np.ndarray, seed: int) -> Callable[[], Sweep]:
+    """An x/y crack-rig sample (sweep format version 2, one actuator driven at a time), same truth, crack
+    and seed as the one-channel sample. Key-phasor triggered (start angle 0) and without per-period
+    phasors, to keep the files small: the synchronous leak is then the same in every sweep."""
+    def make() -> Sweep:
+        truth = load_config(configs_dir() / "crack_rig_truth.yaml")
+        acts = [Port(station=int(s), direction=d) for s, d in XY_ACTUATORS]  # type: ignore[arg-type]
+        sens = [Port(station=int(s), direction=d) for s, d in XY_SENSORS]  # type: ignore[arg-type]
+        return simulate_rig_patterns(truth, grid, acts, sens, speed_rpm=speed, fault=fault, seed=seed,
+                                     created_utc=CREATED_UTC, settings=step_settings(truth, keep_periods=False))
+
+    return make
+
+
 def _three_mass(fault: str | None) -> Callable[[], Sweep]:
     def make() -> Sweep:
         truth = load_config(configs_dir() / "three_mass_truth.yaml")
@@ -76,6 +95,12 @@ SAMPLES: tuple[Sample, ...] = (
     Sample("crack_rig/healthy_2000rpm.h5", _crack_rig(None, 2000.0, GRID_1000RPM, seed=106, free_running=True)),
     Sample("crack_rig/healthy_2000rpm_repeat.h5",
            _crack_rig(None, 2000.0, GRID_1000RPM, seed=107, free_running=True)),
+    Sample("crack_rig_xy/healthy_0rpm.h5", _crack_rig_xy(None, 0.0, GRID_0RPM, seed=101)),
+    Sample("crack_rig_xy/open_crack_0rpm.h5", _crack_rig_xy("open_crack", 0.0, GRID_0RPM, seed=102)),
+    Sample("crack_rig_xy/healthy_1000rpm.h5", _crack_rig_xy(None, 1000.0, GRID_1000RPM, seed=108)),
+    Sample("crack_rig_xy/breathing_crack_1000rpm.h5",
+           _crack_rig_xy("breathing_crack", 1000.0, GRID_1000RPM, seed=104)),
+    Sample("crack_rig_xy/healthy_1000rpm_repeat.h5", _crack_rig_xy(None, 1000.0, GRID_1000RPM, seed=105)),
     Sample("three_mass/healthy.h5", _three_mass(None)),
     Sample("three_mass/damaged.h5", _three_mass("stiffness_loss")),
 )

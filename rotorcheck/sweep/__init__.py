@@ -14,9 +14,16 @@ Public entry points (re-exported here: ``Channel``, ``Run``, ``Sweep``, ``SweepF
 - :mod:`rotorcheck.sweep.compare`: ``compare_sweeps``, ``compare_sweep_files`` (bit for bit).
 - :mod:`rotorcheck.sweep.uff`: Universal File Format dataset 58 export/import (pyuff).
 - :mod:`rotorcheck.sweep.tidy_csv`: tidy CSV export/import.
+- :mod:`rotorcheck.sweep.wide_csv`: wide CSV (one row per frequency, as analysers write) with a
+  column map (YAML/JSON); imports give an FRF-only run.
+- :mod:`rotorcheck.sweep.convert`: ``convert`` between all of these, for ``rotorcheck convert``.
 - :mod:`rotorcheck.sweep.summary`: ``summarize`` for ``rotorcheck info``.
 
-Imports run downwards only: format <- validation <- hdf5io <- compare <- uff, tidy_csv.
+The HDF5 files also open as netCDF-4 in xarray (``engine="h5netcdf"``, ``group="runs/<run_id>"``):
+see :mod:`rotorcheck.sweep.hdf5io`.
+
+Imports run downwards only: format <- validation <- hdf5io <- compare <- uff, tidy_csv, wide_csv
+<- convert.
 """
 
 from rotorcheck.sweep.compare import compare_sweeps

@@ -7,6 +7,17 @@ The writer writes version 1 exactly as before unless a run needs version 2
 (:attr:`~rotorcheck.sweep.format.Run.needs_v2`: several patterns, FRF-only, ``input_var``,
 ``frf_var`` or ``noise_source``); it is atomic (:func:`rotorcheck.fileio.atomic_path`) and refuses
 to overwrite unless ``force=True``.
+
+netCDF-4 view (xarray ``engine="h5netcdf"``): the writer labels every axis with an HDF5 dimension
+scale, so ``xarray.open_dataset(path, engine="h5netcdf", group="runs/<run_id>")`` shows
+``frequency`` as the coordinate (``units`` "Hz") and each data variable with its ``units``
+(:data:`DATASET_UNITS`; ``period_phasor`` mixes N and m, its unit is per channel in
+``/channels/unit``). The axes shared by all runs are root-level netCDF dimensions without a
+variable (empty float32 datasets, netCDF-4's convention): ``channel`` (the channel table, also the
+dimension of ``/channels/*``), ``input``, ``output``; the axes whose length is per run are
+``pattern_<n_exc>`` (version 2) and ``period_<p>``. Nothing is added inside ``/runs`` or a run
+group (the contract's names only); complex128 stays the h5py compound (r, i), which h5netcdf and
+xarray read as complex. The reader ignores the labels.
 """
 
 from __future__ import annotations
@@ -292,6 +303,66 @@ def _put(grp: h5py.Group, name: str, data: np.ndarray) -> None:
     grp.create_dataset(name, data=data, track_times=False)
 
 
+#: ``units`` attribute of each run dataset (the netCDF view); ``period_phasor`` has none (N or m by channel)
+DATASET_UNITS = {
+    "frequency": "Hz",
+    "input_phasor": "N",
+    "output_phasor": "m",
+    "output_var": "m^2",
+    "input_var": "N^2",
+    "n_periods": "1",
+    "frf": "m/N",
+    "frf_var": "m^2/N^2",
+}
+#: the axes after ``frequency`` of each run dataset (``pattern``/``period`` get their length appended);
+#: in version 2 the phasor datasets (:data:`PATTERN_ATTRS`) have ``pattern`` first
+_AXES = {
+    "input_phasor": ("input",),
+    "output_phasor": ("output",),
+    "output_var": ("output",),
+    "input_var": ("input",),
+    "n_periods": (),
+    "frf": ("output", "input"),
+    "frf_var": ("output", "input"),
+    "period_phasor": ("period", "channel"),
+}
+#: netCDF-4's NAME of a dimension scale that is not a variable (followed by the length, 10 wide)
+_NOT_A_VARIABLE = "This is a netCDF dimension but not a netCDF variable."
+
+
+def _label_for_netcdf(h5: h5py.File, version: int) -> None:
+    """Attach dimension scales and ``units`` (module docstring: the netCDF-4 view)."""
+    dims: dict[str, h5py.Dataset] = {}
+
+    def dim(name: str, size: int) -> h5py.Dataset:
+        if name not in dims:
+            # attribute creation order tracked: a newer object header, so REFERENCE_LIST (one entry per
+            # attached dataset) may outgrow the 64 KiB of a compact attribute in a file of many runs
+            ds = h5.create_dataset(name, shape=(size,), dtype=">f4", track_times=False, track_order=True)
+            ds.make_scale(f"{_NOT_A_VARIABLE}{size:10d}")
+            dims[name] = ds
+        return dims[name]
+
+    ch = h5["channels"]
+    for fld in CHANNEL_FIELDS:
+        ch[fld].dims[0].attach_scale(dim("channel", ch[fld].shape[0]))
+    for g in h5["runs"].values():
+        freq = g["frequency"]
+        freq.make_scale("frequency")
+        freq.attrs["units"] = DATASET_UNITS["frequency"]
+        for name, axes in _AXES.items():
+            if name not in g:
+                continue
+            ds = g[name]
+            names = ("pattern", *axes) if version != SCHEMA_VERSION_V1 and name in PATTERN_ATTRS else axes
+            ds.dims[0].attach_scale(freq)
+            for axis, dname in enumerate(names, start=1):
+                size = int(ds.shape[axis])
+                ds.dims[axis].attach_scale(dim(f"{dname}_{size}" if dname in ("pattern", "period") else dname, size))
+            if name in DATASET_UNITS:
+                ds.attrs["units"] = DATASET_UNITS[name]
+
+
 def write_sweep(sweep: Sweep, path: str | os.PathLike[str], force: bool = False) -> None:
     """Validate and write ``sweep`` atomically (temp file in the same folder, fsync, rename).
 
@@ -337,6 +408,7 @@ def write_sweep(sweep: Sweep, path: str | os.PathLike[str], force: bool = False)
                         _put(g, "period_phasor", np.asarray(run.period_phasor, dtype=np.complex128))
                 else:
                     _write_run_v2(g, run)
+            _label_for_netcdf(h5, version)
 
 
 def _write_run_v2(g: h5py.Group, run: Run) -> None:
@@ -367,4 +439,4 @@ def sweep_sha256(path: str | os.PathLike[str]) -> str:
             h.update(chunk)
     return h.hexdigest()
 
-__all__ = ["read_sweep", "sweep_sha256", "write_sweep"]
+__all__ = ["DATASET_UNITS", "read_sweep", "sweep_sha256", "write_sweep"]
