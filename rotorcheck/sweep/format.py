@@ -526,6 +526,25 @@ class FrfTable:
     noise_source: str | None = None
 
 
+def imported_frf_only(file: str | os.PathLike[str], table: FrfTable, frf: np.ndarray, frf_var: np.ndarray | None,
+                      noise_source: str | None, what: str, reader: str) -> Run:
+    """An importer's FRF-only run from ``table`` (``what``: what it holds instead of phasors, e.g. "file
+    (no phasor records)"; ``reader``: the FRF-only reader to suggest): ``noise_source`` (else the
+    table's own) is required and checked."""
+    ns = noise_source if noise_source is not None else table.noise_source
+    if ns is None:
+        raise SweepFormatError(
+            file, "/",
+            f"run {table.run_id!r}: FRF-only {what} and no noise_source: pass noise_source ('measured' "
+            f"or 'assumed: <rule>', e.g. 'assumed: 1 % of |H| floor') to import it as an FRF-only run, or use "
+            f"{reader}",
+        )
+    why = noise_source_problem(ns)
+    if why is not None:
+        raise SweepFormatError(file, "/", f"run {table.run_id!r}: {why}")
+    return Run.frf_only(table.run_id, table.speed_rpm, table.frequency, frf, frf_var, noise_source=ns)
+
+
 def utc_now_iso() -> str:
     """Current UTC time as ISO 8601 with ``Z``, to the second (for ``created_utc``)."""
     return _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")

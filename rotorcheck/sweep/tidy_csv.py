@@ -35,7 +35,7 @@ from rotorcheck.sweep.format import (
     Run,
     Sweep,
     SweepFormatError,
-    noise_source_problem,
+    imported_frf_only,
     sweep_schema_version,
 )
 from rotorcheck.sweep.validation import validate_sweep
@@ -299,19 +299,8 @@ def import_tidy_csv(
         frf_var = None if tab.frf_var is None else tab.frf_var[:, oi][:, :, ii]
         ph = phas[rid]
         if ph is None:
-            ns = noise_source if noise_source is not None else tab.noise_source
-            if ns is None:
-                what = "no phasor columns" if not phasor_cols else "empty phasor cells"
-                raise SweepFormatError(
-                    file, "/",
-                    f"run {rid!r}: FRF-only content ({what}) and no noise_source: pass noise_source "
-                    "('measured' or 'assumed: <rule>', e.g. 'assumed: 1 % of |H| floor') to import it "
-                    "as an FRF-only run, or use read_tidy_csv",
-                )
-            why = noise_source_problem(ns)
-            if why is not None:
-                raise SweepFormatError(file, "/", f"run {rid!r}: {why}")
-            runs[rid] = Run.frf_only(rid, tab.speed_rpm, tab.frequency, frf, frf_var, noise_source=ns)
+            what = "content (no phasor columns)" if not phasor_cols else "content (empty phasor cells)"
+            runs[rid] = imported_frf_only(file, tab, frf, frf_var, noise_source, what, "read_tidy_csv")
             continue
         if tab.output_var is None or tab.n_periods is None:
             raise SweepFormatError(file, "/", f"run {rid!r}: phasor cells without output_var/n_periods")

@@ -51,7 +51,7 @@ from rotorcheck.sweep.format import (
     Run,
     Sweep,
     SweepFormatError,
-    noise_source_problem,
+    imported_frf_only,
     sweep_schema_version,
 )
 from rotorcheck.sweep.validation import validate_sweep
@@ -441,18 +441,8 @@ def import_uff58(
         rec = per_run.get(rid, {})
         missing = [k for k in _PHASOR_KINDS if k not in rec]
         if len(missing) == len(_PHASOR_KINDS):
-            ns = noise_source if noise_source is not None else tab.noise_source
-            if ns is None:
-                raise SweepFormatError(
-                    file, "/",
-                    f"run {rid!r}: FRF-only file (no {list(_PHASOR_KINDS)} records) and no noise_source: "
-                    "pass noise_source ('measured' or 'assumed: <rule>', e.g. 'assumed: 1 % of |H| floor') "
-                    "to import it as an FRF-only run, or use read_uff58_frf",
-                )
-            why = noise_source_problem(ns)
-            if why is not None:
-                raise SweepFormatError(file, "/", f"run {rid!r}: {why}")
-            runs[rid] = Run.frf_only(rid, tab.speed_rpm, tab.frequency, frf, frf_var, noise_source=ns)
+            what = f"file (no {list(_PHASOR_KINDS)} records)"
+            runs[rid] = imported_frf_only(file, tab, frf, frf_var, noise_source, what, "read_uff58_frf")
             continue
         if missing:
             raise SweepFormatError(file, "/", f"run {rid!r}: no {missing} records (phasor records incomplete)")
