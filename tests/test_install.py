@@ -23,28 +23,10 @@ from pathlib import Path
 import pytest
 
 from rotorcheck import resources
+from tests.test_samples import CLI_MD_CONFIGS, CLI_MD_SAMPLES  # cli.md "Bundled files", copied once
 
 ROOT = Path(__file__).resolve().parents[1]
 SPEC = ROOT.parent / "shared" / "spec" / "cli.md"
-
-# cli.md, "Bundled files (names are a contract ...)", copied verbatim
-CLI_MD_CONFIGS = (
-    "crack_rig.yaml",
-    "crack_rig_truth.yaml",
-    "three_mass_trial1.yaml",
-    "three_mass_trial2.yaml",
-    "three_mass_trial3.yaml",
-    "three_mass_truth.yaml",
-)
-CLI_MD_SAMPLES = (
-    "crack_rig/healthy_0rpm.h5",
-    "crack_rig/open_crack_0rpm.h5",
-    "crack_rig/healthy_1000rpm.h5",
-    "crack_rig/breathing_crack_1000rpm.h5",
-    "crack_rig/healthy_1000rpm_repeat.h5",
-    "three_mass/healthy.h5",
-    "three_mass/damaged.h5",
-)
 
 #: what the wheel is built from (copied out of the checkout, so no build/ or egg-info lands in it)
 SOURCE_ITEMS = ("pyproject.toml", "README.md", "MANIFEST.in", "setup.py", "setup.cfg", "rotorcheck", "configs",
