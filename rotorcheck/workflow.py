@@ -731,6 +731,7 @@ class DetectionOutcome:
     anchored_noise_only: Any = None  # the anchored bound over the noise alone (measured)
     joint: Any = None  # robust.joint.JointResult (the joint test, when it decided)
     beyond_benign: Any = None  # robust.real_box.BoxCertificate: per-point certificate beyond benign change
+    damage_xy: np.ndarray | None = None  # (f, 2, 2) N/m: D at the damage station in x and y (several pairs)
 
     @property
     def exit_code(self) -> int:
@@ -804,6 +805,9 @@ class DetectionOutcome:
             rem = np.asarray(np.asarray(j.remaining, dtype=bool).reshape(-1, f.size).any(axis=0))  # any channel pair
             rep.fault_beyond_benign = rem
             rep.fault_beyond_benign_frequencies_hz = [float(x) for x in f[rem]]
+        if self.damage_xy is not None:
+            rep.damage_dynamics_by_direction = {
+                d: {"re": self.damage_xy[:, k, k].real, "im": self.damage_xy[:, k, k].imag} for k, d in enumerate("xy")}
         c = self.beyond_benign
         if c is not None:
             rep.beyond_benign_rule, rep.beyond_benign_status = c.rule, [str(x) for x in c.status]
@@ -875,6 +879,46 @@ def baseline_for_speed(bases: list[Any], rig: RigConfig, run: MeasuredRun, basel
                          f"{baseline_path} holds " + ", ".join(f"{b.run_id} ({b.speed_rpm:g} rpm)" for b in bases)
                          + f" (speed tolerance +-{tol:g} rpm)")
     return min(ok, key=lambda b: abs(b.speed_rpm - run.speed_rpm))
+
+
+def damage_per_direction(rig: RigConfig, run: MeasuredRun, healthy_frf: np.ndarray) -> np.ndarray | None:
+    """With several channel pairs: the damage dynamics at the damage port's station in x and y, (f, 2, 2)
+    N/m (rows and columns x, y; a stiffness loss is positive on the diagonal), eq. 3.11 in matrix form
+    anchored at the measured healthy FRF: ``D = [E12 (T - T_h)^+ E21 + E11]^-1`` with the model's
+    receptances between the damage DOFs and the channels. None with one pair or no damage port, or
+    when the pairs are not every output against every input."""
+    from rotorcheck.config import Port
+    from rotorcheck.nominal import ChannelPair, pair_receptance, port_label
+    from rotorcheck.robust.identify import damage_dynamics
+
+    if run.n_pairs < 2 or rig.damage is None or rig.kind != "rotor" or run.frf_pairs is None:
+        return None
+    outs = list(dict.fromkeys(port_label(p.output) for p in run.pairs))
+    ins = list(dict.fromkeys(port_label(p.input) for p in run.pairs))
+    if len(run.pairs) != len(outs) * len(ins):
+        return None
+    by_label = {port_label(p.output): p.output for p in run.pairs} | {port_label(p.input): p.input for p in run.pairs}
+    station = rig.damage.port.station
+    dmg = [Port(station=station, direction=d) for d in ("x", "y")]
+    f, nf = run.frequency_hz, run.frequency_hz.size
+    T = np.zeros((nf, len(outs), len(ins)), complex)
+    Th = np.zeros_like(T)
+    th = np.asarray(healthy_frf).reshape(nf, -1)
+    for k, p in enumerate(run.pairs):
+        o, i = outs.index(port_label(p.output)), ins.index(port_label(p.input))
+        T[:, o, i], Th[:, o, i] = run.frf_pairs[:, k], th[:, k]
+    cross = ([ChannelPair(a, b, "") for a in dmg for b in dmg]
+             + [ChannelPair(a, by_label[i], "") for a in dmg for i in ins]
+             + [ChannelPair(by_label[o], b, "") for o in outs for b in dmg])
+    H = pair_receptance(rig, f, run.speed_rpm, cross)
+    E11 = H[:, :4].reshape(nf, 2, 2)
+    E12 = H[:, 4:4 + 2 * len(ins)].reshape(nf, 2, len(ins))
+    E21 = H[:, 4 + 2 * len(ins):].reshape(nf, len(outs), 2)
+    with np.errstate(all="ignore"):
+        try:
+            return np.asarray(damage_dynamics(E11, E12, E21, Th, T))
+        except np.linalg.LinAlgError:
+            return None
 
 
 def parse_port(text: str, option: str = "--port") -> Any:
@@ -1025,8 +1069,15 @@ def detect(
         if certified is not None:
             beyond = certified[0]
             notes.extend(certified[1])
+    damage_xy = None
+    if identifiable and baseline.enclose == "measured" and run.n_pairs > 1:
+        damage_xy = damage_per_direction(rig, run, np.asarray(baseline.healthy_frf))
+        if damage_xy is not None:
+            notes.append("damage_dynamics_by_direction: D at the damage station in x and y from every channel "
+                         "pair (eq. 3.11 in matrix form, least squares, anchored at the measured healthy FRF; no "
+                         "bound yet)")
     return DetectionOutcome(rig, baseline, run, model, det, ver, damage, dset, anchored, anchored_set, notes,
-                            measured, noise_only, joint, beyond)
+                            measured, noise_only, joint, beyond, damage_xy)
 
 
 def benign_table(joint: Any, rig: RigConfig) -> list[dict[str, Any]]:

@@ -150,3 +150,41 @@ def test_xy_at_standstill_where_the_cross_pairs_are_silent() -> None:
     nf = h.frequency_hz.size
     assert all(np.all(S[:, k * nf:(k + 1) * nf] == 0) for k in silent)
     assert res.detection.n_fault > out["crack_rig"][1].detection.n_fault
+
+
+def test_damage_dynamics_per_direction_recovers_a_spring_at_the_damage_port() -> None:
+    """Noiseless FRFs of the nominal model by dense solves, before and after a stiffness loss of 2e5 N/m
+    at station 4 in x only: D_xx = 2e5 N/m (to 1e-3: the engine's model receptances against dense
+    solves), D_yy and the cross terms below 1e-6 of it, at every frequency, 1000 rpm (gyroscopic
+    coupling of x and y)."""
+    from pathlib import Path as P
+
+    from rotorcheck.fe.assembly import build_system
+    from rotorcheck.fe.system import RPM_TO_RAD_S
+    from rotorcheck.nominal import ChannelPair
+
+    rig = load_config(configs_dir() / "crack_rig.yaml")
+    speed, f = 1000.0, np.linspace(30.0, 600.0, 40)
+    ins, outs = ACTUATORS, SENSORS
+    pairs = [ChannelPair(outs[0], ins[0], "io")] + [ChannelPair(o, i, f"{k}") for k, (o, i) in enumerate(
+        (o, i) for o in outs for i in ins) if (o, i) != (outs[0], ins[0])]
+    sys_ = build_system(rig)
+    M, C, G, K = sys_.matrices(speed)
+    D = C + speed * RPM_TO_RAD_S * G
+    dx = sys_.port_dof(Port(station=4, direction="x"))
+
+    def frfs(loss: float) -> np.ndarray:
+        Kd = K.copy()
+        Kd[dx, dx] -= loss
+        H = [np.linalg.inv(Kd - (2 * np.pi * x) ** 2 * M + 2j * np.pi * x * D) for x in f]
+        return np.array([[h[sys_.port_dof(p.output), sys_.port_dof(p.input)] for p in pairs] for h in H])
+
+    Th, Tn = frfs(0.0), frfs(2.0e5)
+    zeros = np.zeros(Tn.shape)
+    run = workflow.MeasuredRun(P("x.h5"), "", rig.rig_id, "r", speed, f, np.ones(f.size, complex), Tn[:, 0],
+                               np.zeros(f.size), np.zeros(f.size, int), (30.0, 600.0), pairs=tuple(pairs),
+                               frf_pairs=Tn, var_pairs=zeros, dof_pairs=zeros)
+    Dd = workflow.damage_per_direction(rig, run, Th)
+    assert Dd is not None and Dd.shape == (f.size, 2, 2)
+    assert np.max(np.abs(Dd[:, 0, 0] / 2.0e5 - 1)) < 1e-3
+    assert np.max(np.abs(Dd[:, 1, 1])) < 1e-6 * 2.0e5 and np.max(np.abs(Dd[:, [0, 1], [1, 0]])) < 1e-6 * 2.0e5
