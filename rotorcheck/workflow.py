@@ -571,9 +571,19 @@ def validate(
     V: float | np.ndarray = noise_values(noise_bound)
     if not isinstance(V, float):  # per-point: every healthy run's own V(w), the largest per point
         V = np.max(np.array([noise_values(noise_bound, r) for r in runs], dtype=float), axis=0)
-    res = validation.validate(model.me, [r.W for r in runs], [r.Zt for r in runs], V,
-                              enclose="system" if enclose == "measured" else enclose,
-                              structure=parameter_structure(model, enclose), fail_at=fail_at)
+    if enclose != "measured" and first.n_pairs > 1:
+        # several channel pairs against the model: one experiment per input (unit force), the additive
+        # full block over all outputs and inputs, the noise per point from the stored variances
+        if enclose == "system" or model.structure != "additive":
+            raise InputError(None, "--enclose", f"with several channel pairs only '--enclose data' (additive "
+                             f"uncertainty) or 'measured' is built; got {enclose!r} ({model.structure})")
+        exps = [pair_experiments(rig, r) for r in runs]
+        res = validation.validate(exps[0][0], [w for e in exps for w in e[1]], [z for e in exps for z in e[2]],
+                                  np.max([e[3] for e in exps], axis=0), enclose="data", fail_at=fail_at)
+    else:
+        res = validation.validate(model.me, [r.W for r in runs], [r.Zt for r in runs], V,
+                                  enclose="system" if enclose == "measured" else enclose,
+                                  structure=parameter_structure(model, enclose), fail_at=fail_at)
     healthy = healthy_estimate(runs)
     upd = None
     if update:
@@ -881,6 +891,53 @@ def baseline_for_speed(bases: list[Any], rig: RigConfig, run: MeasuredRun, basel
     return min(ok, key=lambda b: abs(b.speed_rpm - run.speed_rpm))
 
 
+def pair_experiments(rig: RigConfig, run: MeasuredRun, confidence: float = 0.99
+                     ) -> tuple[np.ndarray, list[np.ndarray], list[np.ndarray], np.ndarray]:
+    """A several-pair run as experiments for the model-centred modes (``--enclose data``): ``(Me, W, Z,
+    V)`` with Me the additive uncertainty on the model's FRF matrix (f, n_out, n_in), one experiment per
+    input (unit force, W (f, n_in); Z the measured FRF column (f, n_out)) and V (f,) m/N the noise bound
+    per point: the largest pair's standard deviation times the complex-Gaussian quantile, Sidak over
+    every point and pair at ``confidence``."""
+    from rotorcheck.nominal import pair_receptance, port_label
+    from rotorcheck.robust.lft import additive_me
+    from rotorcheck.robust.noise import point_miss
+
+    if run.frf_pairs is None or run.var_pairs is None:
+        raise InputError(run.path, "/channels", "one channel pair: no experiments to form")
+    outs = list(dict.fromkeys(port_label(p.output) for p in run.pairs))
+    ins = list(dict.fromkeys(port_label(p.input) for p in run.pairs))
+    if len(run.pairs) != len(outs) * len(ins):
+        raise InputError(run.path, "/channels", "the channel pairs are not every output against every input")
+    nf = run.frequency_hz.size
+    G = pair_receptance(rig, run.frequency_hz, run.speed_rpm, run.pairs)
+    T = np.zeros((nf, len(outs), len(ins)), complex)
+    Gm = np.zeros_like(T)
+    for k, p in enumerate(run.pairs):
+        o, i = outs.index(port_label(p.output)), ins.index(port_label(p.input))
+        T[:, o, i], Gm[:, o, i] = run.frf_pairs[:, k], G[:, k]
+    q = float(np.sqrt(-np.log(point_miss(confidence, nf * len(run.pairs)))))
+    V = q * np.sqrt(np.max(run.var_pairs, axis=1))
+    W = [np.broadcast_to(np.eye(len(ins), dtype=complex)[i], (nf, len(ins))).copy() for i in range(len(ins))]
+    return additive_me(Gm), W, [T[:, :, i] for i in range(len(ins))], V
+
+
+def _worst_detection(dets: list[Any]) -> Any:
+    """One per-point detection from several experiments': a point is a fault when any experiment's is;
+    the required gamma is the largest."""
+    from rotorcheck.robust.validation import DetectionResult
+
+    if len(dets) == 1:
+        return dets[0]
+    fault = np.any([d.fault for d in dets], axis=0)
+    lo = np.max([d.gamma_required for d in dets], axis=0)
+    up = np.max([d.gamma_required_upper for d in dets], axis=0)
+    status = np.where(fault, "fault", dets[0].status).astype("<U13")
+    for d in dets:
+        status = np.where(~fault & (d.status != "ok"), d.status, status)
+    return DetectionResult(lo, up, dets[0].gamma_healthy, fault, status, dets[0].rtol,
+                           sum(d.n_solver_calls for d in dets), dets[0].reason)
+
+
 def damage_per_direction(rig: RigConfig, run: MeasuredRun, healthy_frf: np.ndarray) -> np.ndarray | None:
     """With several channel pairs: the damage dynamics at the damage port's station in x and y, (f, 2, 2)
     N/m (rows and columns x, y; a stiffness loss is positive on the diagonal), eq. 3.11 in matrix form
@@ -1000,6 +1057,11 @@ def detect(
         if run.harmonics_removed == 0 and run.speed_rpm != 0.0:
             notes.append("the sweep stores no per-period phasors: shaft-speed harmonics (1X, 2X, ...) could not "
                          "be removed; with a free-running start angle they may show as differences near kX")
+    elif run.n_pairs > 1:
+        me, Ws, Zs, Vp = pair_experiments(rig, run)
+        dets = [validation.detect(me, w, z, Vp, baseline.gamma, fail_at=fail_at) for w, z in zip(Ws, Zs)]
+        det = _worst_detection(dets)
+        ver = validation.verdict(det.fault, det.status, baseline.gamma_status)
     else:
         det = validation.detect(model.me, run.W, run.Zt, _baseline_v(baseline, run), baseline.gamma,
                                 parameter_structure(model, baseline.enclose), fail_at=fail_at)

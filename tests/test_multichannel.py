@@ -188,3 +188,26 @@ def test_damage_dynamics_per_direction_recovers_a_spring_at_the_damage_port() ->
     assert Dd is not None and Dd.shape == (f.size, 2, 2)
     assert np.max(np.abs(Dd[:, 0, 0] / 2.0e5 - 1)) < 1e-3
     assert np.max(np.abs(Dd[:, 1, 1])) < 1e-6 * 2.0e5 and np.max(np.abs(Dd[:, [0, 1], [1, 0]])) < 1e-6 * 2.0e5
+
+
+def test_enclose_data_with_several_pairs_brackets_the_closed_form(files) -> None:  # type: ignore[no-untyped-def]
+    """`--enclose data` on the 4 x 2 sweep: one experiment per input (unit force) against the additive
+    full block over the model's FRF matrix. With W = e_i only column i of Delta acts, so the smallest
+    sigma_max(Delta) per experiment is sqrt(sum_o max(0, |r_oi| - V)^2) (r: the data minus the model);
+    gamma_h (max over the experiments) is bracketed by the LMI's certified lower and verified upper bounds
+    at every point; `system` with several pairs is refused."""
+    nominal = load_config(configs_dir() / "crack_rig.yaml")
+    run = workflow.load_run(files["xy_healthy"], nominal)
+    me, W, Z, V = workflow.pair_experiments(nominal, run)
+    n_in, n_out = len(W), Z[0].shape[1]
+    G = me[:, n_in:, n_out:]  # the model's FRF matrix inside Me = [[0, I_in], [I_out, G]]
+    ref = np.max([np.sqrt(np.sum(np.maximum(np.abs(z - G[:, :, i]) - V[:, None], 0.0) ** 2, axis=1))
+                  for i, z in enumerate(Z)], axis=0)
+    val = workflow.validate(nominal, [run], workflow.fit_noise(run), enclose="data")
+    res = val.result
+    ok = res.status == "ok"
+    assert ok.mean() > 0.95
+    assert np.all(res.gamma_lower[ok] <= ref[ok] * (1 + 1e-6))
+    assert np.all(res.gamma_upper[ok] >= ref[ok] * (1 - 1e-6))
+    with pytest.raises(workflow.InputError, match="--enclose"):
+        workflow.validate(nominal, [run], workflow.fit_noise(run), enclose="system")
