@@ -574,12 +574,12 @@ def validate(
     if enclose != "measured" and first.n_pairs > 1:
         # several channel pairs against the model: one experiment per input (unit force), the additive
         # full block over all outputs and inputs, the noise per point from the stored variances
-        if enclose == "system" or model.structure != "additive":
-            raise InputError(None, "--enclose", f"with several channel pairs only '--enclose data' (additive "
-                             f"uncertainty) or 'measured' is built; got {enclose!r} ({model.structure})")
+        if model.structure != "additive":
+            raise InputError(None, "--enclose", f"with several channel pairs the model-centred modes need "
+                             f"additive uncertainty (this rig: {model.structure}); use 'measured'")
         exps = [pair_experiments(rig, r) for r in runs]
         res = validation.validate(exps[0][0], [w for e in exps for w in e[1]], [z for e in exps for z in e[2]],
-                                  np.max([e[3] for e in exps], axis=0), enclose="data", fail_at=fail_at)
+                                  np.max([e[3] for e in exps], axis=0), enclose=enclose, fail_at=fail_at)
     else:
         res = validation.validate(model.me, [r.W for r in runs], [r.Zt for r in runs], V,
                                   enclose="system" if enclose == "measured" else enclose,

@@ -136,6 +136,22 @@ def gamma_enclose_system_siso(me: np.ndarray, W: np.ndarray, Zt: np.ndarray,
     return out
 
 
+def gamma_enclose_system_additive(G: np.ndarray, W: np.ndarray, Zt: np.ndarray,
+                                  noise_bound: float | np.ndarray) -> np.ndarray:
+    """Smallest g such that every output in the data polydisc ``{Z : |Z_o - Zt_o| <= V}`` is
+    ``(G + Delta) W`` for some full block ``sigma_max(Delta) <= g`` (additive uncertainty, several outputs
+    and inputs): ``{Delta W}`` is the ball of radius ``g |W|``, so ``g = sqrt(sum_o (|Zt_o - (G W)_o| +
+    V)^2) / |W|``. ``G`` (f, n_out, n_in), ``W`` (f, n_in), ``Zt`` (f, n_out), V scalar or (f,); (f,)."""
+    G = np.asarray(G, dtype=complex)
+    W = np.asarray(W, dtype=complex).reshape(G.shape[0], G.shape[2])
+    Zt = np.asarray(Zt, dtype=complex).reshape(G.shape[0], G.shape[1])
+    V = np.broadcast_to(np.asarray(noise_bound, dtype=float), (G.shape[0],))
+    r = np.abs(Zt - np.einsum("fij,fj->fi", G, W))
+    nw = np.linalg.norm(W, axis=1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(nw > 0, np.sqrt(np.sum((r + V[:, None]) ** 2, axis=1)) / nw, np.inf)
+
+
 def damage_disk_additive(T: np.ndarray, E11: np.ndarray, E12: np.ndarray, E21: np.ndarray,
                          E22: np.ndarray, r: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """method.md's additive closed form for the identified-damage disk (test oracle).

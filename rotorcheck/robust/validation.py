@@ -29,7 +29,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from rotorcheck.robust.closed_form import gamma_enclose_system_siso
+from rotorcheck.robust.closed_form import gamma_enclose_system_additive, gamma_enclose_system_siso
 from rotorcheck.robust.lft import as_freq_matrix
 from rotorcheck.robust.mu.structure import (
     DEFAULT_BACKEND,
@@ -156,6 +156,16 @@ def validate(me: np.ndarray, W: np.ndarray | Sequence[np.ndarray],
     return ValidationResult(gam, lo, up, status, enclose, V, calls, per, reason)
 
 
+def _additive_shape(M: np.ndarray, W: np.ndarray, Zt: np.ndarray, f: int) -> bool:
+    """Whether ``M`` is the additive uncertainty's ``[[0, I_in], [I_out, G]]`` for the data's sizes."""
+    n_in = np.asarray(W).reshape(f, -1).shape[1]
+    n_out = np.asarray(Zt).reshape(f, -1).shape[1]
+    if M.shape[1:] != (n_in + n_out, n_out + n_in):
+        return False
+    return (np.allclose(M[:, :n_in, :n_out], 0) and np.allclose(M[:, :n_in, n_out:], np.eye(n_in))
+            and np.allclose(M[:, n_in:, :n_out], np.eye(n_out)))
+
+
 def _enclose_system(me: np.ndarray, W: np.ndarray, Zt: np.ndarray, V: float | np.ndarray,
                     structure: Structure | None, f: int, fail_at: Collection[int]
                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -165,6 +175,16 @@ def _enclose_system(me: np.ndarray, W: np.ndarray, Zt: np.ndarray, V: float | np
     so gamma is that divided by the block weight."""
     M = as_freq_matrix(me, f)
     blocks = (structure or Structure()).blocks
+    if M.shape[1:] != (2, 2) and blocks is None and _additive_shape(M, W, Zt, f):
+        # several outputs/inputs, additive full block (Me = [[0, I], [I, G]]): closed form
+        n_in = np.asarray(W).reshape(f, -1).shape[1]
+        n_out = np.asarray(Zt).reshape(f, -1).shape[1]
+        g = gamma_enclose_system_additive(M[:, n_in:, n_out:], W, Zt, V)
+        st = np.asarray(np.where(np.isfinite(g), STATUS_OK, STATUS_UNEXPLAINABLE), dtype="<U13")
+        reason = np.full(f, "", dtype=object)
+        for i in set(int(j) for j in fail_at):
+            st[i], g[i], reason[i] = STATUS_FAILED, np.nan, "injected failure (testing hook)"
+        return g, st, reason
     if M.shape[1:] != (2, 2) or (blocks is not None and len(blocks) != 1):
         raise NotImplementedError(
             "enclose='system' is implemented for SISO data with one complex scalar "
