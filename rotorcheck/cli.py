@@ -564,6 +564,9 @@ def simulate(
     check_writable([output], force)
     rig_path = rig if rig is not None else configs_dir() / "crack_rig_truth.yaml"
     cfg = workflow.load_rig(rig_path)
+    if (f_min is None or f_max is None) and "band_hz" not in cfg.analysis.model_fields_set:
+        err.print(f"{rig_path}: no analysis.band_hz; simulating {cfg.analysis.band_hz[0]:g}-"
+                  f"{cfg.analysis.band_hz[1]:g} Hz (default)")
     f_min = cfg.analysis.band_hz[0] if f_min is None else f_min
     f_max = cfg.analysis.band_hz[1] if f_max is None else f_max
     if points is None:

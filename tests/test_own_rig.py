@@ -43,3 +43,16 @@ def test_a_rig_without_measurement_noise_warns(tmp_path: Path, capsys: pytest.Ca
     quiet.write_text(RIG.read_text().replace("output_noise_std: 1.0e-7", "output_noise_std: 0.0"))
     assert main(["simulate", str(tmp_path / "q.h5"), "--rig", str(quiet), "--points", "5"]) == EXIT_OK
     assert "noise-free" in capsys.readouterr().err
+
+
+def test_a_rig_without_band_says_which_it_uses(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    text = RIG.read_text()
+    start = text.index("analysis:")
+    end = text.index("variability:")
+    bare = tmp_path / "bare.yaml"
+    bare.write_text(text[:start] + text[end:])
+    assert main(["simulate", str(tmp_path / "b.h5"), "--rig", str(bare), "--points", "5"]) == EXIT_OK
+    err = capsys.readouterr().err
+    assert "no analysis.band_hz; simulating 30-600 Hz (default)" in err
+    f = next(iter(read_sweep(tmp_path / "b.h5").runs.values())).frequency
+    assert (f[0], f[-1]) == (30.0, 600.0)
