@@ -124,8 +124,9 @@ def model(
     rig_path = rig if rig is not None else default_rig_path("crack_rig")
     from rotorcheck.workflow import plot_formats
 
-    result = model_report(rig_path, speed_rpm=speed, out_dir=out if plots else None, force=force,
-                          formats=plot_formats(plot_format))
+    with _progress(f"solving the model of {rig_path}" + (" and plotting" if plots else "")):
+        result = model_report(rig_path, speed_rpm=speed, out_dir=out if plots else None, force=force,
+                              formats=plot_formats(plot_format))
     summary = result["summary"]
     for at in summary.get("at_speeds", [summary]):
         table = Table(title=f"{summary['rig_id']} at {at['speed_rpm']:g} rpm", title_justify="left")
@@ -245,8 +246,9 @@ def crack(
     from rotorcheck.workflow import crack_report, plot_formats
 
     rig_path = rig if rig is not None else configs_dir() / "crack_rig_truth.yaml"
-    doc = crack_report(rig_path, fault=fault, unbalance_g_m=unbalance, out_dir=out, force=force,
-                       formats=plot_formats(plot_format))
+    with _progress(f"the cracked rotor ({fault}): harmonic balance, orbits, spectra"):
+        doc = crack_report(rig_path, fault=fault, unbalance_g_m=unbalance, out_dir=out, force=force,
+                           formats=plot_formats(plot_format))
     for key, h in doc["harmonics"].items():
         amps = ", ".join(f"{n}X {x * 1e6:.3g}" for n, x in zip(h["order"][1:5], h["x_m"][1:5]))
         err.print(f"{key:16s} x at station {doc['station']} (um): {amps}")
