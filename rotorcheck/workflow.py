@@ -741,7 +741,7 @@ class DetectionOutcome:
     anchored_noise_only: Any = None  # the anchored bound over the noise alone (measured)
     joint: Any = None  # robust.joint.JointResult (the joint test, when it decided)
     beyond_benign: Any = None  # robust.real_box.BoxCertificate: per-point certificate beyond benign change
-    damage_xy: np.ndarray | None = None  # (f, 2, 2) N/m: D at the damage station in x and y (several pairs)
+    damage_xy: Any = None  # DirectionalDamage: D at the damage station in x and y (several pairs)
 
     @property
     def exit_code(self) -> int:
@@ -815,9 +815,13 @@ class DetectionOutcome:
             rem = np.asarray(np.asarray(j.remaining, dtype=bool).reshape(-1, f.size).any(axis=0))  # any channel pair
             rep.fault_beyond_benign = rem
             rep.fault_beyond_benign_frequencies_hz = [float(x) for x in f[rem]]
-        if self.damage_xy is not None:
+        dxy = self.damage_xy
+        if dxy is not None:
             rep.damage_dynamics_by_direction = {
-                d: {"re": self.damage_xy[:, k, k].real, "im": self.damage_xy[:, k, k].imag} for k, d in enumerate("xy")}
+                d: {"re": dxy.estimate[:, k, k].real, "im": dxy.estimate[:, k, k].imag,
+                    "re_interval": [dxy.re_interval[0][:, k], dxy.re_interval[1][:, k]],
+                    "im_interval": [dxy.im_interval[0][:, k], dxy.im_interval[1][:, k]],
+                    "interval_confidence": 0.95, "interval_draws": dxy.draws} for k, d in enumerate("xy")}
         c = self.beyond_benign
         if c is not None:
             rep.beyond_benign_rule, rep.beyond_benign_status = c.rule, [str(x) for x in c.status]
@@ -938,12 +942,28 @@ def _worst_detection(dets: list[Any]) -> Any:
                            sum(d.n_solver_calls for d in dets), dets[0].reason)
 
 
-def damage_per_direction(rig: RigConfig, run: MeasuredRun, healthy_frf: np.ndarray) -> np.ndarray | None:
+@dataclass
+class DirectionalDamage:
+    """The damage dynamics at the damage station in x and y from several channel pairs: ``estimate``
+    (f, 2, 2) N/m, and per direction (columns x, y) the 95 % intervals of the real and imaginary parts of
+    the diagonal, (f, 2) each, by Monte Carlo over both sweeps' noise (complex Gaussian with the stored
+    variances; the model's receptances to and from the damage station taken as exact)."""
+
+    estimate: np.ndarray
+    re_interval: tuple[np.ndarray, np.ndarray]
+    im_interval: tuple[np.ndarray, np.ndarray]
+    draws: int
+
+
+def damage_per_direction(rig: RigConfig, run: MeasuredRun, healthy_frf: np.ndarray,
+                         healthy_var: np.ndarray | None = None, draws: int = 200, seed: int = 20261124
+                         ) -> DirectionalDamage | None:
     """With several channel pairs: the damage dynamics at the damage port's station in x and y, (f, 2, 2)
     N/m (rows and columns x, y; a stiffness loss is positive on the diagonal), eq. 3.11 in matrix form
     anchored at the measured healthy FRF: ``D = [E12 (T - T_h)^+ E21 + E11]^-1`` with the model's
-    receptances between the damage DOFs and the channels. None with one pair or no damage port, or
-    when the pairs are not every output against every input."""
+    receptances between the damage DOFs and the channels, and its Monte Carlo intervals
+    (:class:`DirectionalDamage`; ``healthy_var`` (f, P) the healthy FRF's variance, none: no interval).
+    None with one pair or no damage port, or when the pairs are not every output against every input."""
     from rotorcheck.config import Port
     from rotorcheck.nominal import ChannelPair, pair_receptance, port_label
     from rotorcheck.robust.identify import damage_dynamics
@@ -958,12 +978,17 @@ def damage_per_direction(rig: RigConfig, run: MeasuredRun, healthy_frf: np.ndarr
     station = rig.damage.port.station
     dmg = [Port(station=station, direction=d) for d in ("x", "y")]
     f, nf = run.frequency_hz, run.frequency_hz.size
-    T = np.zeros((nf, len(outs), len(ins)), complex)
-    Th = np.zeros_like(T)
-    th = np.asarray(healthy_frf).reshape(nf, -1)
-    for k, p in enumerate(run.pairs):
-        o, i = outs.index(port_label(p.output)), ins.index(port_label(p.input))
-        T[:, o, i], Th[:, o, i] = run.frf_pairs[:, k], th[:, k]
+    idx = [(outs.index(port_label(p.output)), ins.index(port_label(p.input))) for p in run.pairs]
+
+    def matrix(cols: np.ndarray) -> np.ndarray:
+        """(..., f, P) -> (..., f, n_out, n_in)"""
+        out = np.zeros((*cols.shape[:-1], len(outs), len(ins)), dtype=cols.dtype)
+        for k, (o, i) in enumerate(idx):
+            out[..., o, i] = cols[..., k]
+        return out
+
+    T = matrix(np.asarray(run.frf_pairs))
+    Th = matrix(np.asarray(healthy_frf).reshape(nf, -1))
     cross = ([ChannelPair(a, b, "") for a in dmg for b in dmg]
              + [ChannelPair(a, by_label[i], "") for a in dmg for i in ins]
              + [ChannelPair(by_label[o], b, "") for o in outs for b in dmg])
@@ -971,11 +996,35 @@ def damage_per_direction(rig: RigConfig, run: MeasuredRun, healthy_frf: np.ndarr
     E11 = H[:, :4].reshape(nf, 2, 2)
     E12 = H[:, 4:4 + 2 * len(ins)].reshape(nf, 2, len(ins))
     E21 = H[:, 4 + 2 * len(ins):].reshape(nf, len(outs), 2)
-    with np.errstate(all="ignore"):
-        try:
-            return np.asarray(damage_dynamics(E11, E12, E21, Th, T))
-        except np.linalg.LinAlgError:
-            return None
+
+    def solve(t: np.ndarray, th: np.ndarray, reps: int = 1) -> np.ndarray:
+        """D for ``reps`` stacked copies of the grid (draw after draw)."""
+        e11, e12, e21 = (np.tile(x, (reps, 1, 1)) for x in (E11, E12, E21))
+        with np.errstate(all="ignore"):
+            return np.asarray(damage_dynamics(e11, e12, e21, th.reshape(-1, *th.shape[-2:]),
+                                              t.reshape(-1, *t.shape[-2:])))
+
+    try:
+        est = solve(T, Th)
+    except np.linalg.LinAlgError:
+        return None
+    nan = np.full((nf, 2), np.nan)
+    if healthy_var is None or run.var_pairs is None or draws < 2:
+        return DirectionalDamage(est, (nan, nan), (nan, nan), 0)
+    rng = np.random.default_rng(seed)
+
+    def noisy(x: np.ndarray, var: np.ndarray) -> np.ndarray:
+        sd = np.sqrt(np.asarray(var).reshape(nf, -1) / 2.0)
+        return x + matrix(sd * (rng.standard_normal((draws, *sd.shape)) + 1j * rng.standard_normal((draws, *sd.shape))))
+
+    try:
+        sims = solve(noisy(T, run.var_pairs), noisy(Th, healthy_var), draws).reshape(draws, nf, 2, 2)
+    except np.linalg.LinAlgError:
+        return DirectionalDamage(est, (nan, nan), (nan, nan), 0)
+    diag = sims[:, :, [0, 1], [0, 1]]  # (draws, f, 2)
+    lo_re, hi_re = np.nanpercentile(diag.real, [2.5, 97.5], axis=0)
+    lo_im, hi_im = np.nanpercentile(diag.imag, [2.5, 97.5], axis=0)
+    return DirectionalDamage(est, (lo_re, hi_re), (lo_im, hi_im), draws)
 
 
 def parse_port(text: str, option: str = "--port") -> Any:
@@ -1133,11 +1182,14 @@ def detect(
             notes.extend(certified[1])
     damage_xy = None
     if identifiable and baseline.enclose == "measured" and run.n_pairs > 1:
-        damage_xy = damage_per_direction(rig, run, np.asarray(baseline.healthy_frf))
+        damage_xy = damage_per_direction(rig, run, np.asarray(baseline.healthy_frf),
+                                         np.asarray(baseline.healthy_frf_var))
         if damage_xy is not None:
             notes.append("damage_dynamics_by_direction: D at the damage station in x and y from every channel "
-                         "pair (eq. 3.11 in matrix form, least squares, anchored at the measured healthy FRF; no "
-                         "bound yet)")
+                         "pair (eq. 3.11 in matrix form, least squares, anchored at the measured healthy FRF); "
+                         "its intervals: 95 % by Monte Carlo over both sweeps' noise (complex Gaussian, the "
+                         "stored variances), the model's receptances to and from the damage station taken as "
+                         "exact: a statistical interval, not the exact set of the one-channel bound")
     return DetectionOutcome(rig, baseline, run, model, det, ver, damage, dset, anchored, anchored_set, notes,
                             measured, noise_only, joint, beyond, damage_xy)
 
