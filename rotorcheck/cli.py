@@ -296,8 +296,7 @@ def fit_noise(
         raise InputError(None, "--confidence", f"must be in (0, 1), got {confidence}")
     target = out / "baseline.h5"
     check_writable([target], force)
-    rig_path = workflow.resolve_rig(workflow.rig_for(rig, sweep_path, target), sweep_path)
-    cfg, mrun = workflow.load_rig_and_run(sweep_path, rig_path, run)
+    cfg, rig_path, (mrun,) = workflow.load_rig_and_runs(sweep_path, rig, target, run)
     nb = workflow.fit_noise(mrun, method=method, confidence=confidence, manual_m=value)
     base = workflow.noise_baseline(cfg, mrun, nb)
     base.extra["rig_path"] = str(Path(rig_path).resolve())  # later commands need no --rig
@@ -345,9 +344,9 @@ def validate(
 
     formats = workflow.plot_formats(plot_format)
     target = out / "baseline.h5"
-    rig_path = workflow.resolve_rig(workflow.rig_for(rig, sweeps[0], target), sweeps[0])
-    cfg = workflow.load_rig(rig_path)
-    run_ids = [run] if run is not None else workflow.run_ids(sweeps[0])
+    cfg, rig_path, firsts = workflow.load_rig_and_runs(sweeps[0], rig, target, run, every_run=True)
+    others = [workflow.read_runs(p, cfg, [r.run_id for r in firsts]) for p in sweeps[1:]]
+    run_ids = [r.run_id for r in firsts]
     noise = workflow.prior_noise(target, cfg, force)
     prior_run = read_baseline(target).run_id if noise is not None else None
     if noise is not None:
@@ -357,9 +356,8 @@ def validate(
     check_writable([p for d in plot_dirs for p in workflow.plot_paths(d, workflow.PLOT_STEMS_VALIDATE, formats)]
                    if plots else [], force)
     outcomes, n_bad, docs = [], 0, []
-    for rid, plot_dir in zip(run_ids, plot_dirs):
-        first = workflow.load_run(sweeps[0], cfg, rid)
-        runs = [first] + [workflow.load_run(p, cfg, rid) for p in sweeps[1:]]
+    for k, (first, plot_dir) in enumerate(zip(firsts, plot_dirs)):
+        runs = [first] + [o[k] for o in others]
         nb = noise if noise is not None and (not several or prior_run == first.run_id) else None
         if nb is None:
             nb = workflow.fit_noise(runs[0])
@@ -429,14 +427,14 @@ def detect(
 
     formats = workflow.plot_formats(plot_format)
     base_path = baseline if baseline is not None else out / "baseline.h5"
-    ids = [run] if run is not None else workflow.run_ids(sweep)
-    if len(ids) > 1:
-        return _detect_runs(sweep, ids, rig, out, base_path, at, plots, confidence, rule, false_alarm, resample,
+    cfg, _, mruns = workflow.load_rig_and_runs(sweep, rig, base_path, run, every_run=True)
+    if len(mruns) > 1:
+        return _detect_runs(sweep, mruns, cfg, out, base_path, at, plots, confidence, rule, false_alarm, resample,
                             formats, fail_at, as_json, force)
     check_writable([out / f for f in REPORT_FILES]
                    + (workflow.plot_paths(out, workflow.PLOT_STEMS_DETECT, formats) if plots else []), force)
     base = read_baseline(base_path)
-    cfg, mrun = workflow.load_rig_and_run(sweep, workflow.rig_for(rig, sweep, base_path), run)
+    mrun = mruns[0]
     with _progress(f"detecting {sweep.name} against {base_path}"):
         outcome = _detect_one(base, cfg, mrun, sweep, base_path, confidence, rule, false_alarm, resample, fail_at)
         report = outcome.report()
@@ -480,7 +478,7 @@ def _print_outcome(outcome: Any, report: dict[str, Any], prefix: str = "") -> No
             err.print(line)
 
 
-def _detect_runs(sweep: Path, ids: list[str], rig: Path | None, out: Path, base_path: Path, at: float | None,
+def _detect_runs(sweep: Path, mruns: list[Any], cfg: Any, out: Path, base_path: Path, at: float | None,
                  plots: bool, confidence: float, rule: str | None, false_alarm: float, resample: bool,
                  formats: tuple[str, ...], fail_at: str, as_json: bool, force: bool) -> int:
     """Every run of a file of several runs against the baseline's run at the same speed (within the rig's
@@ -491,15 +489,13 @@ def _detect_runs(sweep: Path, ids: list[str], rig: Path | None, out: Path, base_
     from rotorcheck.fileio import atomic_write_text, check_writable
     from rotorcheck.report.reports import REPORT_FILES, render_json, write_reports
 
+    ids = [r.run_id for r in mruns]
     check_writable([out / "report.json"] + [out / rid / f for rid in ids for f in REPORT_FILES]
                    + ([p for rid in ids for p in workflow.plot_paths(out / rid, workflow.PLOT_STEMS_DETECT, formats)]
                       if plots else []), force)
     bases = read_baselines(base_path)
-    rig_path = workflow.rig_for(rig, sweep, base_path)
     summary: list[dict[str, Any]] = []
-    codes = []
-    for rid in ids:
-        cfg, mrun = workflow.load_rig_and_run(sweep, rig_path, rid)
+    for rid, mrun in zip(ids, mruns):
         base = workflow.baseline_for_speed(bases, cfg, mrun, base_path)
         with _progress(f"run {rid}: detecting against the baseline's run {base.run_id}"):
             outcome = _detect_one(base, cfg, mrun, sweep, base_path, confidence, rule, false_alarm, resample, fail_at)
@@ -507,7 +503,6 @@ def _detect_runs(sweep: Path, ids: list[str], rig: Path | None, out: Path, base_
             plot_files = workflow.detection_plots(outcome, out / rid, at, formats) if plots else []
             write_reports(report, out / rid, plot_files)
         _print_outcome(outcome, report, prefix=f"run {rid} ({mrun.speed_rpm:g} rpm): ")
-        codes.append(outcome.exit_code)
         summary.append({"run_id": rid, "speed_rpm": mrun.speed_rpm, "baseline_run_id": base.run_id,
                         "verdict": report["verdict"], "verdict_reason": report["verdict_reason"],
                         "report": str(out / rid / "report.json")})

@@ -153,56 +153,61 @@ class MeasuredRun:
         return self.Zt / self.W
 
 
-def resolve_rig(rig_path: str | Path | None, sweep_path: str | Path) -> Path:
-    """``--rig`` or, by default, the bundled rig named by the sweep's ``rig_id``."""
+def rig_for(rig_path: str | Path | None, rig_id: str, baseline_path: str | Path | None = None) -> Path:
+    """The rig file for a command on a sweep of rig ``rig_id``: ``--rig``; else the one a baseline at
+    ``baseline_path`` was made with (stored as its ``rig_path``) when it is of the same rig; else the
+    bundled rig named ``rig_id``. A stored rig file that is gone is an error naming it."""
     if rig_path is not None:
         return Path(rig_path)
-    from rotorcheck.sweep.hdf5io import read_sweep
+    if baseline_path is not None and Path(baseline_path).exists():
+        import h5py
 
-    return default_rig_path(read_sweep(sweep_path).rig_id)
+        try:
+            with h5py.File(baseline_path, "r") as b:
+                stored, base_id = b.attrs.get("x_rig_path"), b.attrs.get("rig_id")
+        except OSError:
+            stored = base_id = None  # not HDF5: the baseline's own reader says what is wrong
+        if stored is not None and str(base_id) == rig_id:
+            if not Path(str(stored)).exists():
+                raise InputError(baseline_path, "/@x_rig_path", f"the rig file the baseline was made with ({stored}) "
+                                 "is gone; pass --rig")
+            return Path(str(stored))
+    return default_rig_path(rig_id)
 
 
-def run_ids(sweep_path: str | Path) -> list[str]:
-    """The run ids of a sweep file, in file order."""
-    from rotorcheck.sweep.hdf5io import read_sweep
+def load_rig_and_runs(sweep_path: str | Path, rig_path: str | Path | None = None,
+                      baseline_path: str | Path | None = None, run_id: str | None = None, every_run: bool = False
+                      ) -> tuple[RigConfig, Path, list[MeasuredRun]]:
+    """Read a sweep file once: its rig (:func:`rig_for`), that rig's file, and its runs checked against the
+    rig: ``run_id``; else every run with ``every_run``; else the file's one run (several: an error asking
+    for ``--run``)."""
+    from rotorcheck.sweep.hdf5io import read_sweep, sweep_sha256
 
-    return list(read_sweep(sweep_path).runs)
-
-
-def rig_for(rig_path: str | Path | None, sweep_path: str | Path, baseline_path: str | Path | None = None
-            ) -> Path | None:
-    """The rig file for a command: ``--rig``; else the one a baseline at ``baseline_path`` was made with
-    (stored as its ``rig_path``) when the sweep is of that baseline's rig; else None (the bundled rig
-    named by the sweep's ``rig_id``). A stored rig file that is gone is an error naming it."""
-    if rig_path is not None:
-        return Path(rig_path)
-    if baseline_path is None or not Path(baseline_path).exists():
-        return None
-    import h5py
-
-    try:
-        with h5py.File(baseline_path, "r") as b, h5py.File(sweep_path, "r") as sw:
-            stored, base_id, sweep_id = b.attrs.get("x_rig_path"), b.attrs.get("rig_id"), sw.attrs.get("rig_id")
-    except OSError:
-        return None  # not HDF5: the commands' own readers say what is wrong
-    if stored is None or str(base_id) != str(sweep_id):
-        return None
-    if not Path(str(stored)).exists():
-        raise InputError(baseline_path, "/@x_rig_path", f"the rig file the baseline was made with ({stored}) is gone; "
-                         "pass --rig")
-    return Path(str(stored))
+    p = Path(sweep_path)
+    sweep = read_sweep(p)
+    rig_file = rig_for(rig_path, sweep.rig_id, baseline_path)
+    config = load_config(rig_file)
+    sha = sweep_sha256(p)
+    ids: list[str | None] = list(sweep.runs) if every_run and run_id is None else [run_id]
+    return config, rig_file, [measured_run(sweep, config, rid, p, sha) for rid in ids]
 
 
 def load_rig_and_run(sweep_path: str | Path, rig_path: str | Path | None = None, run_id: str | None = None
                      ) -> tuple[RigConfig, MeasuredRun]:
     """Read a sweep file once: its rig (``rig_path``, or the bundled rig named by its ``rig_id``) and
     the run, checked against that rig (:func:`load_run`)."""
+    config, _, runs = load_rig_and_runs(sweep_path, rig_path, None, run_id)
+    return config, runs[0]
+
+
+def read_runs(path: str | Path, config: RigConfig, run_ids: list[str] | None = None) -> list[MeasuredRun]:
+    """Every run of a sweep file (or those of ``run_ids``), read once, checked against ``config``."""
     from rotorcheck.sweep.hdf5io import read_sweep, sweep_sha256
 
-    p = Path(sweep_path)
+    p = Path(path)
     sweep = read_sweep(p)
-    config = load_config(rig_path if rig_path is not None else default_rig_path(sweep.rig_id))
-    return config, measured_run(sweep, config, run_id, p, sweep_sha256(p))
+    sha = sweep_sha256(p)
+    return [measured_run(sweep, config, rid, p, sha) for rid in (run_ids if run_ids is not None else sweep.runs)]
 
 
 def load_run(path: str | Path, config: RigConfig, run_id: str | None = None,
