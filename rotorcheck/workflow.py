@@ -270,15 +270,16 @@ def _channel_pairs(sweep: Any, config: RigConfig, p: Path) -> tuple[list[Any], l
     """Every (output, input) channel pair of ``sweep`` as model ports, the rig's actuator -> sensor first,
     and each pair's (output, input) column. A channel off the model, or a sweep without the rig's own
     actuator and sensor, is refused naming the channel."""
+    from rotorcheck.fe.assembly import build_system
     from rotorcheck.nominal import ChannelPair, channel_port, port_label
+
+    system = build_system(config) if config.kind == "rotor" else None  # to check each channel's station
 
     def port(ch: Any) -> Any:
         try:
             prt = channel_port(config, int(ch.node), ch.direction)
-            if config.kind == "rotor":
-                from rotorcheck.fe.assembly import build_system
-
-                build_system(config).port_dof(prt)
+            if system is not None:
+                system.port_dof(prt)
         except (KeyError, InputError) as exc:
             raise InputError(p, "/channels", f"channel {ch.name!r} (node {ch.node} {ch.direction}) is not on rig "
                              f"{config.rig_id!r}: {exc}") from None
@@ -900,6 +901,38 @@ def baseline_for_speed(bases: list[Any], rig: RigConfig, run: MeasuredRun, basel
     return min(ok, key=lambda b: abs(b.speed_rpm - run.speed_rpm))
 
 
+@dataclass(frozen=True)
+class _PairGrid:
+    """A several-pair run's outputs and inputs (model ports, first-seen order) when its pairs are every
+    output against every input, and where each pair sits in the (output, input) matrix."""
+
+    outputs: list[Any]
+    inputs: list[Any]
+    index: list[tuple[int, int]]
+
+    @classmethod
+    def of(cls, run: MeasuredRun) -> _PairGrid | None:
+        """The grid of ``run``'s pairs; None with one pair or when some output/input pair is missing."""
+        from rotorcheck.nominal import port_label
+
+        if run.n_pairs < 2:
+            return None
+        outs = list({port_label(p.output): p.output for p in run.pairs}.items())
+        ins = list({port_label(p.input): p.input for p in run.pairs}.items())
+        if len(run.pairs) != len(outs) * len(ins):
+            return None
+        o_at, i_at = {k: n for n, (k, _) in enumerate(outs)}, {k: n for n, (k, _) in enumerate(ins)}
+        index = [(o_at[port_label(p.output)], i_at[port_label(p.input)]) for p in run.pairs]
+        return cls([v for _, v in outs], [v for _, v in ins], index)
+
+    def matrix(self, cols: np.ndarray) -> np.ndarray:
+        """(..., f, P) pair columns -> (..., f, n_out, n_in)."""
+        out = np.zeros((*cols.shape[:-1], len(self.outputs), len(self.inputs)), dtype=cols.dtype)
+        for k, (o, i) in enumerate(self.index):
+            out[..., o, i] = cols[..., k]
+        return out
+
+
 def pair_experiments(rig: RigConfig, run: MeasuredRun, confidence: float = 0.99
                      ) -> tuple[np.ndarray, list[np.ndarray], list[np.ndarray], np.ndarray]:
     """A several-pair run as experiments for the model-centred modes (``--enclose data``): ``(Me, W, Z,
@@ -907,27 +940,23 @@ def pair_experiments(rig: RigConfig, run: MeasuredRun, confidence: float = 0.99
     input (unit force, W (f, n_in); Z the measured FRF column (f, n_out)) and V (f,) m/N the noise bound
     per point: the largest pair's standard deviation times the complex-Gaussian quantile, Sidak over
     every point and pair at ``confidence``."""
-    from rotorcheck.nominal import pair_receptance, port_label
+    from rotorcheck.nominal import pair_receptance
     from rotorcheck.robust.lft import additive_me
     from rotorcheck.robust.noise import point_miss
 
-    if run.frf_pairs is None or run.var_pairs is None:
+    grid = _PairGrid.of(run)
+    if run.n_pairs < 2 or run.frf_pairs is None or run.var_pairs is None:
         raise InputError(run.path, "/channels", "one channel pair: no experiments to form")
-    outs = list(dict.fromkeys(port_label(p.output) for p in run.pairs))
-    ins = list(dict.fromkeys(port_label(p.input) for p in run.pairs))
-    if len(run.pairs) != len(outs) * len(ins):
+    if grid is None:
         raise InputError(run.path, "/channels", "the channel pairs are not every output against every input")
     nf = run.frequency_hz.size
-    G = pair_receptance(rig, run.frequency_hz, run.speed_rpm, run.pairs)
-    T = np.zeros((nf, len(outs), len(ins)), complex)
-    Gm = np.zeros_like(T)
-    for k, p in enumerate(run.pairs):
-        o, i = outs.index(port_label(p.output)), ins.index(port_label(p.input))
-        T[:, o, i], Gm[:, o, i] = run.frf_pairs[:, k], G[:, k]
+    T = grid.matrix(np.asarray(run.frf_pairs))
+    Gm = grid.matrix(pair_receptance(rig, run.frequency_hz, run.speed_rpm, run.pairs))
     q = float(np.sqrt(-np.log(point_miss(confidence, nf * len(run.pairs)))))
     V = q * np.sqrt(np.max(run.var_pairs, axis=1))
-    W = [np.broadcast_to(np.eye(len(ins), dtype=complex)[i], (nf, len(ins))).copy() for i in range(len(ins))]
-    return additive_me(Gm), W, [T[:, :, i] for i in range(len(ins))], V
+    n_in = len(grid.inputs)
+    W = [np.broadcast_to(np.eye(n_in, dtype=complex)[i], (nf, n_in)).copy() for i in range(n_in)]
+    return additive_me(Gm), W, [T[:, :, i] for i in range(n_in)], V
 
 
 def _worst_detection(dets: list[Any]) -> Any:
@@ -970,33 +999,20 @@ def damage_per_direction(rig: RigConfig, run: MeasuredRun, healthy_frf: np.ndarr
     (:class:`DirectionalDamage`; ``healthy_var`` (f, P) the healthy FRF's variance, none: no interval).
     None with one pair or no damage port, or when the pairs are not every output against every input."""
     from rotorcheck.config import Port
-    from rotorcheck.nominal import ChannelPair, pair_receptance, port_label
+    from rotorcheck.nominal import ChannelPair, pair_receptance
     from rotorcheck.robust.identify import damage_dynamics
 
-    if run.n_pairs < 2 or rig.damage is None or rig.kind != "rotor" or run.frf_pairs is None:
+    grid = _PairGrid.of(run)
+    if grid is None or rig.damage is None or rig.kind != "rotor" or run.frf_pairs is None:
         return None
-    outs = list(dict.fromkeys(port_label(p.output) for p in run.pairs))
-    ins = list(dict.fromkeys(port_label(p.input) for p in run.pairs))
-    if len(run.pairs) != len(outs) * len(ins):
-        return None
-    by_label = {port_label(p.output): p.output for p in run.pairs} | {port_label(p.input): p.input for p in run.pairs}
-    station = rig.damage.port.station
-    dmg = [Port(station=station, direction=d) for d in ("x", "y")]
+    ins, outs, matrix = grid.inputs, grid.outputs, grid.matrix
+    dmg = [Port(station=rig.damage.port.station, direction=d) for d in ("x", "y")]
     f, nf = run.frequency_hz, run.frequency_hz.size
-    idx = [(outs.index(port_label(p.output)), ins.index(port_label(p.input))) for p in run.pairs]
-
-    def matrix(cols: np.ndarray) -> np.ndarray:
-        """(..., f, P) -> (..., f, n_out, n_in)"""
-        out = np.zeros((*cols.shape[:-1], len(outs), len(ins)), dtype=cols.dtype)
-        for k, (o, i) in enumerate(idx):
-            out[..., o, i] = cols[..., k]
-        return out
-
     T = matrix(np.asarray(run.frf_pairs))
     Th = matrix(np.asarray(healthy_frf).reshape(nf, -1))
     cross = ([ChannelPair(a, b, "") for a in dmg for b in dmg]
-             + [ChannelPair(a, by_label[i], "") for a in dmg for i in ins]
-             + [ChannelPair(by_label[o], b, "") for o in outs for b in dmg])
+             + [ChannelPair(a, i, "") for a in dmg for i in ins]
+             + [ChannelPair(o, b, "") for o in outs for b in dmg])
     H = pair_receptance(rig, f, run.speed_rpm, cross)
     E11 = H[:, :4].reshape(nf, 2, 2)
     E12 = H[:, 4:4 + 2 * len(ins)].reshape(nf, 2, len(ins))
