@@ -340,17 +340,16 @@ def _multi_pair_run(sweep: Any, run: Any, pairs: list[Any], cols: list[tuple[int
     removed = 0
     pp = run.period_phasor_exc
     if pp is not None and run.speed_rpm != 0.0 and shaft_orders > 0:
-        from rotorcheck.signal.lockin import remove_shaft_harmonics
+        from rotorcheck.signal.lockin import fit_shaft_harmonics
 
         in_cols = [j for j, c in enumerate(sweep.channels) if c.role == "input"]
         out_cols = [j for j, c in enumerate(sweep.channels) if c.role == "output"]
-        shaft = abs(run.speed_rpm) / 60.0
-        for e in range(X.shape[1]):
-            for o, oc in enumerate(out_cols):
-                for i, ic in enumerate(in_cols):
-                    w, z, v, d = remove_shaft_harmonics(pp[:, e], n_per[:, e], f, shaft, ic, oc, shaft_orders)
-                    X[:, e, i] = w
-                Y[:, e, o], V[:, e, o], D[:, e, o] = z, v, d
+        n_in = len(in_cols)
+        for e in range(X.shape[1]):  # each channel of each pattern fitted once
+            mean, var, dof = fit_shaft_harmonics(pp[:, e], n_per[:, e], f, abs(run.speed_rpm) / 60.0,
+                                                 in_cols + out_cols, shaft_orders)
+            X[:, e, :], Y[:, e, :] = mean[:, :n_in], mean[:, n_in:]
+            V[:, e, :], D[:, e, :] = var[:, n_in:], dof[:, n_in:]
         removed = shaft_orders
     H = ls_frf(X, Y)  # (f, n_out, n_in)
     Hv = ls_frf_var(X, V)

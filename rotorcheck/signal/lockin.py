@@ -253,21 +253,32 @@ def shaft_harmonic_fit(
     return mean, var, 2 * (n - q)
 
 
+def fit_shaft_harmonics(
+    period_phasor: np.ndarray, n_periods: np.ndarray, frequency_hz: np.ndarray, shaft_hz: float,
+    cols: list[int], orders: int = SHAFT_ORDERS,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """For the channels ``cols`` of a sweep's ``period_phasor`` (f, p, n_chan): the phasor (N or m), the
+    variance of that mean and its real dof per point, (f, len(cols)) each, with the shaft-speed harmonics
+    1X..``orders``X fitted out (:func:`shaft_harmonic_fit`; a free-running start angle then leaves no
+    leak)."""
+    nf = frequency_hz.size
+    mean = np.empty((nf, len(cols)), complex)
+    var = np.empty((nf, len(cols)))
+    dof = np.empty((nf, len(cols)))
+    for j in range(nf):
+        per = period_phasor[j, : int(n_periods[j]), :]
+        for k, c in enumerate(cols):
+            mean[j, k], var[j, k], dof[j, k] = shaft_harmonic_fit(per[:, c], float(frequency_hz[j]), shaft_hz,
+                                                                  orders)
+    return mean, var, dof
+
+
 def remove_shaft_harmonics(
     period_phasor: np.ndarray, n_periods: np.ndarray, frequency_hz: np.ndarray, shaft_hz: float,
     in_col: int, out_col: int, orders: int = SHAFT_ORDERS,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Input and output phasors (N, m), output variance of the mean (m^2) and its real dof per
     point of a sweep's ``period_phasor`` (f, p, n_chan; columns ``in_col``/``out_col``), with the
-    shaft-speed harmonics 1X..``orders``X fitted out (:func:`shaft_harmonic_fit`; a free-running
-    start angle then leaves no leak)."""
-    nf = frequency_hz.size
-    W = np.empty(nf, complex)
-    Z = np.empty(nf, complex)
-    var = np.empty(nf)
-    dof = np.empty(nf)
-    for j in range(nf):
-        per = period_phasor[j, : int(n_periods[j]), :]
-        W[j], _, _ = shaft_harmonic_fit(per[:, in_col], float(frequency_hz[j]), shaft_hz, orders)
-        Z[j], var[j], dof[j] = shaft_harmonic_fit(per[:, out_col], float(frequency_hz[j]), shaft_hz, orders)
-    return W, Z, var, dof
+    shaft-speed harmonics fitted out (:func:`fit_shaft_harmonics`)."""
+    mean, var, dof = fit_shaft_harmonics(period_phasor, n_periods, frequency_hz, shaft_hz, [in_col, out_col], orders)
+    return mean[:, 0], mean[:, 1], var[:, 1], dof[:, 1]
