@@ -1189,14 +1189,13 @@ def detect(
     beyond = None
     if use_joint and Th is not None:
         kappa = KAPPA_NOMINAL if baseline.benign_kappa is None else float(baseline.benign_kappa)
-        joint = joint_detection(updated_rig(rig, baseline_updates(baseline)), np.asarray(baseline.healthy_frf),
-                                np.asarray(baseline.healthy_frf_var), run, kappa, _learned(baseline),
-                                false_alarm, baseline.speed_rpm, baseline.benign_correction)
+        model_rig = updated_rig(rig, baseline_updates(baseline))
+        th_all, var_all = np.asarray(baseline.healthy_frf), np.asarray(baseline.healthy_frf_var)
+        joint = joint_detection(model_rig, th_all, var_all, run, kappa, _learned(baseline), false_alarm,
+                                baseline.speed_rpm, baseline.benign_correction)
         ver = joint_verdict(joint, ver)
         notes.extend(joint.notes)
-        certified = certify_beyond_benign(updated_rig(rig, baseline_updates(baseline)),
-                                          np.asarray(baseline.healthy_frf), np.asarray(baseline.healthy_frf_var), run,
-                                          joint, baseline.speed_rpm)
+        certified = certify_beyond_benign(model_rig, th_all, var_all, run, joint, baseline.speed_rpm)
         if certified is not None:
             beyond = certified[0]
             notes.extend(certified[1])
