@@ -10,13 +10,15 @@ change ``G_changed - G`` (E -1 %: 27 % against 48 % of the change left after the
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
 from rotorcheck.config import RigConfig
-from rotorcheck.nominal import ChannelPair, nominal_model, pair_receptance
+from rotorcheck.nominal import ChannelPair, nominal_model, pair_receptance, primary_pair
 from rotorcheck.robust.real_box import AffineModel, AffineParameter
 from rotorcheck.variability import BenignParameter, benign_parameters, with_benign
 
@@ -139,18 +141,28 @@ def benign_prediction(config: RigConfig, freq_hz: np.ndarray, speed_rpm: float, 
 @dataclass(frozen=True)
 class BenignBox:
     """The rig's benign parameters as an affine real-parameter model of the dynamic stiffness
-    (:class:`rotorcheck.robust.real_box.AffineModel`) plus the gain factor's range; ``frozen``: the
-    parameters whose effect is exact only with the damping matrix held at its value at the centre."""
+    (:class:`rotorcheck.robust.real_box.AffineModel`, seen from one channel pair) plus the gain factor's
+    range; ``notes`` name the parameters whose damping change is held at its healthy value."""
 
     model: AffineModel
     gain: tuple[float, float]
     names: tuple[str, ...]
     notes: tuple[str, ...]
+    system: Any = field(repr=False)  # the assembled rig (fe.system.MechanicalSystem): its ports' DOFs
+
+    def for_pair(self, pair: ChannelPair) -> BenignBox:
+        """The same parameters seen from ``pair`` (unit force at its input, displacement at its output)."""
+        b = np.zeros(self.system.n_dof)
+        c = np.zeros(self.system.n_dof)
+        b[self.system.port_dof(pair.input)] = 1.0
+        c[self.system.port_dof(pair.output)] = 1.0
+        return dataclasses.replace(self, model=dataclasses.replace(self.model, b=b, c=c))
 
 
 def benign_box(config: RigConfig, speed_rpm: float, parameters: Sequence[BenignParameter] | None = None,
                speed_offset: float = 0.0, pair: ChannelPair | None = None) -> BenignBox:
-    """The benign parameters of ``config`` at ``speed_rpm`` as real parameters entering the dynamic
+    """The benign parameters of ``config`` at ``speed_rpm``, seen from ``pair`` (default: the rig's
+    actuator -> sensor; :meth:`BenignBox.for_pair` for others), as real parameters entering the dynamic
     stiffness affinely: each parameter by the exact change of M, C and K per unit (checked affine at its
     range's ends and centre), the speed tolerance by ``Omega G`` (range moved by ``speed_offset`` rpm), the
     gains as one factor. Modal damping is rebuilt from the changed modes (not affine in a stiffness): it
@@ -174,10 +186,8 @@ def benign_box(config: RigConfig, speed_rpm: float, parameters: Sequence[BenignP
             affine.append(AffineParameter(prm.name, (("D", G * RPM_TO_RAD_S),), prm.lo + speed_offset,
                                           prm.hi + speed_offset))
             continue
-        at = {}
-        for x in (prm.lo, 0.5 * (prm.lo + prm.hi), prm.hi):
-            at[x] = build_system(with_benign(config, {prm.name: x})[0]).matrices(speed_rpm)
-        lo_m, mid_m, hi_m = (at[x] for x in sorted(at))
+        lo_m, mid_m, hi_m = (build_system(with_benign(config, {prm.name: x})[0]).matrices(speed_rpm)
+                             for x in (prm.lo, 0.5 * (prm.lo + prm.hi), prm.hi))
         span = prm.hi - prm.lo
         terms = []
         for kind, j, base in (("M", 0, M), ("D", 1, C), ("K", 3, K)):
@@ -196,9 +206,7 @@ def benign_box(config: RigConfig, speed_rpm: float, parameters: Sequence[BenignP
         affine.append(AffineParameter(prm.name, tuple(terms), prm.lo, prm.hi))
     notes = [f"damping held at its healthy value for {', '.join(held)} (modal damping rebuilt from the changed "
              "modes is not affine in the parameter)"] if held else []
-    b = np.zeros(sys0.n_dof)
-    c = np.zeros(sys0.n_dof)
-    b[sys0.port_dof(config.ports.actuator if pair is None else pair.input)] = 1.0
-    c[sys0.port_dof(config.ports.sensor if pair is None else pair.output)] = 1.0
-    model = AffineModel(M, C + speed_rpm * RPM_TO_RAD_S * G, K, b, c, tuple(affine))
-    return BenignBox(model, (g_lo, g_hi), tuple(a.name for a in affine), tuple(notes))
+    n = sys0.n_dof
+    model = AffineModel(M, C + speed_rpm * RPM_TO_RAD_S * G, K, np.zeros(n), np.zeros(n), tuple(affine))
+    box = BenignBox(model, (g_lo, g_hi), tuple(a.name for a in affine), tuple(notes), sys0)
+    return box.for_pair(pair if pair is not None else primary_pair(config))

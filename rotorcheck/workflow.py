@@ -1376,19 +1376,20 @@ def certify_beyond_benign(rig: RigConfig, Th: np.ndarray, var_h: np.ndarray, run
     nf, n_pairs = est.frf.shape
     th, vh = _per_pair(Th, run.frequency_hz, n_pairs, run), _per_pair(var_h, run.frequency_hz, n_pairs, run)
     z = float(np.sqrt(joint.point_threshold / 2.0))  # |r|^2 / sigma^2 ~ Exp(1): chi2_2 / 2
-    certs, notes = [], []
+    certs = []
     g0 = io_frf(rig, run.frequency_hz, speed, run.pairs if n_pairs > 1 else None).reshape(nf, n_pairs)
+    box0 = benign_box(rig, speed, params, run.speed_rpm - speed)  # the parameters once; each pair's view below
+    notes = list(box0.notes)
     for k in range(n_pairs):
         if np.max(np.abs(g0[:, k])) <= SILENT * np.max(np.abs(g0)):
             # the model says this pair does not respond (its planes decouple): nothing benign to predict
             certs.append(BoxCertificate(np.full(nf, "explained", dtype="<U11"), np.full((nf, len(params)), np.nan),
                                         np.full(nf, np.nan), np.zeros(nf, dtype=int), np.zeros(nf, dtype=bool)))
             continue
-        box = benign_box(rig, speed, params, run.speed_rpm - speed, run.pairs[k] if n_pairs > 1 else None)
+        box = box0.for_pair(run.pairs[k]) if n_pairs > 1 else box0
         certs.append(certify_points(box.model, 2.0 * np.pi * run.frequency_hz, est.frf[:, k], th[:, k],
                                     est.var[:, k], vh[:, k], z, joint.model_error[k * nf:(k + 1) * nf], box.gain,
                                     max_boxes))
-        notes = list(box.notes)
     if joint.learned:
         notes.append("the per-point certificate beyond benign change uses the model's parameters only (the "
                      "learned benign directions are no parameters of the model)")
