@@ -11,8 +11,8 @@ import pytest
 
 from rotorcheck import workflow
 from rotorcheck.cli import EXIT_DAMAGE, EXIT_INPUT, EXIT_OK, main
-from rotorcheck.config import Port, load_config
-from rotorcheck.nominal import pair_receptance
+from rotorcheck.config import Port, RigConfig, load_config
+from rotorcheck.nominal import ChannelPair, pair_receptance
 from rotorcheck.resources import configs_dir
 from rotorcheck.sim.rig_sim import simulate_rig, simulate_rig_patterns, step_settings
 from rotorcheck.sweep import write_sweep
@@ -152,44 +152,54 @@ def test_xy_at_standstill_where_the_cross_pairs_are_silent() -> None:
     assert res.detection.n_fault > out["crack_rig"][1].detection.n_fault
 
 
+LOSS_X4 = 2.0e5  # N/m: a stiffness loss at station 4 in x only (the damage port's station)
+
+
+def _xy_pairs() -> list[ChannelPair]:
+    """The 8 pairs of the x/y set, the rig's actuator -> sensor first."""
+    rest = [(o, i) for o in SENSORS for i in ACTUATORS if (o, i) != (SENSORS[0], ACTUATORS[0])]
+    return [ChannelPair(SENSORS[0], ACTUATORS[0], "io")] + [ChannelPair(o, i, f"{k}") for k, (o, i) in enumerate(rest)]
+
+
+def _dense_frfs(rig: RigConfig, speed: float, f: np.ndarray, pairs: list[ChannelPair], loss: float) -> np.ndarray:
+    """Each pair's FRF (f, P) by dense solves of the FE matrices with ``loss`` N/m taken from station 4 x."""
+    from rotorcheck.fe.assembly import build_system
+    from rotorcheck.fe.system import RPM_TO_RAD_S
+
+    sys_ = build_system(rig)
+    M, C, G, K = sys_.matrices(speed)
+    D = C + speed * RPM_TO_RAD_S * G
+    K = K.copy()
+    dx = sys_.port_dof(Port(station=4, direction="x"))
+    K[dx, dx] -= loss
+    H = [np.linalg.inv(K - (2 * np.pi * x) ** 2 * M + 2j * np.pi * x * D) for x in f]
+    return np.array([[h[sys_.port_dof(p.output), sys_.port_dof(p.input)] for p in pairs] for h in H])
+
+
+def _pair_run(rig: RigConfig, speed: float, f: np.ndarray, pairs: list[ChannelPair], frf: np.ndarray,
+              var: np.ndarray) -> workflow.MeasuredRun:
+    """A several-pair run from given FRFs and their variances (variances treated as known)."""
+    from pathlib import Path as P
+
+    return workflow.MeasuredRun(P("x.h5"), "", rig.rig_id, "r", speed, f, np.ones(f.size, complex), frf[:, 0],
+                                np.zeros(f.size), np.zeros(f.size, int), (30.0, 600.0), pairs=tuple(pairs),
+                                frf_pairs=frf, var_pairs=var, dof_pairs=np.full(var.shape, np.inf))
+
+
 def test_damage_dynamics_per_direction_recovers_a_spring_at_the_damage_port() -> None:
     """Noiseless FRFs of the nominal model by dense solves, before and after a stiffness loss of 2e5 N/m
     at station 4 in x only: D_xx = 2e5 N/m (to 1e-3: the engine's model receptances against dense
     solves), D_yy and the cross terms below 1e-6 of it, at every frequency, 1000 rpm (gyroscopic
     coupling of x and y)."""
-    from pathlib import Path as P
-
-    from rotorcheck.fe.assembly import build_system
-    from rotorcheck.fe.system import RPM_TO_RAD_S
-    from rotorcheck.nominal import ChannelPair
-
     rig = load_config(configs_dir() / "crack_rig.yaml")
-    speed, f = 1000.0, np.linspace(30.0, 600.0, 40)
-    ins, outs = ACTUATORS, SENSORS
-    pairs = [ChannelPair(outs[0], ins[0], "io")] + [ChannelPair(o, i, f"{k}") for k, (o, i) in enumerate(
-        (o, i) for o in outs for i in ins) if (o, i) != (outs[0], ins[0])]
-    sys_ = build_system(rig)
-    M, C, G, K = sys_.matrices(speed)
-    D = C + speed * RPM_TO_RAD_S * G
-    dx = sys_.port_dof(Port(station=4, direction="x"))
-
-    def frfs(loss: float) -> np.ndarray:
-        Kd = K.copy()
-        Kd[dx, dx] -= loss
-        H = [np.linalg.inv(Kd - (2 * np.pi * x) ** 2 * M + 2j * np.pi * x * D) for x in f]
-        return np.array([[h[sys_.port_dof(p.output), sys_.port_dof(p.input)] for p in pairs] for h in H])
-
-    Th, Tn = frfs(0.0), frfs(2.0e5)
-    zeros = np.zeros(Tn.shape)
-    run = workflow.MeasuredRun(P("x.h5"), "", rig.rig_id, "r", speed, f, np.ones(f.size, complex), Tn[:, 0],
-                               np.zeros(f.size), np.zeros(f.size, int), (30.0, 600.0), pairs=tuple(pairs),
-                               frf_pairs=Tn, var_pairs=zeros, dof_pairs=zeros)
-    res = workflow.damage_per_direction(rig, run, Th)
+    speed, f, pairs = 1000.0, np.linspace(30.0, 600.0, 40), _xy_pairs()
+    Th, Tn = _dense_frfs(rig, speed, f, pairs, 0.0), _dense_frfs(rig, speed, f, pairs, LOSS_X4)
+    res = workflow.damage_per_direction(rig, _pair_run(rig, speed, f, pairs, Tn, np.zeros(Tn.shape)), Th)
     assert res is not None and res.draws == 0
     Dd = res.estimate
     assert Dd.shape == (f.size, 2, 2)
-    assert np.max(np.abs(Dd[:, 0, 0] / 2.0e5 - 1)) < 1e-3
-    assert np.max(np.abs(Dd[:, 1, 1])) < 1e-6 * 2.0e5 and np.max(np.abs(Dd[:, [0, 1], [1, 0]])) < 1e-6 * 2.0e5
+    assert np.max(np.abs(Dd[:, 0, 0] / LOSS_X4 - 1)) < 1e-3
+    assert np.max(np.abs(Dd[:, 1, 1])) < 1e-6 * LOSS_X4 and np.max(np.abs(Dd[:, [0, 1], [1, 0]])) < 1e-6 * LOSS_X4
 
 
 def test_enclose_data_with_several_pairs_brackets_the_closed_form(files) -> None:  # type: ignore[no-untyped-def]
@@ -228,39 +238,26 @@ def test_damage_per_direction_intervals_cover_the_truth() -> None:
     """The same 2e5 N/m loss in x, both sweeps with complex Gaussian noise of 0.3 % of |T| per pair: the
     95 % Monte Carlo interval of Re D_xx contains 2e5 N/m at 85-100 % of the frequencies (nominal 95 %,
     40 points), its width grows with the noise, and with no noise it has zero width."""
-    from pathlib import Path as P
-
-    from rotorcheck.fe.assembly import build_system
-    from rotorcheck.fe.system import RPM_TO_RAD_S
-    from rotorcheck.nominal import ChannelPair, pair_receptance
+    from rotorcheck.nominal import pair_receptance
 
     rig = load_config(configs_dir() / "crack_rig.yaml")
-    speed, f = 1000.0, np.linspace(30.0, 600.0, 40)
-    pairs = [ChannelPair(SENSORS[0], ACTUATORS[0], "io")] + [ChannelPair(o, i, f"{k}") for k, (o, i) in enumerate(
-        (o, i) for o in SENSORS for i in ACTUATORS) if (o, i) != (SENSORS[0], ACTUATORS[0])]
-    sys_ = build_system(rig)
-    M, C, G, K = sys_.matrices(speed)
-    D = C + speed * RPM_TO_RAD_S * G
-    dx = sys_.port_dof(Port(station=4, direction="x"))
-    Kd = K.copy()
-    Kd[dx, dx] -= 2.0e5
-    Tn = np.array([[np.linalg.inv(Kd - (2 * np.pi * x) ** 2 * M + 2j * np.pi * x * D)[
-        sys_.port_dof(p.output), sys_.port_dof(p.input)] for p in pairs] for x in f])
+    speed, f, pairs = 1000.0, np.linspace(30.0, 600.0, 40), _xy_pairs()
+    Tn = _dense_frfs(rig, speed, f, pairs, LOSS_X4)
     Th = pair_receptance(rig, f, speed, pairs)  # the engine's healthy model: its E's are exact for it
     rng = np.random.default_rng(5)
+
+    def noise(v: np.ndarray) -> np.ndarray:
+        return np.sqrt(v / 2) * (rng.standard_normal(v.shape) + 1j * rng.standard_normal(v.shape))
+
     widths = []
     for rel in (0.0, 0.003, 0.006):
         var_n, var_h = (rel * np.abs(Tn)) ** 2, (rel * np.abs(Th)) ** 2
-        noise = lambda v: np.sqrt(v / 2) * (rng.standard_normal(v.shape) + 1j * rng.standard_normal(v.shape))  # noqa: E731
         tn, th = Tn + noise(var_n), Th + noise(var_h)
-        run = workflow.MeasuredRun(P("x.h5"), "", rig.rig_id, "r", speed, f, np.ones(f.size, complex), tn[:, 0],
-                                   np.zeros(f.size), np.zeros(f.size, int), (30.0, 600.0), pairs=tuple(pairs),
-                                   frf_pairs=tn, var_pairs=var_n, dof_pairs=np.full(var_n.shape, np.inf))
-        res = workflow.damage_per_direction(rig, run, th, var_h, draws=400)
+        res = workflow.damage_per_direction(rig, _pair_run(rig, speed, f, pairs, tn, var_n), th, var_h, draws=400)
         assert res is not None and res.draws == 400
         lo, hi = res.re_interval[0][:, 0], res.re_interval[1][:, 0]
         widths.append(float(np.median(hi - lo)))
         if rel > 0:
-            inside = np.mean((lo <= 2.0e5) & (2.0e5 <= hi))
+            inside = np.mean((lo <= LOSS_X4) & (LOSS_X4 <= hi))
             assert 0.85 <= inside <= 1.0, inside
-    assert widths[0] < 1e-6 * 2.0e5 and widths[0] < widths[1] < widths[2]
+    assert widths[0] < 1e-6 * LOSS_X4 and widths[0] < widths[1] < widths[2]
