@@ -238,7 +238,6 @@ def test_damage_per_direction_intervals_cover_the_truth() -> None:
     """The same 2e5 N/m loss in x, both sweeps with complex Gaussian noise of 0.3 % of |T| per pair: the
     95 % Monte Carlo interval of Re D_xx contains 2e5 N/m at 85-100 % of the frequencies (nominal 95 %,
     40 points), its width grows with the noise, and with no noise it has zero width."""
-    from rotorcheck.nominal import pair_receptance
 
     rig = load_config(configs_dir() / "crack_rig.yaml")
     speed, f, pairs = 1000.0, np.linspace(30.0, 600.0, 40), _xy_pairs()
