@@ -22,7 +22,8 @@ from typing import Any
 import numpy as np
 
 from rotorcheck.robust import detect, lft, mu, validate
-from tests.oracles.mixed_mu import min_feasible_1d, real_plus_complex
+from tests.oracles.mixed_mu import cplx as _cplx
+from tests.oracles.mixed_mu import min_feasible_1d, real_plus_complex, real_plus_complex_cases
 
 # ECP 210a three-mass system, dissertation Table 1
 _M = (2.8113, 2.6396, 2.6074)
@@ -62,10 +63,6 @@ def three_mass_counts(V: float) -> dict[str, tuple[int, int]]:
             counts.append(detect(me, W, H_d * W, V, val.gamma, structure=st).n_fault)
         out[name] = (counts[0], counts[1])
     return out
-
-
-def _cplx(rng: np.random.Generator, *shape: int) -> np.ndarray:
-    return rng.normal(size=shape) + 1j * rng.normal(size=shape)
 
 
 def siso_gap(n: int = 300, seed: int = 11) -> dict[str, float]:
@@ -117,15 +114,7 @@ def _stats(tag: str, real: mu.GammaResult, comp: mu.GammaResult, ref: np.ndarray
 def mixed_gap(n: int = 40, seed: int = 12) -> dict[str, float]:
     """One real + one complex scalar block sharing gamma: gap stats and time per point."""
 
-    rng = np.random.default_rng(seed)
-    me = np.zeros((n, 3, 3), complex)
-    me[:, :2, :2] = 0.3 * _cplx(rng, n, 2, 2)
-    me[:, :2, 2], me[:, 2, :2], me[:, 2, 2] = _cplx(rng, n, 2), _cplx(rng, n, 2), _cplx(rng, n)
-    W = _cplx(rng, n)
-    d = np.stack([0.4 * rng.normal(size=n), 0.4 * _cplx(rng, n)], axis=1)
-    Z0 = np.array([lft.lft_upper(me[i], np.diag(d[i]))[0, 0, 0] for i in range(n)]) * W
-    Zt = Z0 + 0.3 * np.abs(Z0) * _cplx(rng, n)
-    V = rng.uniform(0.2, 0.9, n) * np.abs(Zt - Z0)
+    me, W, Zt, V = real_plus_complex_cases(np.random.default_rng(seed), n)
     t0 = time.perf_counter()
     real = mu.required_gamma(me, W, Zt, V, mu.Structure((mu.Block("real"), mu.Block("scalar"))))
     t_real = time.perf_counter() - t0

@@ -76,3 +76,25 @@ def real_plus_complex(me: np.ndarray, W: np.ndarray, Zt: np.ndarray, V: np.ndarr
                               method="bounded", options={"xatol": 1e-13})
         ref[i] = min(float(vals[j]), float(res.fun))
     return ref
+
+
+def cplx(rng: np.random.Generator, *shape: int) -> np.ndarray:
+    """Complex standard normal draws (real and imaginary parts each N(0, 1))."""
+    return rng.normal(size=shape) + 1j * rng.normal(size=shape)
+
+
+def real_plus_complex_cases(rng: np.random.Generator, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``n`` random points for one real and one complex scalar block sharing gamma: ``(Me (n, 3, 3), W, Zt,
+    V)``, the data made by a known Delta (real 0.4 N(0,1), complex 0.4 CN(0,1)) plus a 30 % perturbation,
+    V a random 20-90 % of that perturbation's size (so most points need a nonzero gamma)."""
+    from rotorcheck.robust import lft
+
+    me = np.zeros((n, 3, 3), complex)
+    me[:, :2, :2] = 0.3 * cplx(rng, n, 2, 2)
+    me[:, :2, 2], me[:, 2, :2], me[:, 2, 2] = cplx(rng, n, 2), cplx(rng, n, 2), cplx(rng, n)
+    W = cplx(rng, n)
+    d = np.stack([0.4 * rng.normal(size=n), 0.4 * cplx(rng, n)], axis=1)
+    Z0 = np.array([lft.lft_upper(me[i], np.diag(d[i]))[0, 0, 0] for i in range(n)]) * W
+    Zt = Z0 + 0.3 * np.abs(Z0) * cplx(rng, n)
+    V = rng.uniform(0.2, 0.9, n) * np.abs(Zt - Z0)
+    return me, W, Zt, V

@@ -20,14 +20,10 @@ import pytest
 from robust_helpers import M1, three_mass_Z
 
 from rotorcheck.robust import detect, lft, mu, validate
-from tests.oracles.mixed_mu import min_feasible_1d, real_plus_complex
+from tests.oracles.mixed_mu import cplx, min_feasible_1d, real_plus_complex, real_plus_complex_cases
 
 SEED = 2025
 TOL = 1e-6  # brute-force resolution (relative)
-
-
-def cplx(rng: np.random.Generator, *shape: int) -> np.ndarray:
-    return rng.normal(size=shape) + 1j * rng.normal(size=shape)
 
 
 def _siso_resid(me: np.ndarray, W: complex, Zt: complex, d: np.ndarray) -> np.ndarray:
@@ -102,16 +98,7 @@ def test_siso_real_parameter_brackets_brute_force_and_exceeds_complex(
 
 @pytest.fixture(scope="module")
 def mixed() -> dict[str, np.ndarray]:
-    rng = np.random.default_rng(SEED + 1)
-    n = 30
-    me = np.zeros((n, 3, 3), complex)
-    me[:, :2, :2] = 0.3 * cplx(rng, n, 2, 2)
-    me[:, :2, 2], me[:, 2, :2], me[:, 2, 2] = cplx(rng, n, 2), cplx(rng, n, 2), cplx(rng, n)
-    W = cplx(rng, n)
-    d = np.stack([0.4 * rng.normal(size=n), 0.4 * cplx(rng, n)], axis=1)
-    Z0 = np.array([lft.lft_upper(me[i], np.diag(d[i]))[0, 0, 0] for i in range(n)]) * W
-    Zt = Z0 + 0.3 * np.abs(Z0) * cplx(rng, n)
-    V = rng.uniform(0.2, 0.9, n) * np.abs(Zt - Z0)
+    me, W, Zt, V = real_plus_complex_cases(np.random.default_rng(SEED + 1), 30)
     st = mu.Structure((mu.Block("real"), mu.Block("scalar")))
     real = mu.required_gamma(me, W, Zt, V, st, rtol=1e-7)
     comp = mu.required_gamma(me, W, Zt, V, mu.Structure((mu.Block("scalar"), mu.Block("scalar"))),
