@@ -826,7 +826,15 @@ class DetectionOutcome:
                 d: {"re": dxy.estimate[:, k, k].real, "im": dxy.estimate[:, k, k].imag,
                     "re_interval": [dxy.re_interval[0][:, k], dxy.re_interval[1][:, k]],
                     "im_interval": [dxy.im_interval[0][:, k], dxy.im_interval[1][:, k]],
-                    "interval_confidence": 0.95, "interval_draws": dxy.draws} for k, d in enumerate("xy")}
+                    "interval_confidence": 0.95, "interval_draws": dxy.draws,
+                    **({} if dxy.bound is None else {
+                        "bound_kind": [str(x) for x in dxy.bound.kind],
+                        "bound_re": [dxy.bound.re_outer[:, k, 0], dxy.bound.re_outer[:, k, 1]],
+                        "bound_im": [dxy.bound.im_outer[:, k, 0], dxy.bound.im_outer[:, k, 1]],
+                        "witness_re": [dxy.bound.re_inner[:, k, 0], dxy.bound.re_inner[:, k, 1]],
+                        "witness_im": [dxy.bound.im_inner[:, k, 0], dxy.bound.im_inner[:, k, 1]],
+                        "bound_confidence": m.confidence if m is not None else None})}
+                for k, d in enumerate("xy")}
         c = self.beyond_benign
         if c is not None:
             rep.beyond_benign_rule, rep.beyond_benign_status = c.rule, [str(x) for x in c.status]
@@ -986,16 +994,19 @@ class DirectionalDamage:
     re_interval: tuple[np.ndarray, np.ndarray]
     im_interval: tuple[np.ndarray, np.ndarray]
     draws: int
+    bound: Any = None  # robust.damage_block.DamageBlockBound: the certified set over the noise polydisc
 
 
 def damage_per_direction(rig: RigConfig, run: MeasuredRun, healthy_frf: np.ndarray,
-                         healthy_var: np.ndarray | None = None, draws: int = 200, seed: int = 20261124
-                         ) -> DirectionalDamage | None:
+                         healthy_var: np.ndarray | None = None, draws: int = 200, seed: int = 20261124,
+                         radius: np.ndarray | None = None) -> DirectionalDamage | None:
     """With several channel pairs: the damage dynamics at the damage port's station in x and y, (f, 2, 2)
     N/m (rows and columns x, y; a stiffness loss is positive on the diagonal), eq. 3.11 in matrix form
     anchored at the measured healthy FRF: ``D = [E12 (T - T_h)^+ E21 + E11]^-1`` with the model's
     receptances between the damage DOFs and the channels, and its Monte Carlo intervals
     (:class:`DirectionalDamage`; ``healthy_var`` (f, P) the healthy FRF's variance, none: no interval).
+    ``radius`` (f, P) m/N: the noise allowance of each pair's difference at a family-wise confidence; with
+    it, the certified set of D over that noise polydisc (:func:`rotorcheck.robust.damage_block.damage_block_bound`).
     None with one pair or no damage port, or when the pairs are not every output against every input."""
     from rotorcheck.config import Port
     from rotorcheck.nominal import ChannelPair, pair_receptance
@@ -1028,9 +1039,15 @@ def damage_per_direction(rig: RigConfig, run: MeasuredRun, healthy_frf: np.ndarr
         est = solve(T, Th)
     except np.linalg.LinAlgError:
         return None
+    bound = None
+    if radius is not None:
+        from rotorcheck.robust.damage_block import damage_block_bound
+
+        bound = damage_block_bound(E11, E12, E21, T - Th, matrix(np.asarray(radius, dtype=float).reshape(nf, -1)))
+        est = bound.estimate  # the weighted least-squares member (its W) rather than the pseudo-inverse's
     nan = np.full((nf, 2), np.nan)
     if healthy_var is None or run.var_pairs is None or draws < 2:
-        return DirectionalDamage(est, (nan, nan), (nan, nan), 0)
+        return DirectionalDamage(est, (nan, nan), (nan, nan), 0, bound)
     rng = np.random.default_rng(seed)
 
     def noisy(x: np.ndarray, var: np.ndarray) -> np.ndarray:
@@ -1040,11 +1057,11 @@ def damage_per_direction(rig: RigConfig, run: MeasuredRun, healthy_frf: np.ndarr
     try:
         sims = solve(noisy(T, run.var_pairs), noisy(Th, healthy_var), draws).reshape(draws, nf, 2, 2)
     except np.linalg.LinAlgError:
-        return DirectionalDamage(est, (nan, nan), (nan, nan), 0)
+        return DirectionalDamage(est, (nan, nan), (nan, nan), 0, bound)
     diag = sims[:, :, [0, 1], [0, 1]]  # (draws, f, 2)
     lo_re, hi_re = np.nanpercentile(diag.real, [2.5, 97.5], axis=0)
     lo_im, hi_im = np.nanpercentile(diag.imag, [2.5, 97.5], axis=0)
-    return DirectionalDamage(est, (lo_re, hi_re), (lo_im, hi_im), draws)
+    return DirectionalDamage(est, (lo_re, hi_re), (lo_im, hi_im), draws, bound)
 
 
 def parse_port(text: str, option: str = "--port") -> Any:
@@ -1202,13 +1219,17 @@ def detect(
     damage_xy = None
     if identifiable and baseline.enclose == "measured" and run.n_pairs > 1:
         damage_xy = damage_per_direction(rig, run, np.asarray(baseline.healthy_frf),
-                                         np.asarray(baseline.healthy_frf_var))
+                                         np.asarray(baseline.healthy_frf_var),
+                                         radius=None if measured is None else measured.radius)
         if damage_xy is not None:
             notes.append("damage_dynamics_by_direction: D at the damage station in x and y from every channel "
-                         "pair (eq. 3.11 in matrix form, least squares, anchored at the measured healthy FRF); "
-                         "its intervals: 95 % by Monte Carlo over both sweeps' noise (complex Gaussian, the "
-                         "stored variances), the model's receptances to and from the damage station taken as "
-                         "exact: a statistical interval, not the exact set of the one-channel bound")
+                         "pair (eq. 3.11 in matrix form: the weighted least-squares member, anchored at the "
+                         "measured healthy FRF); bound_re/bound_im: the certified outer intervals of every D "
+                         "consistent with both sweeps' noise (each pair's difference within its allowance at the "
+                         "stated family-wise confidence; the set of W is convex, D its Moebius image: SOCP support "
+                         "functions plus an exact remainder bound), witness_re/witness_im the range attained inside "
+                         "it; the model's receptances to and from the damage station taken as exact; "
+                         "re_interval/im_interval: 95 % by Monte Carlo over the noise")
     return DetectionOutcome(rig, baseline, run, model, det, ver, damage, dset, anchored, anchored_set, notes,
                             measured, noise_only, joint, beyond, damage_xy)
 
