@@ -413,6 +413,8 @@ def detect(
         "--false-alarm", help="False-alarm probability per sweep of the joint test.")] = 0.01,
     resample: Annotated[bool, typer.Option(
         "--resample", help="Interpolate the new sweep onto the baseline's frequency grid when they differ.")] = False,
+    locate: Annotated[bool, typer.Option(
+        "--locate", help="When the verdict is damage, locate it too (the 'location' section; see `locate`).")] = False,
     plot_format: PlotFormatOpt = "png",
     fail_at: FailAtOpt = "",
     as_json: JsonOpt = False,
@@ -430,13 +432,14 @@ def detect(
     cfg, _, mruns = workflow.load_rig_and_runs(sweep, rig, base_path, run, every_run=True)
     if len(mruns) > 1:
         return _detect_runs(sweep, mruns, cfg, out, base_path, at, plots, confidence, rule, false_alarm, resample,
-                            formats, fail_at, as_json, force)
+                            formats, fail_at, as_json, force, locate)
     check_writable([out / f for f in REPORT_FILES]
                    + (workflow.plot_paths(out, workflow.PLOT_STEMS_DETECT, formats) if plots else []), force)
     base = read_baseline(base_path)
     mrun = mruns[0]
     with _progress(f"detecting {sweep.name} against {base_path}"):
-        outcome = _detect_one(base, cfg, mrun, sweep, base_path, confidence, rule, false_alarm, resample, fail_at)
+        outcome = _detect_one(base, cfg, mrun, sweep, base_path, confidence, rule, false_alarm, resample, fail_at,
+                              locate)
         report = outcome.report()
     with _progress("writing reports and plots"):
         plot_files = workflow.detection_plots(outcome, out, at, formats) if plots else []
@@ -450,8 +453,8 @@ def detect(
 
 
 def _detect_one(base: Any, cfg: Any, mrun: Any, sweep: Path, base_path: Path, confidence: float,
-                rule: str | None, false_alarm: float, resample: bool, fail_at: str) -> Any:
-    """One run against its baseline: resample when asked, check, detect."""
+                rule: str | None, false_alarm: float, resample: bool, fail_at: str, locate: bool = False) -> Any:
+    """One run against its baseline: resample when asked, check, detect (and locate a damage when asked)."""
     from rotorcheck import workflow
 
     if resample and base.frequency_hz is not None and workflow.grid_mismatch(mrun.frequency_hz,
@@ -460,8 +463,11 @@ def _detect_one(base: Any, cfg: Any, mrun: Any, sweep: Path, base_path: Path, co
         err.print(f"resampled {sweep} ({mrun.resampled_from} points) onto the baseline's grid "
                   f"({base.frequency_hz.size} points, linear interpolation)")
     workflow.check_baseline(base, cfg, mrun, base_path)
-    return workflow.detect(cfg, base, mrun, fail_at=_fail_at(fail_at), confidence=confidence, rule=rule,
-                           false_alarm=false_alarm)
+    outcome = workflow.detect(cfg, base, mrun, fail_at=_fail_at(fail_at), confidence=confidence, rule=rule,
+                              false_alarm=false_alarm)
+    if locate and outcome.verdict.verdict == "damage":
+        outcome.location = workflow.locate_damage(cfg, base, mrun, false_alarm)
+    return outcome
 
 
 def _print_outcome(outcome: Any, report: dict[str, Any], prefix: str = "") -> None:
@@ -476,11 +482,13 @@ def _print_outcome(outcome: Any, report: dict[str, Any], prefix: str = "") -> No
     for line in (workflow.joint_summary(outcome), workflow.anchored_summary(outcome)):
         if line:
             err.print(line)
+    if outcome.location is not None:
+        err.print("location: " + outcome.location.summary())
 
 
 def _detect_runs(sweep: Path, mruns: list[Any], cfg: Any, out: Path, base_path: Path, at: float | None,
                  plots: bool, confidence: float, rule: str | None, false_alarm: float, resample: bool,
-                 formats: tuple[str, ...], fail_at: str, as_json: bool, force: bool) -> int:
+                 formats: tuple[str, ...], fail_at: str, as_json: bool, force: bool, locate: bool = False) -> int:
     """Every run of a file of several runs against the baseline's run at the same speed (within the rig's
     speed tolerance; the closest): reports in <out>/<run_id>/, one summary <out>/report.json; the file is
     damage when any run is, inconclusive when none is but one is inconclusive, else healthy."""
@@ -498,7 +506,8 @@ def _detect_runs(sweep: Path, mruns: list[Any], cfg: Any, out: Path, base_path: 
     for rid, mrun in zip(ids, mruns):
         base = workflow.baseline_for_speed(bases, cfg, mrun, base_path)
         with _progress(f"run {rid}: detecting against the baseline's run {base.run_id}"):
-            outcome = _detect_one(base, cfg, mrun, sweep, base_path, confidence, rule, false_alarm, resample, fail_at)
+            outcome = _detect_one(base, cfg, mrun, sweep, base_path, confidence, rule, false_alarm, resample, fail_at,
+                                  locate)
             report = outcome.report()
             plot_files = workflow.detection_plots(outcome, out / rid, at, formats) if plots else []
             write_reports(report, out / rid, plot_files)
@@ -515,6 +524,74 @@ def _detect_runs(sweep: Path, mruns: list[Any], cfg: Any, out: Path, base_path: 
     if as_json:
         _emit_json(doc)
     return {"damage": EXIT_DAMAGE, "inconclusive": EXIT_INCONCLUSIVE, "healthy": EXIT_OK}[verdict]
+
+
+@app.command()
+def locate(
+    sweep: Annotated[Path, typer.Argument(help="New sweep whose change to locate against the healthy baseline.")],
+    rig: RigOpt = None,
+    out: OutOpt = DEFAULT_OUT,
+    baseline: Annotated[Path | None, typer.Option("--baseline", help="Baseline (default <out>/baseline.h5).")] = None,
+    run: RunOpt = None,
+    elements: Annotated[str, typer.Option(
+        "--elements", help="Candidate shaft elements, e.g. 3,4,5 (default: every element).")] = "",
+    section_length: Annotated[float | None, typer.Option(
+        "--crack-section-length", help="Breathing crack section length for depths, m (default: the rig's crack's, "
+                                       "else the element's diameter).")] = None,
+    false_alarm: Annotated[float, typer.Option(
+        "--false-alarm", help="Chance per sweep that the true element is excluded (Sidak over the points used).")
+    ] = 0.01,
+    resample: Annotated[bool, typer.Option(
+        "--resample", help="Interpolate the new sweep onto the baseline's frequency grid when they differ.")] = False,
+    plots: Annotated[bool, typer.Option(help="Write the location plot (the shaft, elements by status).")] = True,
+    plot_format: PlotFormatOpt = "png",
+    as_json: JsonOpt = False,
+    force: ForceOpt = False,
+) -> int:
+    """Where and how big: every shaft element as a candidate for a local stiffness loss, each excluded with
+    a certificate (the frequencies named) or given a certified interval of loss and crack depth; the
+    consistent ones ranked. Writes <out>/location.json (and location.png); exit 1 when a damage is located,
+    0 when the change needs none (no damage to locate), 2 on bad input."""
+    from rotorcheck import workflow
+    from rotorcheck.baseline import read_baseline
+    from rotorcheck.fileio import atomic_write_text, check_writable
+    from rotorcheck.report.reports import render_json
+
+    formats = workflow.plot_formats(plot_format)
+    base_path = baseline if baseline is not None else out / "baseline.h5"
+    try:
+        els = tuple(int(x) for x in elements.replace(" ", "").split(",") if x) or None
+    except ValueError:
+        raise InputError(None, "--elements", f"{elements!r} is no list of element numbers (e.g. 3,4,5)") from None
+    cfg, _, mruns = workflow.load_rig_and_runs(sweep, rig, base_path, run)
+    mrun = mruns[0]
+    targets = [out / "location.json"] + (workflow.plot_paths(out, ("location",), formats) if plots else [])
+    check_writable(targets, force)
+    base = read_baseline(base_path)
+    if resample and base.frequency_hz is not None and workflow.grid_mismatch(mrun.frequency_hz,
+                                                                             base.frequency_hz) is not None:
+        mrun = workflow.resample_run(mrun, base.frequency_hz)
+        err.print(f"resampled {sweep} onto the baseline's grid ({base.frequency_hz.size} points)")
+    workflow.check_baseline(base, cfg, mrun, base_path)
+    with _progress(f"locating the change of {sweep.name} (every candidate element, certified)"):
+        res = workflow.locate_damage(cfg, base, mrun, false_alarm, els, section_length)
+    doc = {"sweep": str(sweep), "sweep_sha256": mrun.sha256, "baseline": str(base_path), "rig_id": cfg.rig_id,
+           "speed_rpm": mrun.speed_rpm, **res.to_dict()}
+    atomic_write_text(out / "location.json", render_json(doc))
+    written = [out / "location.json"]
+    if plots:
+        from rotorcheck.report.figures import save_figure
+        from rotorcheck.report.plots import location_figure
+
+        written += save_figure(location_figure(cfg, res, f"{sweep.name}: {res.summary()}"), out / "location", formats)
+    err.print(("[bold red]" if res.best is not None else "[bold green]") + res.summary() + "[/]")
+    if res.single_channel is not None:
+        err.print("one channel alone: " + res.single_channel.summary())
+    for p_ in written:
+        err.print(f"wrote {p_}")
+    if as_json:
+        _emit_json(doc)
+    return EXIT_DAMAGE if res.best is not None else EXIT_OK
 
 
 @app.command()

@@ -747,6 +747,7 @@ class DetectionOutcome:
     joint: Any = None  # robust.joint.JointResult (the joint test, when it decided)
     beyond_benign: Any = None  # robust.real_box.BoxCertificate: per-point certificate beyond benign change
     damage_xy: Any = None  # DirectionalDamage: D at the damage station in x and y (several pairs)
+    location: Any = None  # rotorcheck.location.LocationResult (detect --locate)
 
     @property
     def exit_code(self) -> int:
@@ -820,6 +821,8 @@ class DetectionOutcome:
             rem = np.asarray(np.asarray(j.remaining, dtype=bool).reshape(-1, f.size).any(axis=0))  # any channel pair
             rep.fault_beyond_benign = rem
             rep.fault_beyond_benign_frequencies_hz = [float(x) for x in f[rem]]
+        if self.location is not None:
+            rep.location = self.location.to_dict()
         dxy = self.damage_xy
         if dxy is not None:
             rep.damage_dynamics_by_direction = {
@@ -1232,6 +1235,60 @@ def detect(
                          "re_interval/im_interval: 95 % by Monte Carlo over the noise")
     return DetectionOutcome(rig, baseline, run, model, det, ver, damage, dset, anchored, anchored_set, notes,
                             measured, noise_only, joint, beyond, damage_xy)
+
+
+def locate_damage(rig: RigConfig, baseline: Any, run: MeasuredRun, false_alarm: float = 0.01,
+                  elements: tuple[int, ...] | None = None, section_length: float | None = None,
+                  both: bool = True, **options: Any) -> Any:
+    """Where and how big (:func:`rotorcheck.location.locate`) against a baseline validated with
+    ``--enclose measured``: :func:`locate_run` with its healthy FRF, speed and updated model."""
+    if baseline.enclose != "measured" or _healthy_frf(baseline) is None:
+        raise InputError(baseline.path, "enclose", "locating needs a baseline validated with --enclose measured "
+                         f"(this one: {baseline.enclose!r})")
+    return locate_run(updated_rig(rig, baseline_updates(baseline)), run, np.asarray(baseline.healthy_frf),
+                      np.asarray(baseline.healthy_frf_var), baseline.speed_rpm, false_alarm, elements,
+                      section_length, both, **options)
+
+
+def locate_run(rig: RigConfig, run: MeasuredRun, healthy_frf: np.ndarray, healthy_var: np.ndarray,
+               speed_rpm: float | None = None, false_alarm: float = 0.01, elements: tuple[int, ...] | None = None,
+               section_length: float | None = None, both: bool = True, **options: Any) -> Any:
+    """Every shaft element (or ``elements``) as a candidate for a local stiffness loss
+    (:func:`rotorcheck.location.locate`), ``run`` against the healthy FRF (f,) or (f, P) and the variance
+    of its mean, the rig's benign parameters real in their ranges (at the healthy ``speed_rpm``; the run's
+    offset from it moves the speed range). With several channel pairs and ``both``, the rig's own actuator
+    -> sensor pair alone is located too (``result.single_channel``). ``section_length`` (m): the breathing
+    crack's, for depths. ``options`` go to :func:`rotorcheck.location.locate`."""
+    from rotorcheck.location import locate
+    from rotorcheck.signatures import benign_box
+    from rotorcheck.variability import benign_at
+
+    if rig.kind != "rotor":
+        raise InputError(None, "--rig", "locating needs a rotor's shaft elements; this rig is lumped")
+    if not 0.0 < false_alarm < 1.0:
+        raise InputError(None, "--false-alarm", f"must be in (0, 1), got {false_alarm}")
+    if elements is not None:
+        known = {e.start for e in rig.shaft}
+        bad = [e for e in elements if e not in known]
+        if bad:
+            raise InputError(None, "--elements", f"no shaft element {bad} in this rig (elements {sorted(known)})")
+    f = run.frequency_hz
+    est = frf_estimate(run)
+    n_pairs = est.frf.shape[1]
+    th, vh = _per_pair(healthy_frf, f, n_pairs, run), _per_pair(healthy_var, f, n_pairs, run)
+    speed = run.speed_rpm if speed_rpm is None else speed_rpm
+    params = benign_at(rig, speed) if rig.variability else ()
+    box = benign_box(rig, speed, params, run.speed_rpm - speed)
+    pairs = list(run.pairs)
+    bm = _benign_model(rig, f, speed, th, KAPPA_NOMINAL, run.speed_rpm - speed, None, pairs if n_pairs > 1 else None)
+    env = np.zeros(f.size * n_pairs) if bm is None else np.asarray(bm.envelope, dtype=float)
+    res = locate(rig, box, pairs, f, speed, est.frf, est.var, th, vh, env, false_alarm, elements,
+                 crack_section_length=section_length, **options)
+    if both and n_pairs > 1:
+        res.single_channel = locate(rig, box.for_pair(pairs[0]), pairs[:1], f, speed, est.frf[:, :1],
+                                    est.var[:, :1], th[:, :1], vh[:, :1], env[:f.size], false_alarm, elements,
+                                    crack_section_length=section_length, **options)
+    return res
 
 
 def benign_table(joint: Any, rig: RigConfig) -> list[dict[str, Any]]:

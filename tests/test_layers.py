@@ -26,6 +26,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("rotorcheck.nominal",),
     ("rotorcheck.signatures",),  # crack and benign change shapes by re-solving the model
     ("rotorcheck.updating",),  # model updating on the benign parameters
+    ("rotorcheck.location",),  # candidate elements with certified severity intervals
     ("rotorcheck.baseline", "rotorcheck.report"),
     ("rotorcheck.workflow",),
     ("rotorcheck.cli",),

@@ -8,6 +8,7 @@ names (``--rig`` defaults to the bundled rig named by the sweep, ``--out`` to ``
     rotorcheck fit-noise  <healthy sweep>
     rotorcheck validate   <healthy sweep>
     rotorcheck detect     <new sweep>
+    rotorcheck locate     <new sweep>      (the open crack at 0 rpm: where and how big)
 
 Cases: the open crack at 0 rpm, the breathing crack at 1000 rpm, the repeat healthy sweep at
 1000 rpm and a free-running (random start angle) healthy pair at 2000 rpm (false-alarm checks); with
@@ -25,6 +26,8 @@ from pathlib import Path
 
 from rotorcheck.resources import configs_dir, samples_dir
 
+#: the cases where the demo also locates the change (every shaft element a candidate)
+LOCATE = ("open_crack_0rpm",)
 CASES = (
     ("open_crack_0rpm", "crack_rig/healthy_0rpm.h5", "crack_rig/open_crack_0rpm.h5"),
     ("breathing_crack_1000rpm", "crack_rig/healthy_1000rpm.h5", "crack_rig/breathing_crack_1000rpm.h5"),
@@ -69,6 +72,8 @@ def main(root: str | Path = "demo") -> int:
         if rc == 2:
             return 2
         summary.append((name, VERDICTS.get(rc, str(rc)), work / "rotorcheck-out"))
+        if name in LOCATE and _run(["locate", n], work) == 2:
+            return 2
     print("\nsummary")
     for name, verdict, out in summary:
         print(f"  {name:26s} {verdict:12s} reports and plots in {out}")

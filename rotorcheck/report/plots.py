@@ -8,6 +8,8 @@ Fig. 43/47).
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from matplotlib.figure import Figure
 
@@ -156,4 +158,57 @@ def damage_dynamics_figure(
     ax_p.grid(True, alpha=0.3)
     if title:
         ax_m.set_title(title)
+    return fig
+
+
+def location_figure(config: Any, location: Any, title: str = "") -> Figure:
+    """The shaft along its axis (m): each candidate element coloured by its status (excluded: grey,
+    consistent: blue, the best ranked: red), stations, discs, bearings, actuator and sensor marked; below,
+    the certified stiffness-loss interval of every candidate not excluded (and its estimate)."""
+    from matplotlib.patches import Rectangle
+
+    fig = Figure(figsize=(8.0, 5.0), layout="constrained")
+    ax, bx = fig.subplots(2, 1, sharex=True, height_ratios=(1.0, 1.4))
+    z = np.asarray(config.stations, dtype=float)
+    status = {c.element: c for c in location.candidates}
+    best = location.best.element if location.best is not None else None
+    colour = {"excluded": "0.8", "consistent": "tab:blue"}
+    for el in config.shaft:
+        c = status.get(el.start)
+        col = "tab:red" if el.start == best else colour.get(c.status if c is not None else "", "white")
+        r = 0.5 * el.outer_diameter
+        ax.add_patch(Rectangle((z[el.start - 1], -r), z[el.end - 1] - z[el.start - 1], 2 * r, facecolor=col,
+                               edgecolor="k", lw=0.6))
+        ax.text(0.5 * (z[el.start - 1] + z[el.end - 1]), 1.6 * r, str(el.start), ha="center", va="bottom", fontsize=7)
+    dmax = max(el.outer_diameter for el in config.shaft)
+    for d in config.discs:
+        ax.add_patch(Rectangle((z[d.station - 1] - 0.004, -1.5 * dmax), 0.008, 3.0 * dmax, facecolor="0.4"))
+    for b in config.bearings:
+        ax.plot(z[b.station - 1], -1.3 * dmax, "^", color="k", ms=9)
+    ports = getattr(config, "ports", None)
+    for port, mark, name in ((getattr(ports, "actuator", None), "v", "actuator"),
+                             (getattr(ports, "sensor", None), "o", "sensor")):
+        if port is not None and getattr(port, "station", None) is not None:
+            ax.plot(z[port.station - 1], 1.3 * dmax, mark, color="tab:green", ms=8,
+                    label=f"{name} s{port.station}{port.direction}")
+    ax.plot([], [], "^", color="k", label="bearing")
+    ax.set_ylim(-2.2 * dmax, 2.2 * dmax)
+    ax.set_yticks([])
+    import textwrap
+
+    ax.set_title("\n".join(textwrap.wrap(title or location.summary(), 110)), fontsize=8)
+    ax.legend(loc="upper right", fontsize=7)
+    for c in location.candidates:
+        if c.status != "consistent":
+            continue
+        mid = 0.5 * (c.z_start_m + c.z_end_m)
+        lo, hi = 100 * c.loss_interval[0], 100 * c.loss_interval[1]
+        col = "tab:red" if c.element == best else "tab:blue"
+        bx.plot([mid, mid], [lo, hi], color=col, lw=5, alpha=0.6, solid_capstyle="butt")
+        if c.loss_estimate is not None:
+            bx.plot(mid, 100 * c.loss_estimate, "k_", ms=12)
+    bx.set_ylabel("element stiffness loss (%)\ncertified interval, fit (-)")
+    bx.set_xlabel("axial position (m); grey: excluded, blue: consistent, red: most likely")
+    bx.grid(True, alpha=0.3)
+    bx.set_xlim(z[0] - 0.01, z[-1] + 0.01)
     return fig

@@ -193,6 +193,10 @@ class _Point:
     allowance2: float
     g_lo: float
     g_hi: float
+    # a deterministic bound on the model's error, added to the noise allowance: ``tolerance`` (m/N) plus
+    # ``relative_error`` times the predicted change ``|T_h| |gain rho - 1|``
+    tolerance: float = 0.0
+    relative_error: float = 0.0
 
 
 def _examine(model: AffineModel, pt: _Point, centre: np.ndarray, half: np.ndarray
@@ -203,14 +207,18 @@ def _examine(model: AffineModel, pt: _Point, centre: np.ndarray, half: np.ndarra
     rho = model.receptance(pt.w, centre) / pt.g0
     gm = _best_gain(pt.t_new, pt.t_healthy * rho, pt.g_lo, pt.g_hi)
     resid = abs(pt.t_new - gm * pt.t_healthy * rho)
-    if resid <= pt.z * np.sqrt(pt.var_new + abs(gm * rho) ** 2 * pt.var_healthy + pt.allowance2):
+    extra = pt.tolerance + pt.relative_error * abs(pt.t_healthy) * abs(gm * rho - 1.0)
+    if resid <= pt.z * np.sqrt(pt.var_new + abs(gm * rho) ** 2 * pt.var_healthy + pt.allowance2) + extra:
         return True, -np.inf, share, gm
     _, rad, share = model.box_bound(pt.w, centre, half)
     if not np.isfinite(rad):
         return False, -np.inf, share, gm
     eps = rad / abs(pt.g0)
     low = resid - pt.g_hi * abs(pt.t_healthy) * eps
-    up = pt.z * np.sqrt(pt.var_new + (pt.g_hi * (abs(rho) + eps)) ** 2 * pt.var_healthy + pt.allowance2)
+    # |gain rho' - 1| over the box and the gain range: largest at a gain end (convex in the gain), plus eps
+    change = max(abs(pt.g_lo * rho - 1.0), abs(pt.g_hi * rho - 1.0)) + pt.g_hi * eps
+    extra = pt.tolerance + pt.relative_error * abs(pt.t_healthy) * change
+    up = pt.z * np.sqrt(pt.var_new + (pt.g_hi * (abs(rho) + eps)) ** 2 * pt.var_healthy + pt.allowance2) + extra
     return False, low - up, share, gm
 
 

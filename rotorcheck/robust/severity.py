@@ -1,0 +1,364 @@
+"""A certified interval of one real parameter (a severity) that every frequency point must share.
+
+The per-point certificate of :mod:`rotorcheck.robust.real_box` asks, point by point, whether *some*
+parameter values in the box explain the data there, each point free to choose its own. Here the values
+are the same at every point (one shaft, one sweep), which is far sharper: per point, a benign parameter
+at a range end explains almost any change near a resonance; jointly it must explain all of them.
+
+The severity's range is cut into slices. For each slice, a branch and bound over the other parameters
+(benign, real) proves the slice *excluded* when every sub-box is excluded by at least one point (the
+small-gain bound of :func:`rotorcheck.robust.real_box._examine`, batched here in :func:`examine_points`),
+or finds a *witness* (a parameter value that explains every point, evaluated exactly), or runs out of its
+budget ("open": not excluded, kept). Each end of the interval is found from outside in: the outermost slice
+not excluded is halved until ``tol`` wide, then searched for a witness. The interval is certified (no
+parameter value outside it explains every point); with witnesses at both ends it is also attained
+within ``tol``. When every slice is excluded, the hypothesis is excluded and the points that excluded
+sub-boxes are named (the test of that: at those points no severity and benign value in the box explain
+the data).
+"""
+
+from __future__ import annotations
+
+import heapq
+import itertools
+from collections import Counter
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from rotorcheck.robust.real_box import AffineModel, _Point
+
+#: how the severity interval is made (report.json)
+SEVERITY_RULE = ("one severity and one set of benign parameter values (real, in their ranges) and gain for every point "
+                 "jointly; a box of them is excluded when at one point of one channel pair |T_new - gain T_h G/G0| "
+                 "exceeds z sqrt(var_new + |gain G/G0|^2 var_h) + tolerance + eps |T_h| |gain G/G0 - 1| for all its "
+                 "members (small-gain bound; z Sidak over the points used, complex Gaussian noise with the variances "
+                 "as known; tolerance and eps the model's error bounds); the certified interval holds every severity "
+                 "not excluded (branch and bound per slice, outermost slices halved), a candidate is excluded when "
+                 "every slice is")
+
+
+#: points tried first on every box (the ones that excluded boxes most often)
+EARLY = 6
+
+
+@dataclass(frozen=True)
+class SeverityInterval:
+    """What :func:`severity_interval` certifies about one hypothesis."""
+
+    status: str  # "excluded" | "consistent"
+    lower: float  # certified: no value below explains every point jointly (nan when excluded)
+    upper: float
+    witness_interval: tuple[float, float]  # values at the ends that do explain every point (nan: none found)
+    excluding: tuple[int, ...]  # points that excluded sub-boxes, most often first
+    boxes: int  # sub-boxes examined
+    witnessed: bool  # both ends hold a witness within tol (else the interval may be wider than the set)
+
+
+@dataclass(frozen=True)
+class Points:
+    """The points of :func:`severity_interval` as arrays (m,): frequency ``w`` rad/s, the model's
+    receptance at the parameters' zero ``g0``, new and healthy FRFs and their variances, the quantile
+    ``z``, the variance-like allowance ``a2``, the gain range, the deterministic ``tolerance`` (m/N) and
+    ``relative_error`` of the prediction (see :class:`rotorcheck.robust.real_box._Point`); ``b``, ``c``
+    (m, n) each point's force input and displacement output."""
+
+    w: np.ndarray
+    g0: np.ndarray
+    t_new: np.ndarray
+    t_healthy: np.ndarray
+    var_new: np.ndarray
+    var_healthy: np.ndarray
+    z: float
+    a2: np.ndarray
+    g_lo: float
+    g_hi: float
+    tolerance: np.ndarray
+    relative_error: np.ndarray
+    b: np.ndarray
+    c: np.ndarray
+
+    @property
+    def size(self) -> int:
+        return int(self.w.size)
+
+    def take(self, idx: np.ndarray) -> Points:
+        """The points ``idx`` (an index array) only."""
+        def t(x: np.ndarray) -> np.ndarray:
+            return np.asarray(x)[idx]
+
+        return Points(t(self.w), t(self.g0), t(self.t_new), t(self.t_healthy), t(self.var_new), t(self.var_healthy),
+                      self.z, t(self.a2), self.g_lo, self.g_hi, t(self.tolerance), t(self.relative_error), t(self.b),
+                      t(self.c))
+
+    @classmethod
+    def of(cls, models: Sequence[AffineModel], points: Sequence[_Point], which: Sequence[int]) -> Points:
+        """From per-point records and each point's model (its ``b``, ``c``)."""
+        def arr(name: str, dtype: Any = float) -> np.ndarray:
+            return np.array([getattr(p, name) for p in points], dtype=dtype)
+
+        p0 = points[0]
+        return cls(arr("w"), arr("g0", complex), arr("t_new", complex), arr("t_healthy", complex), arr("var_new"),
+                   arr("var_healthy"), float(p0.z), arr("allowance2"), float(p0.g_lo), float(p0.g_hi),
+                   arr("tolerance"), arr("relative_error"), np.array([models[j].b for j in which], dtype=float),
+                   np.array([models[j].c for j in which], dtype=float))
+
+
+@dataclass(frozen=True)
+class _Factors:
+    """A model's parameter factors stacked: ``U`` (n, r), ``V`` (n, r), each column's parameter and kind."""
+
+    U: np.ndarray
+    V: np.ndarray
+    param: np.ndarray  # (r,) int
+    kind: np.ndarray  # (r,) str
+
+    @classmethod
+    def of(cls, model: AffineModel) -> _Factors:
+        us, vs, prm, kind = [], [], [], []
+        for i, terms in enumerate(model.factors):
+            for k, u, v in terms:
+                us.append(u)
+                vs.append(v)
+                prm += [i] * u.shape[1]
+                kind += [k] * u.shape[1]
+        n = model.K.shape[0]
+        return cls(np.hstack(us) if us else np.zeros((n, 0)), np.hstack(vs) if vs else np.zeros((n, 0)),
+                   np.array(prm, dtype=int), np.array(kind))
+
+
+def _s_of(kind: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """(m, r) the factor s(w) of each column: 1 (K), j w (D), -w^2 (M)."""
+    out = np.ones((w.size, kind.size), dtype=complex)
+    out[:, kind == "D"] = 1j * w[:, None]
+    out[:, kind == "M"] = -(w**2)[:, None]
+    return out
+
+
+def examine_points(model: AffineModel, fac: _Factors, pts: Points, centre: np.ndarray, half: np.ndarray
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Every point at once: ``(explained at the centre (m,), margin of the exclusion test (m,) (> 0:
+    excluded; -inf where explained or unbounded) ``centre``, ``half`` (p,) for every point or (m, p) one
+    box per point), each parameter's share of the bound (m, p), the bound
+    on the scaled ``||N||`` (m,): the small-gain bound is finite below 1)`` -- the
+    batched form of :func:`rotorcheck.robust.real_box._examine` (the same bounds)."""
+    w = pts.w
+    p = len(model.parameters)
+    centre = np.broadcast_to(np.asarray(centre, dtype=float), (w.size, p))
+    half = np.broadcast_to(np.asarray(half, dtype=float), (w.size, p))
+    Z = model.K[None] - (w**2)[:, None, None] * model.M[None] + 1j * w[:, None, None] * model.D[None]
+    for i, prm in enumerate(model.parameters):
+        t = centre[:, i]
+        if np.any(t != 0.0):
+            for kind, A in prm.terms:
+                Z = Z + (t * _s_of(np.array([kind]), w)[:, 0])[:, None, None] * A[None]
+    r = fac.U.shape[1]
+    rhs = np.concatenate([np.broadcast_to(fac.U, (w.size, *fac.U.shape)), pts.b[:, :, None]], axis=2)
+    X = np.linalg.solve(Z, rhs.astype(complex))
+    g_c = np.sum(pts.c * X[:, :, r], axis=1)
+    scale = _s_of(fac.kind, w) * half[:, fac.param]  # (m, r)
+    Xu = X[:, :, :r] * scale[:, None, :]
+    x = (pts.c[:, None, :] @ Xu)[:, 0, :]
+    y = X[:, :, r] @ fac.V  # (m, r)
+    N = fac.V.T[None] @ Xu
+    # one positive scale per parameter block (commutes with delta_i I)
+    share = np.zeros((w.size, p))
+    sc = np.ones((w.size, r))
+    for i in range(p):
+        cols = fac.param == i
+        if not np.any(cols):
+            continue
+        nx = np.linalg.norm(x[:, cols], axis=1)
+        ny = np.linalg.norm(y[:, cols], axis=1)
+        share[:, i] = nx * ny
+        good = (nx > 0) & (ny > 0)
+        sc[:, cols] = np.where(good, np.sqrt(np.where(good, nx, 1.0) / np.where(good, ny, 1.0)), 1.0)[:, None]
+    xs, ys = x / sc, y * sc
+    Ns = sc[:, :, None] * N / sc[:, None, :]
+    nrm = np.sqrt(np.sum(np.abs(Ns) ** 2, axis=(1, 2)))
+    big = nrm >= 0.5  # the exact norm only where the Frobenius bound costs much
+    if np.any(big):
+        Nb = Ns[big]
+        top = np.linalg.eigvalsh(np.conj(np.swapaxes(Nb, 1, 2)) @ Nb)[:, -1]  # ||N||^2, Hermitian: cheaper than svd
+        nrm[big] = np.minimum(nrm[big], np.sqrt(np.maximum(top, 0.0)) * (1.0 + 1e-12))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        rad = np.where(nrm < 1.0, np.linalg.norm(xs, axis=1) * np.linalg.norm(ys, axis=1) / (1.0 - nrm), np.inf)
+        rho = g_c / pts.g0
+        pred = pts.t_healthy * rho
+        den = np.abs(pred) ** 2
+        gm = np.where(den > 0, (pts.t_new * np.conj(pred)).real / np.where(den > 0, den, 1.0), 1.0)
+        gm = np.clip(gm, pts.g_lo, pts.g_hi)
+        resid = np.abs(pts.t_new - gm * pred)
+        extra = pts.tolerance + pts.relative_error * np.abs(pts.t_healthy) * np.abs(gm * rho - 1.0)
+        ok = resid <= pts.z * np.sqrt(pts.var_new + np.abs(gm * rho) ** 2 * pts.var_healthy + pts.a2) + extra
+        eps = rad / np.abs(pts.g0)
+        low = resid - pts.g_hi * np.abs(pts.t_healthy) * eps
+        change = np.maximum(np.abs(pts.g_lo * rho - 1.0), np.abs(pts.g_hi * rho - 1.0)) + pts.g_hi * eps
+        extra = pts.tolerance + pts.relative_error * np.abs(pts.t_healthy) * change
+        up = pts.z * np.sqrt(pts.var_new + (pts.g_hi * (np.abs(rho) + eps)) ** 2 * pts.var_healthy + pts.a2) + extra
+        margin = np.where(ok | ~np.isfinite(rad), -np.inf, low - up)
+    return ok, margin, share, nrm
+
+
+def point_ratios(model: AffineModel, pts: Points, theta: np.ndarray) -> np.ndarray:
+    """(m,) each point's residual over its allowance at ``theta`` (exact; best gain per point clipped to
+    its range): every ratio <= 1 makes ``theta`` a witness."""
+    w = pts.w
+    Z = model.K[None] - (w**2)[:, None, None] * model.M[None] + 1j * w[:, None, None] * model.D[None]
+    for t, prm in zip(np.asarray(theta, dtype=float), model.parameters):
+        if t != 0.0:
+            for kind, A in prm.terms:
+                Z = Z + (t * _s_of(np.array([kind]), w)[:, 0])[:, None, None] * A[None]
+    g = np.sum(pts.c * np.linalg.solve(Z, pts.b[:, :, None].astype(complex))[:, :, 0], axis=1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        rho = g / pts.g0
+        pred = pts.t_healthy * rho
+        den = np.abs(pred) ** 2
+        gm = np.clip(np.where(den > 0, (pts.t_new * np.conj(pred)).real / np.where(den > 0, den, 1.0), 1.0),
+                     pts.g_lo, pts.g_hi)
+        allow = (pts.z * np.sqrt(pts.var_new + np.abs(gm * rho) ** 2 * pts.var_healthy + pts.a2) + pts.tolerance
+                 + pts.relative_error * np.abs(pts.t_healthy) * np.abs(gm * rho - 1.0))
+        return np.abs(pts.t_new - gm * pred) / allow
+
+
+def _witness(model: AffineModel, pts: Points, lo: np.ndarray, hi: np.ndarray) -> np.ndarray | None:
+    """Parameter values in ``[lo, hi]`` explaining every point (every ratio <= 1): the box's centre, else a
+    bounded least squares of the ratios from it, then one that weighs the largest ratios; None if none."""
+    from scipy.optimize import least_squares
+
+    free = hi > lo
+    x0 = 0.5 * (lo + hi)
+    if np.all(point_ratios(model, pts, x0) <= 1.0):
+        return x0
+    if not np.any(free):
+        return None
+
+    def full(xf: np.ndarray) -> np.ndarray:
+        x = x0.copy()
+        x[free] = xf
+        return x
+
+    for power in (1.0, 4.0):
+        def res(xf: np.ndarray, q: float = power) -> np.ndarray:
+            r = point_ratios(model, pts, full(xf))
+            return np.where(np.isfinite(r), r, 1e6) ** q
+        try:
+            sol = least_squares(res, x0[free], bounds=(lo[free], hi[free]), x_scale=hi[free] - lo[free], max_nfev=40)
+        except (ValueError, np.linalg.LinAlgError):
+            return None
+        x0 = full(sol.x)
+        if np.all(point_ratios(model, pts, x0) <= 1.0):
+            return x0
+    return None
+
+
+def _box(model: AffineModel, fac: _Factors, pts: Points, lo: np.ndarray, hi: np.ndarray, max_boxes: int,
+         used: Counter[int]) -> tuple[str, np.ndarray | None, int]:
+    """Branch and bound over one box, every point jointly: ``("excluded" | "witness" | "open", witness,
+    boxes)``. A sub-box is excluded when one point excludes it; its centre is a witness when it explains
+    every point; the sub-box closest to exclusion is split first (along the parameter with the largest
+    share of that point's bound); "open": the budget ran out first."""
+
+    def examine(c: np.ndarray, h: np.ndarray) -> tuple[float, np.ndarray | None]:
+        # the points that excluded boxes most often first (most boxes fall to one of them), then the rest
+        first = np.array([k for k, _ in used.most_common(EARLY)], dtype=int)
+        if first.size:
+            _, margin, share, _ = examine_points(model, fac, pts.take(first), c, h)
+            k = int(np.argmax(margin))
+            if margin[k] > 0:
+                used[int(first[k])] += 1
+                return float(margin[k]), share[k]
+        ok, margin, share, _ = examine_points(model, fac, pts, c, h)
+        k = int(np.argmax(margin))
+        if margin[k] > 0:
+            used[k] += 1
+            return float(margin[k]), share[k]
+        return (-np.inf, None) if np.all(ok) else (float(margin[k]), share[k])
+
+    c0, h0 = (lo + hi) / 2.0, (hi - lo) / 2.0
+    margin, share = examine(c0, h0)
+    if margin > 0:
+        return "excluded", None, 1
+    if share is None:
+        return "witness", c0, 1
+    heap: list[tuple[float, int, np.ndarray, np.ndarray, np.ndarray]] = [(-margin, 0, c0, h0, share)]
+    boxes, tick = 1, 1
+    span = np.where(hi > lo, hi - lo, 1.0)
+    while heap:
+        if boxes >= max_boxes:
+            return "open", None, boxes
+        _, _, c, h, sh = heapq.heappop(heap)
+        weight = np.where(h > 0, np.nan_to_num(sh), 0.0)
+        i = int(np.argmax(weight)) if np.any(weight > 0) else int(np.argmax(np.where(hi > lo, h / span, -1.0)))
+        if h[i] <= 0.0:
+            return "open", None, boxes
+        h1 = h.copy()
+        h1[i] /= 2.0
+        for sgn in (-1.0, 1.0):
+            c1 = c.copy()
+            c1[i] += sgn * h1[i]
+            margin, share = examine(c1, h1)
+            boxes += 1
+            if margin > 0:
+                continue
+            if share is None:
+                return "witness", c1, boxes
+            heapq.heappush(heap, (-margin, tick, c1, h1, share))
+            tick += 1
+    return "excluded", None, boxes
+
+
+def _end(model: AffineModel, fac: _Factors, pts: Points, lo: np.ndarray, hi: np.ndarray, index: int,
+         upward: bool, tol: float, slices: int, max_boxes: int, used: Counter[int],
+         cache: dict[tuple[float, float], str]) -> tuple[float, float, int, bool]:
+    """One end of the interval: ``(certified end, witness value (nan: none found), boxes, witnessed)``;
+    the end is nan when every slice is excluded. Slices are taken from that end inwards; one not excluded
+    is halved until ``tol`` wide, then searched for a witness."""
+    edges = np.linspace(lo[index], hi[index], slices + 1)
+    stack = [(float(a), float(b)) for a, b in itertools.pairwise(edges)]
+    if not upward:
+        stack.reverse()  # pop() takes the lowest slice first
+    boxes = 0
+    while stack:
+        a, b = stack.pop()
+        l1, h1 = lo.copy(), hi.copy()
+        l1[index], h1[index] = a, b
+        kind = cache.get((a, b))
+        wit = None
+        if kind is None:
+            kind, wit, n = _box(model, fac, pts, l1, h1, max_boxes, used)
+            cache[(a, b)] = kind
+            boxes += n
+        if kind == "excluded":
+            continue
+        if b - a > tol:
+            mid = 0.5 * (a + b)
+            halves = [(a, mid), (mid, b)]
+            stack.extend(halves if upward else halves[::-1])
+            continue
+        if wit is None:
+            wit = _witness(model, pts, l1, h1)
+        return (b if upward else a), (float(wit[index]) if wit is not None else float("nan")), boxes, wit is not None
+    return float("nan"), float("nan"), boxes, True
+
+
+def severity_interval(model: AffineModel, pts: Points, lo: np.ndarray, hi: np.ndarray, index: int,
+                      tol: float = 0.01, slices: int = 16, max_boxes: int = 16) -> SeverityInterval:
+    """Certify the interval of parameter ``index`` over which the box ``[lo, hi]`` (p,) explains every
+    point jointly (module docstring; each point's ``b``, ``c`` in ``pts``); ``tol`` the width to which
+    the end slices are halved; ``slices`` the first division of the range; ``max_boxes`` the budget of
+    sub-boxes per slice."""
+    lo, hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
+    used: Counter[int] = Counter()
+    cache: dict[tuple[float, float], str] = {}
+    fac = _Factors.of(model)
+    n_sl = slices if hi[index] > lo[index] else 1
+    lower, w_lo, n1, done1 = _end(model, fac, pts, lo, hi, index, False, tol, n_sl, max_boxes, used, cache)
+    if not np.isfinite(lower):
+        return SeverityInterval("excluded", float("nan"), float("nan"), (float("nan"), float("nan")),
+                                tuple(k for k, _ in used.most_common()), n1, False)
+    upper, w_hi, n2, done2 = _end(model, fac, pts, lo, hi, index, True, tol, n_sl, max_boxes, used, cache)
+    return SeverityInterval("consistent", float(lower), float(upper), (w_lo, w_hi),
+                            tuple(k for k, _ in used.most_common()), n1 + n2, done1 and done2)

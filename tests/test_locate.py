@@ -1,0 +1,78 @@
+"""`rotorcheck locate` end to end on the bundled crack-rig samples (issue 11): the open crack (element 4,
+modulus factor 0.46: a 54 % loss) is located in element 4 with a loss interval holding 54 %, the far
+elements are excluded with their frequencies named; a healthy repeat locates nothing; detect's report
+carries the same section. Candidates limited to a few elements to keep the test short (the bench runs
+every element: bench/results_location.md)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from rotorcheck.cli import EXIT_DAMAGE, EXIT_INPUT, EXIT_OK, main
+from rotorcheck.resources import samples_dir
+
+S = samples_dir() / "crack_rig"
+
+
+@pytest.fixture(scope="module")
+def base0(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    out = tmp_path_factory.mktemp("loc") / "out"
+    assert main(["fit-noise", str(S / "healthy_0rpm.h5"), "--out", str(out)]) == EXIT_OK
+    assert main(["validate", str(S / "healthy_0rpm.h5"), "--out", str(out), "--no-plots"]) == EXIT_OK
+    return out
+
+
+def test_locate_the_open_crack_sample(base0: Path, capsys: pytest.CaptureFixture) -> None:
+    capsys.readouterr()
+    code = main(["locate", str(S / "open_crack_0rpm.h5"), "--out", str(base0), "--elements", "1,4,9", "--json"])
+    doc = json.loads(capsys.readouterr().out)
+    assert code == EXIT_DAMAGE
+    assert doc["best_element"] == 4 and doc["healthy_excluded"] is True and doc["hypothesis"] == "open"
+    c = {x["element"]: x for x in doc["candidates"]}
+    lo, hi = c[4]["loss_interval"]
+    assert lo <= 0.54 <= hi and c[4]["rank"] == 1
+    mf = c[4]["modulus_factor_interval"]
+    assert mf[0] <= 0.46 <= mf[1]
+    for e in (1, 9):
+        assert c[e]["status"] == "excluded" and c[e]["excluding_frequencies_hz"] and c[e]["rank"] is None
+    assert (base0 / "location.json").exists() and (base0 / "location.png").exists()
+    # nothing is overwritten without --force
+    assert main(["locate", str(S / "open_crack_0rpm.h5"), "--out", str(base0), "--elements", "4"]) == EXIT_INPUT
+
+
+def test_locate_bad_elements_is_input_error(base0: Path, capsys: pytest.CaptureFixture) -> None:
+    assert main(["locate", str(S / "open_crack_0rpm.h5"), "--out", str(base0), "--elements", "4,x",
+                 "--force"]) == EXIT_INPUT
+    assert "--elements" in capsys.readouterr().err
+    assert main(["locate", str(S / "open_crack_0rpm.h5"), "--out", str(base0), "--elements", "42",
+                 "--force", "--no-plots"]) == EXIT_INPUT
+
+
+def test_healthy_repeat_locates_nothing(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    out = tmp_path / "out"
+    assert main(["fit-noise", str(S / "healthy_1000rpm.h5"), "--out", str(out)]) == EXIT_OK
+    assert main(["validate", str(S / "healthy_1000rpm.h5"), "--out", str(out), "--no-plots"]) == EXIT_OK
+    capsys.readouterr()
+    code = main(["locate", str(S / "healthy_1000rpm_repeat.h5"), "--out", str(out), "--elements", "4",
+                 "--json", "--no-plots"])
+    doc = json.loads(capsys.readouterr().out)
+    assert code == EXIT_OK and doc["best_element"] is None and doc["healthy_excluded"] is False
+    assert doc["summary"].startswith("no damage to locate")
+    assert all(x["rank"] is None for x in doc["candidates"])
+
+
+def test_detect_report_carries_the_location(base0: Path) -> None:
+    from rotorcheck import workflow
+    from rotorcheck.baseline import read_baseline
+
+    base = read_baseline(base0 / "baseline.h5")
+    cfg, _, runs = workflow.load_rig_and_runs(S / "open_crack_0rpm.h5", None, base0 / "baseline.h5")
+    outcome = workflow.detect(cfg, base, runs[0])
+    assert outcome.verdict.verdict == "damage"
+    outcome.location = workflow.locate_damage(cfg, base, runs[0], elements=(4,))
+    loc = outcome.report()["location"]
+    assert loc["best_element"] == 4 and loc["candidates"][0]["loss_interval"][0] <= 0.54
+    assert "location" not in workflow.detect(cfg, base, runs[0]).report()
