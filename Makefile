@@ -1,4 +1,6 @@
 # rotorcheck: every target creates and uses its own virtual environment in .venv
+# (one BLAS thread per process: the engine solves many small systems, where BLAS threads only contend,
+# above all beside pytest's two workers on two cores)
 PY ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
@@ -15,12 +17,12 @@ $(STAMP): pyproject.toml
 venv: $(STAMP)
 
 demo: $(STAMP)
-	MPLBACKEND=Agg $(BIN)/python -m tools.demo
+	MPLBACKEND=Agg OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 $(BIN)/python -m tools.demo
 
 test: $(STAMP)
 	$(BIN)/ruff check rotorcheck tests bench tools
 	$(BIN)/python -m mypy rotorcheck
-	MPLBACKEND=Agg $(BIN)/python -m pytest -q -n 2 --dist loadfile
+	MPLBACKEND=Agg OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 $(BIN)/python -m pytest -q -n 2 --dist loadfile
 
 lint: $(STAMP)
 	$(BIN)/ruff check rotorcheck tests bench tools
