@@ -457,17 +457,25 @@ def _detect_one(base: Any, cfg: Any, mrun: Any, sweep: Path, base_path: Path, co
     """One run against its baseline: resample when asked, check, detect (and locate a damage when asked)."""
     from rotorcheck import workflow
 
-    if resample and base.frequency_hz is not None and workflow.grid_mismatch(mrun.frequency_hz,
-                                                                             base.frequency_hz) is not None:
-        mrun = workflow.resample_run(mrun, base.frequency_hz)
-        err.print(f"resampled {sweep} ({mrun.resampled_from} points) onto the baseline's grid "
-                  f"({base.frequency_hz.size} points, linear interpolation)")
+    mrun = _resampled(base, mrun, sweep, resample)
     workflow.check_baseline(base, cfg, mrun, base_path)
     outcome = workflow.detect(cfg, base, mrun, fail_at=_fail_at(fail_at), confidence=confidence, rule=rule,
                               false_alarm=false_alarm)
     if locate and outcome.verdict.verdict == "damage":
         outcome.location = workflow.locate_damage(cfg, base, mrun, false_alarm)
     return outcome
+
+
+def _resampled(base: Any, mrun: Any, sweep: Path, resample: bool) -> Any:
+    """``mrun`` on the baseline's grid when asked and the grids differ (and said so), else as it is."""
+    from rotorcheck import workflow
+
+    if resample and base.frequency_hz is not None and workflow.grid_mismatch(mrun.frequency_hz,
+                                                                             base.frequency_hz) is not None:
+        mrun = workflow.resample_run(mrun, base.frequency_hz)
+        err.print(f"resampled {sweep} ({mrun.resampled_from} points) onto the baseline's grid "
+                  f"({base.frequency_hz.size} points, linear interpolation)")
+    return mrun
 
 
 def _print_outcome(outcome: Any, report: dict[str, Any], prefix: str = "") -> None:
@@ -568,10 +576,7 @@ def locate(
     targets = [out / "location.json"] + (workflow.plot_paths(out, ("location",), formats) if plots else [])
     check_writable(targets, force)
     base = read_baseline(base_path)
-    if resample and base.frequency_hz is not None and workflow.grid_mismatch(mrun.frequency_hz,
-                                                                             base.frequency_hz) is not None:
-        mrun = workflow.resample_run(mrun, base.frequency_hz)
-        err.print(f"resampled {sweep} onto the baseline's grid ({base.frequency_hz.size} points)")
+    mrun = _resampled(base, mrun, sweep, resample)
     workflow.check_baseline(base, cfg, mrun, base_path)
     with _progress(f"locating the change of {sweep.name} (every candidate element, certified)"):
         res = workflow.locate_damage(cfg, base, mrun, false_alarm, els, section_length)

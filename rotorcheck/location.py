@@ -471,11 +471,6 @@ def _fit(model: AffineModel, views: Sequence[Any], omega: np.ndarray, t_new: np.
 def _receptances(model: AffineModel, omega: np.ndarray, theta: np.ndarray, B: np.ndarray, Cm: np.ndarray
                  ) -> np.ndarray:
     """(f, P) receptances ``c_j^T Z(w, theta)^-1 b_j`` of each pair j (columns of B, Cm), batched over w."""
-    Z = model.K[None] - (omega**2)[:, None, None] * model.M[None] + 1j * omega[:, None, None] * model.D[None]
-    for t, prm in zip(theta, model.parameters):
-        if t != 0.0:
-            for kind, A in prm.terms:
-                s = {"K": np.ones_like(omega), "D": 1j * omega, "M": -(omega**2)}[kind]
-                Z = Z + t * s[:, None, None] * A[None]
+    Z = model.dynamic_stiffness_stack(omega, theta)
     X = np.linalg.solve(Z, np.broadcast_to(B, (omega.size, *B.shape)).astype(complex))
     return np.einsum("nj,fnj->fj", Cm, X)

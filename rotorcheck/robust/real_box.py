@@ -113,6 +113,20 @@ class AffineModel:
                     Z = Z + t * self._s(kind, w) * A
         return Z
 
+    def dynamic_stiffness_stack(self, w: np.ndarray, theta: np.ndarray) -> np.ndarray:
+        """``Z(w_k, theta_k)`` (m, n, n) complex N/m for frequencies ``w`` (m,) rad/s and parameters
+        ``theta`` (p,) for all or (m, p) one row per frequency."""
+        w = np.asarray(w, dtype=float)
+        th = np.broadcast_to(np.asarray(theta, dtype=float), (w.size, len(self.parameters)))
+        Z = self.K[None] - (w**2)[:, None, None] * self.M[None] + 1j * w[:, None, None] * self.D[None]
+        for i, prm in enumerate(self.parameters):
+            t = th[:, i]
+            if np.any(t != 0.0):
+                for kind, A in prm.terms:
+                    s = {"K": np.ones_like(w), "D": 1j * w, "M": -(w**2)}[kind]
+                    Z = Z + (t * s)[:, None, None] * A[None]
+        return Z
+
     def receptance(self, w: float, theta: np.ndarray) -> complex:
         """``G(w, theta)`` m/N, by a direct solve."""
         return complex(self.c @ np.linalg.solve(self.dynamic_stiffness(w, theta), self.b))

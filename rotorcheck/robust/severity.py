@@ -22,13 +22,11 @@ from __future__ import annotations
 import heapq
 import itertools
 from collections import Counter
-from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
-from rotorcheck.robust.real_box import AffineModel, _Point
+from rotorcheck.robust.real_box import AffineModel
 
 #: how the severity interval is made (report.json)
 SEVERITY_RULE = ("one severity and one set of benign parameter values (real, in their ranges) and gain for every point "
@@ -93,18 +91,6 @@ class Points:
                       self.z, t(self.a2), self.g_lo, self.g_hi, t(self.tolerance), t(self.relative_error), t(self.b),
                       t(self.c))
 
-    @classmethod
-    def of(cls, models: Sequence[AffineModel], points: Sequence[_Point], which: Sequence[int]) -> Points:
-        """From per-point records and each point's model (its ``b``, ``c``)."""
-        def arr(name: str, dtype: Any = float) -> np.ndarray:
-            return np.array([getattr(p, name) for p in points], dtype=dtype)
-
-        p0 = points[0]
-        return cls(arr("w"), arr("g0", complex), arr("t_new", complex), arr("t_healthy", complex), arr("var_new"),
-                   arr("var_healthy"), float(p0.z), arr("allowance2"), float(p0.g_lo), float(p0.g_hi),
-                   arr("tolerance"), arr("relative_error"), np.array([models[j].b for j in which], dtype=float),
-                   np.array([models[j].c for j in which], dtype=float))
-
 
 @dataclass(frozen=True)
 class _Factors:
@@ -146,14 +132,8 @@ def examine_points(model: AffineModel, fac: _Factors, pts: Points, centre: np.nd
     batched form of :func:`rotorcheck.robust.real_box._examine` (the same bounds)."""
     w = pts.w
     p = len(model.parameters)
-    centre = np.broadcast_to(np.asarray(centre, dtype=float), (w.size, p))
     half = np.broadcast_to(np.asarray(half, dtype=float), (w.size, p))
-    Z = model.K[None] - (w**2)[:, None, None] * model.M[None] + 1j * w[:, None, None] * model.D[None]
-    for i, prm in enumerate(model.parameters):
-        t = centre[:, i]
-        if np.any(t != 0.0):
-            for kind, A in prm.terms:
-                Z = Z + (t * _s_of(np.array([kind]), w)[:, 0])[:, None, None] * A[None]
+    Z = model.dynamic_stiffness_stack(w, centre)
     r = fac.U.shape[1]
     rhs = np.concatenate([np.broadcast_to(fac.U, (w.size, *fac.U.shape)), pts.b[:, :, None]], axis=2)
     X = np.linalg.solve(Z, rhs.astype(complex))
@@ -205,12 +185,7 @@ def examine_points(model: AffineModel, fac: _Factors, pts: Points, centre: np.nd
 def point_ratios(model: AffineModel, pts: Points, theta: np.ndarray) -> np.ndarray:
     """(m,) each point's residual over its allowance at ``theta`` (exact; best gain per point clipped to
     its range): every ratio <= 1 makes ``theta`` a witness."""
-    w = pts.w
-    Z = model.K[None] - (w**2)[:, None, None] * model.M[None] + 1j * w[:, None, None] * model.D[None]
-    for t, prm in zip(np.asarray(theta, dtype=float), model.parameters):
-        if t != 0.0:
-            for kind, A in prm.terms:
-                Z = Z + (t * _s_of(np.array([kind]), w)[:, 0])[:, None, None] * A[None]
+    Z = model.dynamic_stiffness_stack(pts.w, theta)
     g = np.sum(pts.c * np.linalg.solve(Z, pts.b[:, :, None].astype(complex))[:, :, 0], axis=1)
     with np.errstate(divide="ignore", invalid="ignore"):
         rho = g / pts.g0
