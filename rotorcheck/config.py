@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 import re
 from pathlib import Path
 from typing import Annotated, Any, Literal, NamedTuple, get_args
@@ -1034,22 +1035,87 @@ def parse_config(data: Any, source: str | Path = "<config>") -> RigConfig:
         raise ConfigError(source, field, msg) from None
 
 
+#: a rig file larger than this is refused before it is parsed (bytes)
+MAX_RIG_BYTES = 2_000_000
+
+
+class _StrictLoader(yaml.SafeLoader):
+    """Safe YAML with two YAML 1.1 surprises refused: a key given twice in one mapping (the later one
+    silently won) and an integer with a leading zero (``010`` was read as octal 8)."""
+
+    def construct_mapping(self, node: yaml.MappingNode, deep: bool = False) -> dict[Any, Any]:
+        seen: dict[Any, int] = {}
+        for key_node, _ in node.value:
+            key = self.construct_object(key_node, deep=deep)
+            if key in seen:
+                raise yaml.constructor.ConstructorError(
+                    None, None, f"key {key!r} given twice (first on line {seen[key] + 1})", key_node.start_mark)
+            seen[key] = key_node.start_mark.line
+        return super().construct_mapping(node, deep=deep)
+
+    def construct_yaml_int(self, node: yaml.ScalarNode) -> int:
+        text = str(node.value).replace("_", "")
+        if re.fullmatch(r"[-+]?0[0-7]+", text):
+            raise yaml.constructor.ConstructorError(
+                None, None, f"{node.value!r}: a leading zero (YAML 1.1 reads it as octal "
+                f"{int(text, 8)}); write {int(text, 10)} or quote it", node.start_mark)
+        return int(super().construct_yaml_int(node))
+
+
+_StrictLoader.add_constructor("tag:yaml.org,2002:int", _StrictLoader.construct_yaml_int)
+
+
+def _non_finite(data: Any, path: str = "") -> str | None:
+    """The path of the first NaN or infinite number in parsed YAML (``1e400`` reads as inf), else None."""
+    if isinstance(data, float) and not math.isfinite(data):
+        return path or "(top level)"
+    if isinstance(data, dict):
+        for k, v in data.items():
+            hit = _non_finite(v, f"{path}.{k}" if path else str(k))
+            if hit:
+                return hit
+    elif isinstance(data, list):
+        for i, v in enumerate(data):
+            hit = _non_finite(v, f"{path}[{i}]")
+            if hit:
+                return hit
+    return None
+
+
 def load_config(path: str | Path) -> RigConfig:
-    """Read and validate a rig YAML file; raises :class:`ConfigError` naming file and field."""
+    """Read and validate a rig YAML file; raises :class:`ConfigError` naming file and field. Refused
+    before validation: files over :data:`MAX_RIG_BYTES`, text that is not UTF-8, duplicate keys,
+    integers with a leading zero, nesting too deep to parse, NaN or infinite numbers (by field)."""
     p = Path(path)
     try:
-        text = p.read_text(encoding="utf-8")
+        if p.is_file() and p.stat().st_size > MAX_RIG_BYTES:
+            raise ConfigError(p, "", f"{p.stat().st_size} bytes: a rig file is at most {MAX_RIG_BYTES} bytes")
+        with open(p, "rb") as fh:
+            raw = fh.read(MAX_RIG_BYTES + 1)
     except FileNotFoundError:
         raise ConfigError(p, "", "file not found") from None
     except OSError as exc:
         raise ConfigError(p, "", f"cannot read: {exc.strerror}") from None
+    if len(raw) > MAX_RIG_BYTES:
+        raise ConfigError(p, "", f"more than {MAX_RIG_BYTES} bytes: a rig file is at most that")
     try:
-        data = yaml.safe_load(text)
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ConfigError(p, "", f"not UTF-8 text (byte {exc.start}): save the rig file as UTF-8") from None
+    if "\x00" in text:
+        raise ConfigError(p, "", "a NUL byte: this is no text file")
+    try:
+        data = yaml.load(text, Loader=_StrictLoader)  # a SafeLoader subclass
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f"line {mark.line + 1}, column {mark.column + 1}: " if mark else ""
         problem = getattr(exc, "problem", None) or str(exc)
         raise ConfigError(p, "", f"malformed YAML: {where}{problem}") from None
+    except RecursionError:
+        raise ConfigError(p, "", "nested too deeply to be a rig file") from None
+    bad = _non_finite(data)
+    if bad is not None:
+        raise ConfigError(p, bad, "not a finite number (NaN, inf, or beyond the float range such as 1e400)")
     return parse_config(data, p)
 
 

@@ -37,8 +37,16 @@ class UnitError(ValueError):
 def parse_quantity(value: object, dimension: str) -> float:
     """Return ``value`` in SI units of ``dimension`` (speed: rpm; frequency: Hz; angle: rad).
 
-    Accepts a bare number (already SI) or a string ``"<number> <unit>"``.
+    Accepts a bare number (already SI) or a string ``"<number> <unit>"``; NaN and infinite values
+    (``1e400`` overflows to inf) are refused.
     """
+    out = _parse(value, dimension)
+    if not math.isfinite(out):
+        raise UnitError(f"{value!r} is not a finite number (NaN, inf, or beyond the float range)")
+    return out
+
+
+def _parse(value: object, dimension: str) -> float:
     if isinstance(value, bool):
         raise UnitError("expected a number, got a boolean")
     if isinstance(value, (int, float)):
