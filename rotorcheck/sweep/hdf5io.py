@@ -166,6 +166,54 @@ def _read_run_v2(file: str, g: h5py.Group, where: str, run_id: str, speed: Any, 
     )
 
 
+#: a sweep whose datasets hold more than this many bytes is refused before anything is read
+MAX_SWEEP_BYTES = 256 * 2**20
+
+
+def check_self_contained(file: str, h5: h5py.File, max_bytes: int = MAX_SWEEP_BYTES) -> None:
+    """Refuse what would make a sweep read outside itself or more than it should: external links,
+    soft links (a loop among them hung or crashed the reader), virtual datasets and datasets with
+    external raw storage (each can map another file of the machine into the sweep), and datasets
+    totalling more than ``max_bytes``. Raises :class:`SweepFormatError` naming the path."""
+    total = 0
+    seen: set[Any] = set()
+
+    def walk(group: h5py.Group, prefix: str) -> None:
+        nonlocal total
+        for name in group:
+            path = f"{prefix}/{name}" if prefix != "/" else f"/{name}"
+            link = group.get(name, getlink=True)
+            if isinstance(link, h5py.ExternalLink):
+                raise SweepFormatError(file, path, f"an external link to {link.filename}:{link.path}: a sweep "
+                                       "file must hold its own data")
+            if isinstance(link, h5py.SoftLink):
+                raise SweepFormatError(file, path, f"a soft link to {link.path}: not part of the sweep format")
+            obj = group[name]
+            key = obj.id.__hash__()
+            if key in seen:
+                continue
+            seen.add(key)
+            if isinstance(obj, h5py.Group):
+                walk(obj, path)
+                continue
+            if isinstance(obj, h5py.Dataset):
+                if obj.is_virtual:
+                    raise SweepFormatError(file, path, "a virtual dataset (it maps other files): not allowed in a "
+                                           "sweep file")
+                plist = obj.id.get_create_plist()
+                if plist.get_external_count() > 0:
+                    names = [plist.get_external(i)[0].decode(errors="replace")
+                             for i in range(plist.get_external_count())]
+                    raise SweepFormatError(file, path, f"external raw storage in {', '.join(names)}: a sweep file "
+                                           "must hold its own data")
+                total += int(obj.size) * int(obj.dtype.itemsize)
+                if total > max_bytes:
+                    raise SweepFormatError(file, path, f"the datasets exceed {max_bytes // 2**20} MiB: refused "
+                                           "before reading (split the sweep into several files)")
+
+    walk(h5, "/")
+
+
 def read_sweep(
     path: str | os.PathLike[str],
     *,
@@ -189,6 +237,7 @@ def read_sweep(
     except Exception as exc:
         raise SweepFormatError(file, "/", f"cannot open as HDF5 (truncated or corrupt file): {exc}") from exc
     with h5:
+        check_self_contained(file, h5)
         schema = check_text(file, "/@schema", _attr(file, h5, "schema", ""), "schema")
         if schema != SCHEMA:
             raise SweepFormatError(file, "/@schema", f"schema {schema!r}, expected {SCHEMA!r}")
