@@ -164,7 +164,8 @@ def damage_dynamics_figure(
 def location_figure(config: Any, location: Any, title: str = "") -> Figure:
     """The shaft along its axis (m): each candidate element coloured by its status (excluded: grey,
     consistent: blue, the best ranked: red), stations, discs, bearings, actuator and sensor marked; below,
-    the certified stiffness-loss interval of every candidate not excluded (and its estimate)."""
+    the certified stiffness-loss interval of every candidate not excluded (and its estimate), with the
+    depth interval (% of the diameter) of the three best ranked."""
     from matplotlib.patches import Rectangle
 
     fig = Figure(figsize=(8.0, 5.0), layout="constrained")
@@ -207,6 +208,11 @@ def location_figure(config: Any, location: Any, title: str = "") -> Figure:
         bx.plot([mid, mid], [lo, hi], color=col, lw=5, alpha=0.6, solid_capstyle="butt")
         if c.loss_estimate is not None:
             bx.plot(mid, 100 * c.loss_estimate, "k_", ms=12)
+        d0, d1 = c.depth_interval
+        if c.rank is not None and c.rank <= 3 and d0 is not None:
+            depth = f"{100 * d0:.0f}-" + ("50+" if d1 is None else f"{100 * d1:.0f}")
+            bx.annotate(f"#{c.rank}\ndepth {depth} %", (mid, hi), textcoords="offset points", xytext=(0, 4),
+                        ha="center", fontsize=7)
     bx.set_ylabel("element stiffness loss (%)\ncertified interval, fit (-)")
     bx.set_xlabel("axial position (m); grey: excluded, blue: consistent, red: most likely")
     bx.grid(True, alpha=0.3)
