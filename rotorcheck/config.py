@@ -613,6 +613,16 @@ class RigConfig(Strict):
             for i, part in enumerate(getattr(self, group)):
                 if part.station > n:
                     raise ValueError(f"{group}[{i}].station: {part.station} out of range 1..{n}")
+        at: dict[int, int] = {}
+        for i, b in enumerate(self.bearings):
+            if b.station in at:
+                raise ValueError(f"bearings[{i}].station: station {b.station} already has bearings[{at[b.station]}] "
+                                 "(one bearing per station; give their sum, or a spring)")
+            at[b.station] = i
+        for group in ("masses", "lumped_springs"):
+            if getattr(self, group):
+                raise ValueError(f"{group}: applies to kind: lumped only (a rotor takes discs, bearings and "
+                                 "springs); it would be ignored")
         for name in ("actuator", "sensor"):
             p = getattr(self.ports, name)
             if p.station is None or p.station > n:

@@ -81,3 +81,20 @@ def test_cli_exits_2_naming_the_file_and_writes_nothing(tmp_path: Path, capsys: 
     for rig in sorted(configs_dir().glob("*.yaml")):
         load_config(rig)
     assert main(["model", str(RIG), "--out", str(tmp_path / "ok"), "--no-plots"]) == EXIT_OK
+
+
+def test_two_bearings_at_one_station_and_lumped_masses_in_a_rotor(tmp_path: Path) -> None:
+    import yaml
+
+    data = yaml.safe_load(RIG.read_text())
+    first = data["bearings"][0]
+    cases = {
+        "bearings[2].station": {**data, "bearings": [*data["bearings"], {**first, "name": "extra"}]},
+        "masses": {**data, "masses": [{"name": "m", "mass": 10.0}]},
+    }
+    for field, doc in cases.items():
+        p = tmp_path / "rig.yaml"
+        p.write_text(yaml.safe_dump(doc))
+        with pytest.raises(ConfigError) as exc:
+            load_config(p)
+        assert exc.value.field == field, (field, str(exc.value))
