@@ -192,13 +192,13 @@ def _ranges(xs: Sequence[int]) -> str:
     return ", ".join(out)
 
 
-def _loss_shape(config: RigConfig, element: int, speed_rpm: float, hypothesis: str
+def _loss_shape(config: RigConfig, sys0: Any, element: int, speed_rpm: float, hypothesis: str
                 ) -> tuple[np.ndarray, np.ndarray | None]:
     """``(A_K, A_D)``: the change of K (and of C where damping follows K affinely) per unit loss of
-    ``element`` (N/m per 1), to be subtracted; A_D None where the damping is held (modal damping)."""
+    ``element`` (N/m per 1), to be subtracted; A_D None where the damping is held (modal damping);
+    ``sys0`` the assembled ``config``."""
     from rotorcheck.fe.assembly import build_system
 
-    sys0 = build_system(config)
     _, C0, _, K0 = sys0.matrices(speed_rpm)
     if hypothesis == "breathing":
         from rotorcheck.faults.crack import crack_stiffness
@@ -244,9 +244,9 @@ def _relation(config: RigConfig, element: int, hypothesis: str, length: float | 
     l_e = config.stations[element] - config.stations[element - 1]
     nu = config.materials[sh.material].nu
     if hypothesis == "breathing":
-        c = _breathing_crack(config, element, 0.25, length)
-        l_c = c.section_length if c.section_length is not None else 0.0
-        nu_c = c.poisson if c.poisson is not None else nu
+        l_c = section_length(config, element, length)
+        own = next((f for f in config.faults.values() if isinstance(f, Crack) and f.model == "mayes_davies"), None)
+        nu_c = own.poisson if own is not None and own.poisson is not None else nu
         return lambda d: breathing_loss(d, radius, l_c, nu_c)
     own = next((f for f in config.faults.values() if isinstance(f, Crack) and f.model == "open"), None)
     l_o = own.section_length if own is not None and own.section_length is not None else l_e
@@ -281,25 +281,24 @@ def _near_sideband(model: AffineModel, freq_hz: np.ndarray, speed_rpm: float) ->
 HB_DEPTHS = (0.05, 0.15, 0.25, 0.35, 0.45, 0.5)
 
 
-def _hb_relation(config: RigConfig, model: AffineModel, element: int, speed_rpm: float, pts: Any,
+def _hb_relation(config: RigConfig, sysm: Any, model: AffineModel, element: int, speed_rpm: float, pts: Any,
                  length: float | None) -> Any:
     """``depth -> loss`` of a breathing crack in ``element`` as the hypothesis sees it: at each of
     :data:`HB_DEPTHS`, the loss whose time-invariant model (``model``, benign parameters at 0) best
     reproduces (least squares of the relative change at the points ``pts``) the model's own harmonic-
     balance response to a Mayes-Davies crack of that depth (sidebands to 4 x the spin frequency);
-    interpolated linearly, 0 at depth 0, kept non-decreasing."""
+    interpolated linearly, 0 at depth 0, kept non-decreasing; ``sysm`` the assembled ``config``."""
     from scipy.optimize import minimize_scalar
 
     from rotorcheck.faults.crack import crack_stiffness
     from rotorcheck.faults.harmonic_balance import HBSolver
-    from rotorcheck.fe.assembly import build_system
+    from rotorcheck.robust.severity import point_receptances
 
-    sysm = build_system(config)
     f = pts.w / (2.0 * np.pi)
     in_dofs = [int(np.flatnonzero(b)[0]) for b in pts.b]
     out_dofs = [int(np.flatnonzero(c)[0]) for c in pts.c]
     p = len(model.parameters)
-    g0 = np.array([model.receptance(float(w), np.zeros(p)) for w in pts.w])
+    g0 = pts.g0
     losses = [0.0]
     for d in HB_DEPTHS:
         ck = crack_stiffness(sysm, _breathing_crack(config, element, d, length))
@@ -314,8 +313,7 @@ def _hb_relation(config: RigConfig, model: AffineModel, element: int, speed_rpm:
         def cost(x: float, want: np.ndarray = target) -> float:
             theta = np.zeros(p)
             theta[-1] = x
-            g = np.array([model.receptance(float(w), theta) for w in pts.w])
-            return float(np.sum(np.abs(g / g0 - want) ** 2))
+            return float(np.sum(np.abs(point_receptances(model, pts, theta) / g0 - want) ** 2))
 
         losses.append(float(minimize_scalar(cost, bounds=(0.0, MAX_LOSS), method="bounded",
                                             options={"xatol": 1e-4}).x))
@@ -388,7 +386,7 @@ def locate(config: RigConfig, box: Any, pairs: Sequence[ChannelPair], freq_hz: n
     els = tuple(elements) if elements is not None else candidate_elements(config)
 
     def model_with(element: int) -> AffineModel:
-        A_K, A_D = _loss_shape(config, element, speed_rpm, hypothesis)
+        A_K, A_D = _loss_shape(config, box.system, element, speed_rpm, hypothesis)
         terms: tuple[tuple[str, np.ndarray], ...] = (("K", -A_K),) + ((("D", -A_D),) if A_D is not None else ())
         return AffineModel(box.model.M, box.model.D, box.model.K, box.model.b, box.model.c,
                            (*box.model.parameters, AffineParameter(f"loss_{element}", terms, 0.0, MAX_LOSS)))
@@ -400,8 +398,8 @@ def locate(config: RigConfig, box: Any, pairs: Sequence[ChannelPair], freq_hz: n
     healthy = severity_interval(models[els[0]], pts, lo, np.r_[hi_b, 0.0], p, step, 1, 4 * refine_boxes)
     healthy_excluded = healthy.status == "excluded"
     results = {e: severity_interval(models[e], pts, lo, hi, p, step, slices, max_boxes) for e in els}
-    fits = {e: _fit(models[e], views, omega, t_new, t_h, var_new, var_h, a, CRACK_MODEL_ERROR + err, trusted,
-                    box.gain, (r.lower, r.upper))
+    fits = {e: _fit(models[e], B, Cm, g_zero, omega, t_new, t_h, var_new, var_h, a, CRACK_MODEL_ERROR + err,
+                    trusted, box.gain, (r.lower, r.upper))
             for e, r in results.items() if r.status == "consistent" and healthy_excluded}
     order = sorted(fits, key=lambda e: fits[e][1])
     for e in order[:refine]:
@@ -411,7 +409,7 @@ def locate(config: RigConfig, box: Any, pairs: Sequence[ChannelPair], freq_hz: n
     for e, r in results.items():
         rel = _relation(config, e, hypothesis, crack_section_length)
         if hypothesis == "breathing" and rel is not None and e in order[:refine]:
-            rel = _hb_relation(config, models[e], e, speed_rpm, pts, crack_section_length)
+            rel = _hb_relation(config, box.system, models[e], e, speed_rpm, pts, crack_section_length)
         d0, d1 = ((depth_of_loss(r.lower, rel), depth_of_loss(r.upper, rel)) if r.status == "consistent"
                   and rel is not None else (None, None))
         freqs = tuple(dict.fromkeys(float(f[ks[k]]) for k in r.excluding))
@@ -432,11 +430,12 @@ def locate(config: RigConfig, box: Any, pairs: Sequence[ChannelPair], freq_hz: n
                           healthy_excluding_hz=tuple(dict.fromkeys(float(f[ks[k]]) for k in healthy.excluding)))
 
 
-def _fit(model: AffineModel, views: Sequence[Any], omega: np.ndarray, t_new: np.ndarray, t_h: np.ndarray,
-         var_new: np.ndarray, var_h: np.ndarray, a: np.ndarray, rel: np.ndarray, used: np.ndarray,
+def _fit(model: AffineModel, B: np.ndarray, Cm: np.ndarray, g0: np.ndarray, omega: np.ndarray, t_new: np.ndarray,
+         t_h: np.ndarray, var_new: np.ndarray, var_h: np.ndarray, a: np.ndarray, rel: np.ndarray, used: np.ndarray,
          gain: tuple[float, float], loss: tuple[float, float]) -> tuple[float, float]:
     """``(loss, chi2)``: the bounded least-squares fit of the benign parameters, the loss (inside its
-    certified interval) and the gain at the points ``used`` (f, P) of every pair, each residual over its
+    certified interval) and the gain at the points ``used`` (f, P) of every pair (inputs and outputs the
+    columns of ``B``, ``Cm``; ``g0`` (f, P) their receptances at no change), each residual over its
     standard deviation with the model's error bounds in it: ``var_new + var_h + a^2 + (rel |T_h| |gain
     rho - 1|)^2``; two starts along the loss interval."""
     from scipy.optimize import least_squares
@@ -445,9 +444,7 @@ def _fit(model: AffineModel, views: Sequence[Any], omega: np.ndarray, t_new: np.
     lo = np.array([q.lo for q in model.parameters[:-1]] + [loss[0], gain[0]])
     hi = np.array([q.hi for q in model.parameters[:-1]] + [loss[1], gain[1]])
     hi = np.where(hi > lo, hi, lo + 1e-12)  # least_squares needs lo < hi (a fixed gain)
-    B = np.stack([v.model.b for v in views], axis=1)
-    Cm = np.stack([v.model.c for v in views], axis=1)
-    g0 = _receptances(model, omega, np.zeros(p), B, Cm)
+
     def resid(x: np.ndarray) -> np.ndarray:
         g = _receptances(model, omega, x[:p], B, Cm)
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):

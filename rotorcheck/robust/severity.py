@@ -124,7 +124,7 @@ def _s_of(kind: np.ndarray, w: np.ndarray) -> np.ndarray:
 
 
 def examine_points(model: AffineModel, fac: _Factors, pts: Points, centre: np.ndarray, half: np.ndarray
-                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Every point at once: ``(explained at the centre (m,), margin of the exclusion test (m,) (> 0:
     excluded; -inf where explained or unbounded) ``centre``, ``half`` (p,) for every point or (m, p) one
     box per point), each parameter's share of the bound (m, p), the bound
@@ -179,14 +179,19 @@ def examine_points(model: AffineModel, fac: _Factors, pts: Points, centre: np.nd
         extra = pts.tolerance + pts.relative_error * np.abs(pts.t_healthy) * change
         up = pts.z * np.sqrt(pts.var_new + (pts.g_hi * (np.abs(rho) + eps)) ** 2 * pts.var_healthy + pts.a2) + extra
         margin = np.where(ok | ~np.isfinite(rad), -np.inf, low - up)
-    return ok, margin, share, nrm
+    return ok, margin, share
+
+
+def point_receptances(model: AffineModel, pts: Points, theta: np.ndarray) -> np.ndarray:
+    """(m,) each point's receptance ``c^T Z(w, theta)^-1 b`` (m/N), one batched solve."""
+    Z = model.dynamic_stiffness_stack(pts.w, theta)
+    return np.sum(pts.c * np.linalg.solve(Z, pts.b[:, :, None].astype(complex))[:, :, 0], axis=1)
 
 
 def point_ratios(model: AffineModel, pts: Points, theta: np.ndarray) -> np.ndarray:
     """(m,) each point's residual over its allowance at ``theta`` (exact; best gain per point clipped to
     its range): every ratio <= 1 makes ``theta`` a witness."""
-    Z = model.dynamic_stiffness_stack(pts.w, theta)
-    g = np.sum(pts.c * np.linalg.solve(Z, pts.b[:, :, None].astype(complex))[:, :, 0], axis=1)
+    g = point_receptances(model, pts, theta)
     with np.errstate(divide="ignore", invalid="ignore"):
         rho = g / pts.g0
         pred = pts.t_healthy * rho
@@ -240,12 +245,12 @@ def _box(model: AffineModel, fac: _Factors, pts: Points, lo: np.ndarray, hi: np.
         # the points that excluded boxes most often first (most boxes fall to one of them), then the rest
         first = np.array([k for k, _ in used.most_common(EARLY)], dtype=int)
         if first.size:
-            _, margin, share, _ = examine_points(model, fac, pts.take(first), c, h)
+            _, margin, share = examine_points(model, fac, pts.take(first), c, h)
             k = int(np.argmax(margin))
             if margin[k] > 0:
                 used[int(first[k])] += 1
                 return float(margin[k]), share[k]
-        ok, margin, share, _ = examine_points(model, fac, pts, c, h)
+        ok, margin, share = examine_points(model, fac, pts, c, h)
         k = int(np.argmax(margin))
         if margin[k] > 0:
             used[k] += 1
