@@ -135,6 +135,8 @@ def model(
         for i, m in enumerate(at["modes"], 1):
             table.add_row(str(i), f"{m['frequency_hz']:.2f}", f"{m['damping_ratio']:.4f}", m["whirl"])
         err.print(table)
+    for w in dict.fromkeys(w for at in [summary] for w in at.get("warnings", [])):
+        err.print(f"[yellow]warning:[/yellow] {w}")
     crit = ", ".join(f"{c:.0f}" for c in summary["critical_speeds_rpm"]) or "none"
     err.print(f"critical speeds (rpm, up to {summary.get('campbell_max_rpm', 0):.0f}): {crit}")
     for p in result["files"]:
@@ -672,8 +674,9 @@ def simulate(
         if actuator or sensor:
             from rotorcheck.sim.rig_sim import simulate_rig_patterns
 
-            acts = [workflow.parse_port(a, "--actuator") for a in actuator] if actuator else [cfg.ports.actuator]
-            sens = [workflow.parse_port(x, "--sensor") for x in sensor] if sensor else [cfg.ports.sensor]
+            acts = ([workflow.parse_port(a, "--actuator") for a in actuator] if actuator
+                    else [cfg.io_ports("simulate").actuator])
+            sens = [workflow.parse_port(x, "--sensor") for x in sensor] if sensor else [cfg.io_ports("simulate").sensor]
             sw = simulate_rig_patterns(cfg, grid, acts, sens, speed_rpm=speed, fault=fault, seed=seed,
                                        n_harmonics=harmonics, settings=st, created_utc=_utc_now(),
                                        shaft_angle_rad=angle)
@@ -711,6 +714,32 @@ def schema(
         check_writable([out], force)
         atomic_write_text(out, text)
         err.print(f"wrote {out}")
+    return EXIT_OK
+
+
+@app.command("import-ross")
+def import_ross_cmd(
+    rotor: Annotated[Path, typer.Argument(help="A rotor saved by ROSS (Rotor.save), TOML.")],
+    out: Annotated[Path, typer.Argument(help="The rig file to write (YAML).")],
+    rig_id: Annotated[str | None, typer.Option("--rig-id", help="rig_id of the new rig (default: the file name).")]
+    = None,
+    force: ForceOpt = False,
+    as_json: JsonOpt = False,
+) -> int:
+    """A ROSS rotor as a rotorcheck rig file, with what could not be carried over (stderr and the file's header)."""
+    from rotorcheck.fileio import atomic_write_text, check_writable
+    from rotorcheck.ross_import import import_ross
+
+    check_writable([out], force)
+    result = import_ross(rotor, rig_id=rig_id)
+    atomic_write_text(out, result.to_yaml())
+    err.print(f"wrote {out}: rig_id {result.rig['rig_id']!r}, {len(result.rig['stations'])} stations, "
+              f"{len(result.rig['shaft'])} shaft elements (layers included), {len(result.rig.get('bearings', []))} "
+              "bearings/seals; no ports (modal analysis; add ports for sweeps)")
+    for note in result.not_carried:
+        err.print(f"not carried: {note}")
+    if as_json:
+        _emit_json({"rig": str(out), "rig_id": result.rig["rig_id"], "not_carried": list(result.not_carried)})
     return EXIT_OK
 
 

@@ -17,7 +17,7 @@ import json
 import math
 import re
 from pathlib import Path
-from typing import Annotated, Any, Literal, NamedTuple, get_args
+from typing import TYPE_CHECKING, Annotated, Any, Literal, NamedTuple, get_args
 
 import yaml
 from pydantic import (
@@ -30,6 +30,7 @@ from pydantic import (
 )
 
 from rotorcheck.errors import InputError
+from rotorcheck.fileio import read_bounded_text
 from rotorcheck.units import parse_quantity
 
 # --------------------------------------------------------------------------------------------
@@ -50,6 +51,7 @@ Inertia = Annotated[float, _q("inertia")]
 FrequencyHz = Annotated[float, _q("frequency")]
 SpeedRpm = Annotated[float, _q("speed")]
 Force = Annotated[float, _q("force")]
+Moment = Annotated[float, _q("moment")]
 Unbalance = Annotated[float, _q("unbalance")]
 Angle = Annotated[float, _q("angle")]
 Ratio = Annotated[float, _q("dimensionless")]
@@ -93,16 +95,61 @@ class Material(Strict):
         return self.youngs_modulus / (2.0 * self.G) - 1.0
 
 
-class ShaftElement(Strict):
-    """A shaft segment between two stations (1-based), optionally split into ``refine`` elements."""
+ShearMethod = Literal["hutchinson", "cowper"]
+
+
+class TaperedSection:
+    """Diameters of a linearly tapered hollow section: ``outer_diameter`` / ``inner_diameter`` at the
+    start, ``*_right`` at the end (None: as at the start). A mixin of the rig's shaft element and the
+    mesh's element info."""
+
+    if TYPE_CHECKING:
+        outer_diameter: float
+        inner_diameter: float
+        outer_diameter_right: float | None
+        inner_diameter_right: float | None
+
+    @property
+    def outer_right(self) -> float:
+        """Outer diameter at the end (m)."""
+        return self.outer_diameter if self.outer_diameter_right is None else self.outer_diameter_right
+
+    @property
+    def inner_right(self) -> float:
+        """Inner diameter at the end (m)."""
+        return self.inner_diameter if self.inner_diameter_right is None else self.inner_diameter_right
+
+    @property
+    def tapered(self) -> bool:
+        """True when a diameter changes along the element."""
+        return self.outer_right != self.outer_diameter or self.inner_right != self.inner_diameter
+
+
+class ShaftElement(Strict, TaperedSection):
+    """A shaft segment between two stations (1-based), optionally split into ``refine`` elements.
+
+    A linear taper: ``outer_diameter_right`` / ``inner_diameter_right`` at the ``end`` station
+    (default: as at the start). Several entries on one station pair are concentric layers (a sleeve,
+    a hub, a shrink fit): their matrices add. ``shear_method`` / ``shear_coefficient`` / ``shear`` /
+    ``rotary_inertia`` / ``gyroscopic`` override the rig-level settings of the same name.
+    """
 
     start: int = Field(ge=1, description="first station (1-based)")
     end: int = Field(ge=1, description="second station (1-based)")
     material: str
-    outer_diameter: Length = Field(gt=0, description="m")
-    inner_diameter: Length = Field(default=0.0, ge=0, description="m")
+    outer_diameter: Length = Field(gt=0, description="m, at the start station")
+    inner_diameter: Length = Field(default=0.0, ge=0, description="m, at the start station")
+    outer_diameter_right: Length | None = Field(default=None, gt=0, description="m, at the end station (taper)")
+    inner_diameter_right: Length | None = Field(default=None, ge=0, description="m, at the end station (taper)")
     refine: int = Field(default=1, ge=1, le=64, description="sub-elements")
     modulus_factor: Ratio = Field(default=1.0, gt=0, description="E multiplier (open crack)")
+    axial_force: Force = Field(default=0.0, description="N, tension positive (geometric stiffness)")
+    torque: Moment = Field(default=0.0, description="N m, about +z (geometric stiffness)")
+    shear_method: ShearMethod | None = Field(default=None, description="shear coefficient formula")
+    shear_coefficient: Ratio | None = Field(default=None, gt=0, le=2, description="kappa, overrides the formula")
+    shear: bool | None = Field(default=None, description="shear deformation (False: Euler-Bernoulli)")
+    rotary_inertia: bool | None = None
+    gyroscopic: bool | None = None
 
     @model_validator(mode="after")
     def _geometry(self) -> ShaftElement:
@@ -110,15 +157,95 @@ class ShaftElement(Strict):
             raise ValueError("end must be start + 1 (elements join neighbouring stations)")
         if self.inner_diameter >= self.outer_diameter:
             raise ValueError("inner_diameter must be < outer_diameter")
+        if self.shear is False:
+            for key in ("shear_method", "shear_coefficient"):
+                if getattr(self, key) is not None:
+                    raise ValueError(f"{key}: unused with shear: false (the element has no shear deformation)")
+        if self.shear_method is not None and self.shear_coefficient is not None:
+            raise ValueError("shear_coefficient: give shear_method or shear_coefficient, not both")
+        if self.inner_diameter_right is not None and self.inner_diameter_right >= self.outer_right:
+            raise ValueError("inner_diameter_right must be < outer_diameter_right")
+        if self.inner_diameter_right is None and self.outer_diameter_right is not None \
+                and self.inner_diameter >= self.outer_diameter_right:
+            raise ValueError("inner_diameter_right: give it (the bore would exceed outer_diameter_right)")
         return self
 
 
 class Disc(Strict):
+    """A rigid disc at a station: mass and inertias, or its geometry and material.
+
+    Geometry (a solid or bored cylinder of ``width`` along the shaft): ``m = rho pi w (D^2 - d^2) / 4``,
+    ``Ip = m (D^2 + d^2) / 8``, ``Id = Ip / 2 + m w^2 / 12``.
+    """
+
     name: str = "disc"
     station: int = Field(ge=1)
-    mass: Mass = Field(gt=0, description="kg")
-    polar_inertia: Inertia = Field(ge=0, description="kg m^2")
-    transverse_inertia: Inertia = Field(ge=0, description="kg m^2")
+    mass: Mass | None = Field(default=None, gt=0, description="kg")
+    polar_inertia: Inertia | None = Field(default=None, ge=0, description="kg m^2")
+    transverse_inertia: Inertia | None = Field(default=None, ge=0, description="kg m^2")
+    material: str | None = Field(default=None, description="by geometry: material name")
+    width: Length | None = Field(default=None, gt=0, description="by geometry: axial width, m")
+    outer_diameter: Length | None = Field(default=None, gt=0, description="by geometry: m")
+    inner_diameter: Length | None = Field(default=None, ge=0, description="by geometry: bore, m")
+
+    @model_validator(mode="after")
+    def _form(self) -> Disc:
+        inertial = [k for k in ("mass", "polar_inertia", "transverse_inertia") if getattr(self, k) is not None]
+        geometric = [k for k in ("material", "width", "outer_diameter", "inner_diameter")
+                     if getattr(self, k) is not None]
+        if inertial and geometric:
+            raise ValueError(f"{geometric[0]}: give mass and inertias or geometry (material, width, "
+                             "outer_diameter, inner_diameter), not both")
+        if geometric:
+            for k in ("material", "width", "outer_diameter"):
+                if getattr(self, k) is None:
+                    raise ValueError(f"{k}: required for a disc given by its geometry")
+            assert self.outer_diameter is not None
+            if (self.inner_diameter or 0.0) >= self.outer_diameter:
+                raise ValueError("inner_diameter: must be < outer_diameter")
+            return self
+        for k in ("mass", "polar_inertia", "transverse_inertia"):
+            if getattr(self, k) is None:
+                raise ValueError(f"{k}: required field is missing (or give the disc's material, width and diameters)")
+        return self
+
+    def inertias(self, materials: dict[str, Material]) -> tuple[float, float, float]:
+        """(mass kg, polar inertia kg m^2, transverse inertia kg m^2)."""
+        if self.material is None:
+            assert self.mass is not None and self.polar_inertia is not None and self.transverse_inertia is not None
+            return self.mass, self.polar_inertia, self.transverse_inertia
+        assert self.width is not None and self.outer_diameter is not None
+        rho = materials[self.material].density
+        D, d, w = self.outer_diameter, self.inner_diameter or 0.0, self.width
+        m = rho * math.pi * w * (D**2 - d**2) / 4.0
+        ip = m * (D**2 + d**2) / 8.0
+        return m, ip, ip / 2.0 + m * w**2 / 12.0
+
+
+class PointMass(Strict):
+    """A point mass (kg) at a shaft station or a support node: translation only, no inertia."""
+
+    name: str = "point_mass"
+    station: int = Field(ge=1, description="shaft station, or a support node numbered after the last station")
+    mass: Mass | None = Field(default=None, gt=0, description="kg, both directions")
+    mx: Mass | None = Field(default=None, gt=0, description="kg, x only (with my)")
+    my: Mass | None = Field(default=None, gt=0, description="kg, y only (with mx)")
+
+    @model_validator(mode="after")
+    def _form(self) -> PointMass:
+        if self.mass is not None and (self.mx is not None or self.my is not None):
+            raise ValueError("mass: give mass, or mx and my, not both")
+        if self.mass is None and (self.mx is None or self.my is None):
+            raise ValueError("mass: required field is missing (or mx and my)")
+        return self
+
+    @property
+    def masses(self) -> tuple[float, float]:
+        """(m_x, m_y), kg."""
+        if self.mass is not None:
+            return self.mass, self.mass
+        assert self.mx is not None and self.my is not None
+        return self.mx, self.my
 
 
 class SpeedTable(Strict):
@@ -141,11 +268,22 @@ class SpeedTable(Strict):
         return float(np.interp(speed_rpm, self.speed_rpm, self.values))
 
 
+_BEARING_TERMS = ("kxx", "kyy", "kxy", "kyx", "cxx", "cyy", "cxy", "cyx", "mxx", "myy", "mxy", "myx")
+
+
 class Bearing(Strict):
-    """Linear bearing at a station: direct and cross stiffness (N/m) and damping (N s/m)."""
+    """Linear bearing, seal or support at a station: stiffness (N/m), damping (N s/m), mass (kg).
+
+    To ground, or with ``n_link`` between the station and another node (a shaft station, or a support
+    node numbered after the last station: a pedestal, which carries a point mass). The force is
+    ``-(K + j w C - w^2 Mb)`` times the relative displacement. Direct stiffness may be zero or
+    negative (a seal, a magnetic bearing's negative stiffness); the model then warns where the
+    assembled static stiffness is not positive definite.
+    """
 
     name: str = "bearing"
     station: int = Field(ge=1)
+    n_link: int | None = Field(default=None, ge=1, description="the other node (station or support node)")
     kxx: Stiffness | SpeedTable
     kyy: Stiffness | SpeedTable
     kxy: Stiffness | SpeedTable = 0.0
@@ -154,25 +292,26 @@ class Bearing(Strict):
     cyy: Damping | SpeedTable = 0.0
     cxy: Damping | SpeedTable = 0.0
     cyx: Damping | SpeedTable = 0.0
+    mxx: Mass | SpeedTable = 0.0
+    myy: Mass | SpeedTable = 0.0
+    mxy: Mass | SpeedTable = 0.0
+    myx: Mass | SpeedTable = 0.0
 
     @model_validator(mode="after")
     def _signs(self) -> Bearing:
-        for name in ("kxx", "kyy"):
-            v = getattr(self, name)
-            vals = v.values if isinstance(v, SpeedTable) else [v]
-            if any(x <= 0 for x in vals):
-                raise ValueError(f"{name}: must be > 0")
-        for name in ("cxx", "cyy"):
+        for name in ("cxx", "cyy", "mxx", "myy"):
             v = getattr(self, name)
             vals = v.values if isinstance(v, SpeedTable) else [v]
             if any(x < 0 for x in vals):
                 raise ValueError(f"{name}: must be >= 0")
+        if self.n_link is not None and self.n_link == self.station:
+            raise ValueError("n_link: must differ from station")
         return self
 
     def coefficients(self, speed_rpm: float) -> dict[str, float]:
-        """All eight coefficients at ``speed_rpm`` (SI)."""
+        """All twelve coefficients at ``speed_rpm`` (SI)."""
         out = {}
-        for name in ("kxx", "kyy", "kxy", "kyx", "cxx", "cyy", "cxy", "cyx"):
+        for name in _BEARING_TERMS:
             v = getattr(self, name)
             out[name] = v.at(speed_rpm) if isinstance(v, SpeedTable) else float(v)
         return out
@@ -204,11 +343,13 @@ class ModalDamping(Strict):
 
 
 class RayleighDamping(Strict):
-    """C = alpha M + beta K."""
+    """C = alpha M + beta K; ``scope: rotor`` takes M and K of the rotor alone (shaft, discs, point
+    masses; as ROSS's global ``alpha``, ``beta``), ``system`` (default) with bearings and springs."""
 
     kind: Literal["rayleigh"] = "rayleigh"
     alpha: float = Field(ge=0, description="1/s")
     beta: float = Field(ge=0, description="s")
+    scope: Literal["system", "rotor"] = "system"
 
 
 class NoDamping(Strict):
@@ -563,14 +704,23 @@ class RigConfig(Strict):
     stations: list[Length] = Field(default_factory=list, description="axial positions, m")
     shaft: list[ShaftElement] = Field(default_factory=list)
     discs: list[Disc] = Field(default_factory=list)
+    point_masses: list[PointMass] = Field(default_factory=list)
     bearings: list[Bearing] = Field(default_factory=list)
     springs: list[StationSpring] = Field(default_factory=list)
+    shear_method: ShearMethod = Field(default="hutchinson", description="shear coefficient formula (rotor)")
+    shear_coefficient: Ratio | None = Field(default=None, gt=0, le=2, description="kappa for every element")
+    shear: bool = Field(default=True, description="shear deformation in the shaft (False: Euler-Bernoulli)")
+    rotary_inertia: bool = Field(default=True, description="rotary inertia of the shaft")
+    gyroscopic: bool = Field(default=True, description="gyroscopic coupling of shaft and discs")
+    tapered_element: Literal["exact", "greenhill"] = Field(
+        default="exact", description="stiffness of tapered elements: exact (flexibility of the actual "
+        "tapered beam) or greenhill (Greenhill et al. 1985, one mid-section shear parameter; ROSS's)")
     # lumped
     masses: list[LumpedMass] = Field(default_factory=list)
     lumped_springs: list[LumpedSpring] = Field(default_factory=list)
     # common
     damping: DampingModel = Field(default_factory=NoDamping)
-    ports: Ports
+    ports: Ports | None = Field(default=None, description="actuator and sensor; optional (modal analysis)")
     damage: DamagePort | None = None
     uncertainty: Uncertainty = Field(default_factory=Uncertainty)
     faults: dict[str, Fault] = Field(default_factory=dict)
@@ -601,30 +751,54 @@ class RigConfig(Strict):
             raise ValueError("stations: positions must be strictly increasing")
         if not self.shaft:
             raise ValueError("shaft: a rotor needs shaft elements")
-        covered = sorted(e.start for e in self.shaft)
-        if covered != list(range(1, n)):
-            raise ValueError(f"shaft: elements must join every pair of neighbouring stations 1..{n}")
+        refine: dict[int, tuple[int, int]] = {}
         for i, e in enumerate(self.shaft):
             if e.end > n:
                 raise ValueError(f"shaft[{i}].end: station {e.end} out of range 1..{n}")
             if e.material not in self.materials:
                 raise ValueError(f"shaft[{i}].material: unknown material {e.material!r}")
-        for group in ("discs", "bearings", "springs"):
+            first = refine.setdefault(e.start, (i, e.refine))
+            if first[1] != e.refine:
+                raise ValueError(f"shaft[{i}].refine: {e.refine}, but shaft[{first[0]}] on the same stations "
+                                 f"{e.start}-{e.end} (a concentric layer) has {first[1]}; layers share one mesh")
+        missing = [k for k in range(1, n) if k not in refine]
+        if missing:
+            k = missing[0]
+            raise ValueError(f"shaft: no element joins stations {k} and {k + 1} (the shaft must be continuous "
+                             f"over stations 1..{n}; several elements on one pair are concentric layers)")
+        for group in ("discs", "springs"):
             for i, part in enumerate(getattr(self, group)):
                 if part.station > n:
                     raise ValueError(f"{group}[{i}].station: {part.station} out of range 1..{n}")
+        for i, d in enumerate(self.discs):
+            if d.material is not None and d.material not in self.materials:
+                raise ValueError(f"discs[{i}].material: unknown material {d.material!r}")
+        self._check_support_nodes(n)
+        if {"shear_method", "shear_coefficient"} <= self.model_fields_set and self.shear_coefficient is not None:
+            raise ValueError("shear_coefficient: give shear_method or shear_coefficient, not both (the "
+                             "coefficient would override the method everywhere)")
+        if not any(self.shear if e.shear is None else e.shear for e in self.shaft):
+            for key in ("shear_method", "shear_coefficient"):
+                if key in self.model_fields_set and getattr(self, key) is not None:
+                    raise ValueError(f"{key}: unused: no shaft element has shear deformation (shear: false)")
         at: dict[int, int] = {}
         for i, b in enumerate(self.bearings):
+            if b.n_link is not None:
+                continue
             if b.station in at:
                 raise ValueError(f"bearings[{i}].station: station {b.station} already has bearings[{at[b.station]}] "
-                                 "(one bearing per station; give their sum, or a spring)")
+                                 "to ground (one per station; give their sum, or a spring)")
             at[b.station] = i
         for group in ("masses", "lumped_springs"):
             if getattr(self, group):
                 raise ValueError(f"{group}: applies to kind: lumped only (a rotor takes discs, bearings and "
                                  "springs); it would be ignored")
         for name in ("actuator", "sensor"):
+            if self.ports is None:
+                break
             p = getattr(self.ports, name)
+            if p.mass is not None:
+                raise ValueError(f"ports.{name}.mass: a rotor port is a station and direction")
             if p.station is None or p.station > n:
                 raise ValueError(f"ports.{name}.station: must be a station in 1..{n}")
         if self.damage is not None:
@@ -649,9 +823,57 @@ class RigConfig(Strict):
         if mis is not None and mis.station > n:
             raise ValueError(f"measurement.misalignment.station: out of range 1..{n}")
 
+    def _check_support_nodes(self, n: int) -> None:
+        """Support nodes (numbered n+1, n+2, ... after the shaft stations): linked by a bearing's
+        ``n_link``, each with a point mass in x and y, numbered without gaps."""
+        nodes: set[int] = set()
+        for b in self.bearings:
+            for node in (b.station, b.n_link):
+                if node is not None and node > n:
+                    nodes.add(node)
+        for i, pm in enumerate(self.point_masses):
+            if pm.station > n and pm.station not in nodes:
+                raise ValueError(f"point_masses[{i}].station: {pm.station} is neither a station (1..{n}) nor a "
+                                 "support node that a bearing links (n_link)")
+        linked = {b.n_link for b in self.bearings if b.n_link is not None}
+        for node in sorted(nodes):
+            if node not in linked:
+                raise ValueError(f"bearings: support node {node} (after the last station {n}) is not linked to "
+                                 f"the rotor: give a bearing with n_link: {node}")
+            mx = sum(pm.masses[0] for pm in self.point_masses if pm.station == node)
+            my = sum(pm.masses[1] for pm in self.point_masses if pm.station == node)
+            if mx <= 0 or my <= 0:
+                raise ValueError(f"point_masses: support node {node} has no mass in x and y (a massless pedestal "
+                                 "is a series spring: fold it into the bearing, or give the pedestal's mass)")
+        if nodes and sorted(nodes) != list(range(n + 1, n + 1 + len(nodes))):
+            raise ValueError(f"bearings: support nodes must be numbered {n + 1}, {n + 2}, ... without gaps "
+                             f"(got {sorted(nodes)})")
+
+    @property
+    def n_support_nodes(self) -> int:
+        """Support (pedestal) nodes after the shaft stations (rotor)."""
+        n = len(self.stations)
+        nodes = {b.station for b in self.bearings} | {b.n_link for b in self.bearings if b.n_link is not None}
+        return sum(1 for k in nodes if k is not None and k > n)
+
+    def io_ports(self, purpose: str) -> Ports:
+        """The actuator and sensor; a :class:`ConfigError` naming ``purpose`` when the rig has none."""
+        if self.ports is None:
+            raise ConfigError(f"rig {self.rig_id}", "ports", f"{purpose} needs ports.actuator and ports.sensor; "
+                              "this rig has none (a rig without ports serves modal analysis only)")
+        return self.ports
+
     # -- lumped checks -----------------------------------------------------------------------
     def _check_lumped(self) -> None:
         names = [m.name for m in self.masses]
+        rotor_only = ["point_masses", "stations", "shaft", "discs", "bearings", "springs", "materials"]
+        rotor_only += [k for k in ("shear_method", "shear_coefficient", "shear", "rotary_inertia", "gyroscopic",
+                                   "tapered_element") if k in self.model_fields_set]
+        for group in rotor_only:
+            value = getattr(self, group)
+            if value or (not isinstance(value, (list, dict)) and group in self.model_fields_set):
+                raise ValueError(f"{group}: applies to kind: rotor only (a lumped model takes masses and "
+                                 "lumped_springs); it would be ignored")
         if not names:
             raise ValueError("masses: a lumped model needs masses")
         if len(set(names)) != len(names):
@@ -664,6 +886,8 @@ class RigConfig(Strict):
             if s.between[0] == s.between[1]:
                 raise ValueError(f"lumped_springs[{i}].between: a spring needs two ends")
         for name in ("actuator", "sensor"):
+            if self.ports is None:
+                break
             p = getattr(self.ports, name)
             if p.mass not in names:
                 raise ValueError(f"ports.{name}.mass: must name a mass ({', '.join(names)})")
@@ -684,8 +908,33 @@ class RigConfig(Strict):
             data.pop("variability", None)
         if data.get("analysis", {}).get("n_points") is None:  # likewise the simulation grid's point count
             data.get("analysis", {}).pop("n_points", None)
+        _prune_defaults(data, _LATER_KEYS)  # keys added later hash as if absent while at their defaults
         doc = json.dumps(data, sort_keys=True)
         return hashlib.sha256(doc.encode()).hexdigest()
+
+
+#: keys added after rig hashes were first recorded, with their defaults (issue 20), by section
+_LATER_KEYS: dict[str, dict[str, Any]] = {
+    "": {"point_masses": [], "shear_method": "hutchinson", "shear_coefficient": None, "shear": True,
+         "rotary_inertia": True, "gyroscopic": True, "tapered_element": "exact", "ports": None},
+    "shaft": {"outer_diameter_right": None, "inner_diameter_right": None, "axial_force": 0.0, "torque": 0.0,
+              "shear_method": None, "shear_coefficient": None, "shear": None, "rotary_inertia": None,
+              "gyroscopic": None},
+    "discs": {"material": None, "width": None, "outer_diameter": None, "inner_diameter": None},
+    "bearings": {"n_link": None, "mxx": 0.0, "myy": 0.0, "mxy": 0.0, "myx": 0.0},
+    "damping": {"scope": "system"},
+}
+
+
+def _prune_defaults(data: dict[str, Any], later: dict[str, dict[str, Any]]) -> None:
+    """Drop, in place, the keys of ``later`` that hold their default value."""
+    for section, defaults in later.items():
+        target = data if section == "" else data.get(section)
+        items = target if isinstance(target, list) else [target] if isinstance(target, dict) else []
+        for item in items:
+            for key, default in defaults.items():
+                if key in item and item[key] == default:
+                    del item[key]
 
 
 # --------------------------------------------------------------------------------------------
@@ -1097,23 +1346,7 @@ def load_config(path: str | Path) -> RigConfig:
     before validation: files over :data:`MAX_RIG_BYTES`, text that is not UTF-8, duplicate keys,
     integers with a leading zero, nesting too deep to parse, NaN or infinite numbers (by field)."""
     p = Path(path)
-    try:
-        if p.is_file() and p.stat().st_size > MAX_RIG_BYTES:
-            raise ConfigError(p, "", f"{p.stat().st_size} bytes: a rig file is at most {MAX_RIG_BYTES} bytes")
-        with open(p, "rb") as fh:
-            raw = fh.read(MAX_RIG_BYTES + 1)
-    except FileNotFoundError:
-        raise ConfigError(p, "", "file not found") from None
-    except OSError as exc:
-        raise ConfigError(p, "", f"cannot read: {exc.strerror}") from None
-    if len(raw) > MAX_RIG_BYTES:
-        raise ConfigError(p, "", f"more than {MAX_RIG_BYTES} bytes: a rig file is at most that")
-    try:
-        text = raw.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        raise ConfigError(p, "", f"not UTF-8 text (byte {exc.start}): save the rig file as UTF-8") from None
-    if "\x00" in text:
-        raise ConfigError(p, "", "a NUL byte: this is no text file")
+    text = read_bounded_text(p, MAX_RIG_BYTES, "rig file", ConfigError)
     try:
         data = yaml.load(text, Loader=_StrictLoader)  # a SafeLoader subclass
     except yaml.YAMLError as exc:

@@ -10,14 +10,17 @@ flipping it, so no process-wide state changes.
 from __future__ import annotations
 
 import contextlib
+import hashlib
+import json
 import os
 import secrets
-from collections.abc import Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
 
-from rotorcheck.errors import OutputExistsError
+from rotorcheck.errors import InputError, OutputExistsError
 
-__all__ = ["atomic_path", "atomic_write_bytes", "atomic_write_text", "check_writable"]
+__all__ = ["atomic_path", "atomic_write_bytes", "atomic_write_text", "check_replaceable", "check_writable",
+           "read_bounded_text", "record_outputs"]
 
 _CREATE_ATTEMPTS = 100
 
@@ -121,3 +124,94 @@ def atomic_write_bytes(path: str | os.PathLike[str], data: bytes, *, overwrite: 
     """Write ``data`` to ``path`` atomically."""
     with atomic_path(path, overwrite=overwrite) as tmp:
         tmp.write_bytes(data)
+
+
+# --------------------------------------------------------------------------------------------
+# outputs the tool wrote itself (a manifest in the output folder)
+
+MANIFEST_NAME = ".rotorcheck-manifest.json"
+
+
+def _file_sha256(path: Path) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for chunk in iter(lambda: fh.read(1 << 20), b""):
+            h.update(chunk)
+    return h.hexdigest()
+
+
+def _manifest(folder: Path) -> dict[str, str]:
+    """``{file name: sha256}`` of the outputs rotorcheck wrote in ``folder`` (empty when none or unreadable)."""
+    try:
+        data = json.loads((folder / MANIFEST_NAME).read_text())
+    except (OSError, ValueError):
+        return {}
+    files = data.get("files") if isinstance(data, dict) else None
+    return {str(k): str(v) for k, v in files.items()} if isinstance(files, dict) else {}
+
+
+def check_replaceable(paths: Iterable[str | Path], force: bool) -> None:
+    """Like :func:`check_writable`, but an existing output that rotorcheck wrote itself (listed in
+    its folder's manifest, unchanged since) may be replaced; any other existing file is refused
+    without ``force``."""
+    if force:
+        return
+    blocked: list[str] = []
+    for p in map(Path, paths):
+        if not p.exists():
+            continue
+        known = _manifest(p.parent).get(p.name)
+        if known is None or not p.is_file() or _file_sha256(p) != known:
+            blocked.append(str(p))
+    if blocked:
+        raise OutputExistsError(
+            blocked[0], "", "exists and is not an unchanged output of an earlier rotorcheck run here; refusing to "
+            "overwrite (use --force)" + (f" [{len(blocked) - 1} more]" if len(blocked) > 1 else "")
+        )
+
+
+def record_outputs(paths: Iterable[str | Path]) -> None:
+    """Add written outputs (name and sha256) to the manifest of their folder (atomic)."""
+    by_folder: dict[Path, list[Path]] = {}
+    for p in map(Path, paths):
+        by_folder.setdefault(p.parent, []).append(p)
+    for folder, files in by_folder.items():
+        entries = _manifest(folder)
+        entries.update({f.name: _file_sha256(f) for f in files})
+        doc = {"schema": "rotorcheck.outputs", "note": "files rotorcheck wrote here; it replaces them on a "
+               "later run only while unchanged", "files": dict(sorted(entries.items()))}
+        atomic_write_text(folder / MANIFEST_NAME, json.dumps(doc, indent=1) + "\n")
+
+
+# --------------------------------------------------------------------------------------------
+# reading a text input of bounded size
+
+
+def read_bounded_text(
+    path: str | Path, max_bytes: int, what: str,
+    error: Callable[[str | Path, str, str], Exception] = InputError,
+) -> str:
+    """The UTF-8 text of ``path`` (a ``what``, e.g. "rig file"), refused before parsing when it is
+    missing, unreadable, a folder, over ``max_bytes``, not UTF-8 or holding a NUL byte; ``error(file,
+    field, message)`` builds the exception (an :class:`~rotorcheck.errors.InputError` by default)."""
+    p = Path(path)
+    try:
+        if p.is_file() and p.stat().st_size > max_bytes:
+            raise error(p, "", f"{p.stat().st_size} bytes: a {what} is at most {max_bytes} bytes")
+        with open(p, "rb") as fh:
+            raw = fh.read(max_bytes + 1)
+    except FileNotFoundError:
+        raise error(p, "", "file not found") from None
+    except IsADirectoryError:
+        raise error(p, "", f"is a folder, not a {what}") from None
+    except OSError as exc:
+        raise error(p, "", f"cannot read: {exc.strerror or exc}") from None
+    if len(raw) > max_bytes:
+        raise error(p, "", f"more than {max_bytes} bytes: a {what} is at most that")
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise error(p, "", f"not UTF-8 text (byte {exc.start}): save the {what} as UTF-8") from None
+    if "\x00" in text:
+        raise error(p, "", "a NUL byte: this is no text file")
+    return text

@@ -113,8 +113,9 @@ def nominal_model(
     sys_ = system if system is not None else build_system(config)
     f = np.atleast_1d(np.asarray(freq_hz, dtype=float))
     n = sys_.n_dof
-    i_in = sys_.port_dof(config.ports.actuator)
-    i_out = sys_.port_dof(config.ports.sensor)
+    ports = config.io_ports("the nominal frequency response")
+    i_in = sys_.port_dof(ports.actuator)
+    i_out = sys_.port_dof(ports.sensor)
     # no damage port (validation and detection need none): the damage channel is computed at the sensor
     # and then set to NaN, so that no identification is read from it
     i_d = sys_.port_dof(config.damage.port) if config.damage is not None else i_out
@@ -195,7 +196,8 @@ def channel_port(config: RigConfig, node: int, direction: str) -> Port:
 
 def primary_pair(config: RigConfig) -> ChannelPair:
     """The rig's own actuator -> sensor channel (the ports section)."""
-    return ChannelPair(config.ports.sensor, config.ports.actuator, "sensor/actuator")
+    return ChannelPair(config.io_ports("validation and detection").sensor,
+                       config.io_ports("validation and detection").actuator, "sensor/actuator")
 
 
 def pair_receptance(config: RigConfig, freq_hz: np.ndarray, speed_rpm: float, pairs: Sequence[ChannelPair],

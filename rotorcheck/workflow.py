@@ -84,16 +84,18 @@ def _model_plots(config: RigConfig, system: Any, speed_rpm: float, out: Path, fo
     import numpy as np
 
     from rotorcheck.fe.modal import campbell
-    from rotorcheck.fileio import check_writable
+    from rotorcheck.fileio import check_replaceable, record_outputs
     from rotorcheck.report.campbell import campbell_figure, mode_shape_figure
     from rotorcheck.report.figures import save_figure
 
     stems = [out / "campbell", out / "mode_shapes"]
-    check_writable([s.with_suffix("." + ext) for s in stems for ext in formats], force)
+    # a repeated run replaces the plots it wrote itself (manifest in the folder), never another file
+    check_replaceable([s.with_suffix("." + ext) for s in stems for ext in formats], force)
     speeds = np.linspace(0.0, config.analysis.campbell_max_rpm, 41)
     camp = campbell(system, speeds, config.analysis.n_modes)
     files = save_figure(campbell_figure(camp), stems[0], formats)
     files += save_figure(mode_shape_figure(system, speed_rpm, config.analysis.n_modes), stems[1], formats)
+    record_outputs(files)
     return [str(f) for f in files]
 
 
@@ -289,7 +291,8 @@ def _channel_pairs(sweep: Any, config: RigConfig, p: Path) -> tuple[list[Any], l
     outs = [port(c) for c in sweep.outputs]
     if not ins or not outs:
         raise InputError(p, "/channels", "a sweep needs at least one input and one output channel")
-    act, sen = config.ports.actuator, config.ports.sensor
+    rig_ports = config.io_ports("reading a sweep against the rig")
+    act, sen = rig_ports.actuator, rig_ports.sensor
     same = [port_label(x) for x in ins].count(port_label(act)), [port_label(x) for x in outs].count(port_label(sen))
     if same[0] != 1 or same[1] != 1:
         what = "actuator" if same[0] != 1 else "sensor"
@@ -1776,7 +1779,7 @@ def crack_report(
         raise InputError(rig_path, f"faults.{fault}", f"not a breathing crack (breathing cracks: {known or 'none'})")
     if not config.discs:
         raise InputError(rig_path, "discs", "the section 5.3 illustration puts the unbalance on the first disc")
-    st = station if station is not None else config.ports.sensor.station
+    st = station if station is not None else config.io_ports("the illustration").sensor.station
     if st is None:
         raise InputError(rig_path, "ports.sensor.station", "the illustration needs a sensor station")
     stems = []

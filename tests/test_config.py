@@ -53,7 +53,8 @@ def test_unit_spelling_does_not_change_hash(rig: dict) -> None:
 
 BAD_CASES = {
     "missing field": (lambda d: d["discs"][0].pop("mass"), "discs[0].mass", "missing"),
-    "negative stiffness": (lambda d: d["bearings"][1].__setitem__("kxx", -1e7), "bearings[1].kxx", "> 0"),
+    # negative direct stiffness is allowed (seals, magnetic bearings; issue 20); negative damping is not
+    "negative damping": (lambda d: d["bearings"][1].__setitem__("cxx", -1.0), "bearings[1].cxx", ">= 0"),
     "station out of range": (
         lambda d: d["discs"][0].__setitem__("station", 12), "discs[0].station", "out of range"),
     "unknown key": (lambda d: d["bearings"][0].__setitem__("kxz", 1.0), "bearings[0].kxz", "unknown key"),
@@ -112,7 +113,8 @@ def test_missing_file(tmp_path: Path) -> None:
 def test_json_schema_exports() -> None:
     schema = json_schema()
     assert schema["title"] == "rotorcheck rig"
-    assert "bearings" in schema["properties"] and "ports" in schema["required"]
+    assert "bearings" in schema["properties"] and "rig_id" in schema["required"]
+    assert "ports" in schema["properties"] and "ports" not in schema["required"]  # optional (issue 20)
     assert schema["additionalProperties"] is False
 
 

@@ -26,7 +26,7 @@ exactly like ``(u, v)`` under eq. 5.26, so the fixed-frame matrix is the same co
   ``I -> I0``, and ``R = f(theta) diag(dI_xi, dI_eta)/I0`` (eq. 5.25).
 - ``"timoshenko"``: per plane, the exact change of the Timoshenko element when ``I0 -> I0 - dI``,
   ``B_T(I0) - B_T(I0 - dI)`` (shear parameter re-evaluated; the element of
-  :class:`rotorcheck.fe.elements.TimoshenkoBeam`, so the same shear coefficient as the assembly),
+  :func:`rotorcheck.fe.assembly.element_matrices`, so the same element as the assembly),
   so that a fully open crack equals the healthy Timoshenko element with the second moment reduced
   by ``dI`` in each direction.
 
@@ -52,8 +52,8 @@ from rotorcheck.faults.breathing import (
     mayes_davies_steering,
 )
 from rotorcheck.faults.compliance import crack_compliances
-from rotorcheck.fe.assembly import build_system
-from rotorcheck.fe.elements import X_PLANE, TimoshenkoBeam
+from rotorcheck.fe.assembly import build_system, element_matrices
+from rotorcheck.fe.elements import X_PLANE
 from rotorcheck.fe.system import BeamElementInfo, MechanicalSystem
 
 __all__ = [
@@ -299,11 +299,8 @@ def crack_stiffness(
 
     def timo(scale: float = 1.0) -> list[np.ndarray]:
         # the assembly's own element (same shear coefficient); x-plane block = standard plane
-        out = []
-        for e in els:
-            beam = TimoshenkoBeam.from_info(replace(e, youngs_modulus=scale * e.youngs_modulus))
-            out.append(beam.stiffness()[np.ix_(X_PLANE, X_PLANE)])
-        return out
+        k = element_matrices(tuple(replace(e, youngs_modulus=scale * e.youngs_modulus) for e in els)).stiffness
+        return [k[i][np.ix_(X_PLANE, X_PLANE)] for i in range(len(els))]
 
     ident = {0: np.eye(2, dtype=complex)}
     terms: list[_Term] = []

@@ -1,8 +1,13 @@
 """Assemble a :class:`~rotorcheck.fe.system.MechanicalSystem` from a validated rig config.
 
 Rotor (``kind: rotor``): each config shaft element ``e`` (between stations e and e+1) is split into
-``refine`` equal Timoshenko elements; ``station_node`` maps config stations to mesh nodes. Discs,
-bearings and station springs act at station nodes. Assembly is vectorised: element matrices are
+``refine`` equal Timoshenko elements (:mod:`rotorcheck.fe.shaft`: tapered sections, shear options,
+geometric stiffness of axial force and torque); further entries on the same station pair are
+concentric layers whose matrices add (``system.layers``). ``station_node`` maps config stations to
+mesh nodes. Discs, point masses, bearings and station springs act at station nodes; support nodes
+(pedestals: stations numbered after the last shaft station, reached by a bearing's ``n_link``) carry
+x and y only and follow the shaft's DOF. A bearing with ``n_link`` acts on the relative motion of its
+two nodes (stiffness, damping and mass coefficients). Assembly is vectorised: element matrices are
 built as one (ne, 8, 8) stack and scattered with ``np.add.at`` (no Python loop over the global
 matrix).
 
@@ -23,10 +28,11 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from rotorcheck.config import ModalDamping, RayleighDamping, RigConfig
+from rotorcheck.config import Material, ModalDamping, RayleighDamping, RigConfig, ShaftElement
 from rotorcheck.fe.damping import modal_damping_matrix, rayleigh_damping_matrix
-from rotorcheck.fe.elements import RigidDisc, beam_matrices, shear_coefficient
+from rotorcheck.fe.elements import RigidDisc, shear_coefficient
 from rotorcheck.fe.lumped import build_lumped
+from rotorcheck.fe.shaft import ShaftMatrices, shaft_matrices, shear_coefficient_by
 from rotorcheck.fe.system import BeamElementInfo, MechanicalSystem
 
 Matrices = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
@@ -56,63 +62,126 @@ def build_system(
 # rotor
 
 
+def _element_kappa(config: RigConfig, e: ShaftElement, material: Material) -> float | None:
+    """Shear coefficient of a config element: its own value or method, else the rig's (None: the
+    Hutchinson default, computed per mesh element by the element code)."""
+    if e.shear_coefficient is not None:
+        return e.shear_coefficient
+    if e.shear_method is None and config.shear_coefficient is not None:
+        return config.shear_coefficient
+    method = e.shear_method or config.shear_method
+    od = 0.5 * (e.outer_diameter + e.outer_right)
+    idm = 0.5 * (e.inner_diameter + e.inner_right)
+    return float(shear_coefficient_by(method, material.nu, od, idm))
+
+
 def rotor_mesh(
     config: RigConfig, modulus_factors: Mapping[int, float] | None = None
-) -> tuple[np.ndarray, tuple[int, ...], tuple[BeamElementInfo, ...]]:
-    """Mesh of a rotor config: (node positions (m), station -> node, element infos)."""
+) -> tuple[np.ndarray, tuple[int, ...], tuple[BeamElementInfo, ...], tuple[BeamElementInfo, ...]]:
+    """Mesh of a rotor config: (node positions (m), station -> node, shaft element infos, layer infos).
+
+    The first config element listed on a station pair is the shaft (``modulus_factors`` act on it:
+    a crack is in the shaft); further elements on the same pair are concentric layers. A tapered
+    element refined into ``refine`` pieces gets the linearly interpolated diameters at each cut.
+    """
     factors = dict(modulus_factors or {})
     n_seg = len(config.stations) - 1
     for seg in factors:
         if not (1 <= seg <= n_seg):
             raise KeyError(f"modulus_factors: element {seg} out of range 1..{n_seg}")
-    by_start = {e.start: e for e in config.shaft}
+    by_start: dict[int, list[ShaftElement]] = {}
+    for e in config.shaft:
+        by_start.setdefault(e.start, []).append(e)
     positions: list[float] = [config.stations[0]]
     station_node = [0]
     infos: list[BeamElementInfo] = []
+    layers: list[BeamElementInfo] = []
     for seg in range(1, n_seg + 1):
-        e = by_start[seg]
-        mat = config.materials[e.material]
+        group = by_start[seg]
+        refine = group[0].refine
         z0, z1 = config.stations[seg - 1], config.stations[seg]
-        zs = np.linspace(z0, z1, e.refine + 1)
-        E = mat.youngs_modulus * e.modulus_factor * factors.get(seg, 1.0)
-        for k in range(e.refine):
-            node_i = len(positions) - 1
-            positions.append(float(zs[k + 1]))
-            infos.append(
-                BeamElementInfo(
-                    index=len(infos),
-                    segment=seg,
-                    node_i=node_i,
-                    node_j=node_i + 1,
-                    length=float(zs[k + 1] - zs[k]),
-                    youngs_modulus=E,
-                    shear_modulus=mat.G,
-                    density=mat.density,
-                    outer_diameter=e.outer_diameter,
-                    inner_diameter=e.inner_diameter,
-                    poisson=mat.nu,
+        zs = np.linspace(z0, z1, refine + 1)
+        first_node = len(positions) - 1
+        positions.extend(float(z) for z in zs[1:])
+        for layer, e in enumerate(group):
+            mat = config.materials[e.material]
+            E = mat.youngs_modulus * e.modulus_factor * (factors.get(seg, 1.0) if layer == 0 else 1.0)
+            kappa = _element_kappa(config, e, mat)
+            t = np.linspace(0.0, 1.0, refine + 1)
+            od = e.outer_diameter + t * (e.outer_right - e.outer_diameter)
+            idm = e.inner_diameter + t * (e.inner_right - e.inner_diameter)
+            for k in range(refine):
+                target = infos if layer == 0 else layers
+                target.append(
+                    BeamElementInfo(
+                        index=len(target),
+                        segment=seg,
+                        node_i=first_node + k,
+                        node_j=first_node + k + 1,
+                        length=float(zs[k + 1] - zs[k]),
+                        youngs_modulus=E,
+                        shear_modulus=mat.G,
+                        density=mat.density,
+                        outer_diameter=float(od[k]),
+                        inner_diameter=float(idm[k]),
+                        poisson=mat.nu,
+                        outer_diameter_right=float(od[k + 1]) if e.tapered else None,
+                        inner_diameter_right=float(idm[k + 1]) if e.tapered else None,
+                        kappa=kappa,
+                        shear=config.shear if e.shear is None else e.shear,
+                        rotary_inertia=config.rotary_inertia if e.rotary_inertia is None else e.rotary_inertia,
+                        gyroscopic=config.gyroscopic if e.gyroscopic is None else e.gyroscopic,
+                        axial_force=e.axial_force,
+                        torque=e.torque,
+                        layer=layer,
+                        taper=config.tapered_element,
+                    )
                 )
-            )
         station_node.append(len(positions) - 1)
-    return np.asarray(positions), tuple(station_node), tuple(infos)
+    return np.asarray(positions), tuple(station_node), tuple(infos), tuple(layers)
+
+
+def element_matrices(infos: tuple[BeamElementInfo, ...]) -> ShaftMatrices:
+    """The (ne, 8, 8) matrices of mesh elements (one implementation: :func:`rotorcheck.fe.shaft.shaft_matrices`)."""
+    tapers = sorted({i.taper for i in infos})
+    if len(tapers) > 1:  # one call per formulation, merged back in element order
+        parts = {t: (np.array([k for k, i in enumerate(infos) if i.taper == t]),
+                     element_matrices(tuple(i for i in infos if i.taper == t))) for t in tapers}
+        fields = ("mass", "gyroscopic", "stiffness", "axial_force", "torque")
+        merged = {name: np.empty((len(infos), 8, 8)) for name in fields}
+        for idx, mats in parts.values():
+            for name in fields:
+                merged[name][idx] = getattr(mats, name)
+        return ShaftMatrices(**merged)
+    f = lambda name: np.array([getattr(i, name) for i in infos], dtype=float)  # noqa: E731
+    kappa = np.array([
+        i.kappa if i.kappa is not None else shear_coefficient(i.poisson, i.mean_outer_diameter, i.mean_inner_diameter)
+        for i in infos
+    ])
+    return shaft_matrices(
+        f("length"), f("youngs_modulus"), f("shear_modulus"), f("density"), f("outer_diameter"),
+        f("inner_diameter"), f("outer_right"), f("inner_right"), kappa,
+        shear=np.array([i.shear for i in infos]),
+        rotary_inertia=np.array([i.rotary_inertia for i in infos]),
+        gyroscopic=np.array([i.gyroscopic for i in infos]),
+        axial_force=f("axial_force"),
+        torque=f("torque"),
+        **({"taper": tapers[0]} if tapers and tapers[0] != "exact" else {}),
+    )
 
 
 def assemble_beams(infos: tuple[BeamElementInfo, ...], n_dof: int) -> tuple[np.ndarray, ...]:
-    """Global (M, G, K) of the shaft elements only (dense, n_dof x n_dof)."""
-    f = lambda name: np.array([getattr(i, name) for i in infos], dtype=float)  # noqa: E731
-    od, idm, nu = f("outer_diameter"), f("inner_diameter"), f("poisson")
-    kappa = np.array([shear_coefficient(a, b, c) for a, b, c in zip(nu, od, idm)])
-    Me, Ge, Ke = beam_matrices(
-        f("length"), f("youngs_modulus"), f("shear_modulus"), f("density"), od, idm, kappa
-    )
+    """Global (M, G, K) of shaft elements only (dense, n_dof x n_dof); K includes the geometric
+    stiffness of axial force and torque."""
+    out = [np.zeros((n_dof, n_dof)) for _ in range(3)]
+    if not infos:
+        return tuple(out)
+    mats = element_matrices(infos)
     dofs = np.stack([i.dofs for i in infos])  # (ne, 8)
-    rows = np.broadcast_to(dofs[:, :, None], Me.shape)
-    cols = np.broadcast_to(dofs[:, None, :], Me.shape)
-    out = []
-    for blocks in (Me, Ge, Ke):
-        A = np.zeros((n_dof, n_dof))
+    rows = np.broadcast_to(dofs[:, :, None], mats.mass.shape)
+    cols = np.broadcast_to(dofs[:, None, :], mats.mass.shape)
+    for A, blocks in zip(out, (mats.mass, mats.gyroscopic, mats.stiffness + mats.axial_force + mats.torque)):
         np.add.at(A, (rows, cols), blocks)
-        out.append(A)
     return tuple(out)
 
 
@@ -122,33 +191,51 @@ def _node_block(A: np.ndarray, node: int, block: np.ndarray) -> None:
 
 def build_rotor(config: RigConfig, modulus_factors: Mapping[int, float] | None = None) -> MechanicalSystem:
     """Timoshenko FE model of a ``kind: rotor`` config (see module docstring)."""
-    positions, station_node, infos = rotor_mesh(config, modulus_factors)
-    n_dof = 4 * positions.size
-    M, G, K0 = assemble_beams(infos, n_dof)
+    positions, station_node, infos, layers = rotor_mesh(config, modulus_factors)
+    n_station = len(station_node)
+    n_shaft = 4 * positions.size
+    n_sup = config.n_support_nodes
+    n_dof = n_shaft + 2 * n_sup
+
+    def xy(station: int) -> np.ndarray:
+        """The x and y DOF of a shaft station or a support node."""
+        if station <= n_station:
+            return 4 * station_node[station - 1] + np.array([0, 1])
+        return n_shaft + 2 * (station - n_station - 1) + np.array([0, 1])
+
+    M, G, K0 = assemble_beams(infos + layers, n_dof)
     C0 = np.zeros_like(M)
     features: list[tuple[str, str, int]] = []
     for d in config.discs:
-        disc = RigidDisc(d.mass, d.transverse_inertia, d.polar_inertia)
+        m, ip, it = d.inertias(config.materials)
+        disc = RigidDisc(m, it, ip)
         node = station_node[d.station - 1]
         _node_block(M, node, disc.mass_matrix())
-        _node_block(G, node, disc.gyroscopic())
+        if config.gyroscopic:
+            _node_block(G, node, disc.gyroscopic())
         features.append(("disc", d.name, d.station))
+    for pm in config.point_masses:
+        ix = xy(pm.station)
+        M[ix, ix] += pm.masses
+        features.append(("point_mass", pm.name, pm.station))
+    M_rotor, K_rotor = M.copy(), K0.copy()  # Rayleigh damping of scope "rotor"
     for s in config.springs:
         node = station_node[s.station - 1]
         _node_block(K0, node, np.diag([s.kxx, s.kyy, s.k_rot, s.k_rot]))
         _node_block(C0, node, np.diag([s.cxx, s.cyy, 0.0, 0.0]))
         features.append(("spring", s.name, s.station))
-    bearing_dofs = []
+    bearing_dofs: list[tuple[np.ndarray, np.ndarray | None]] = []
     for b in config.bearings:
-        node = station_node[b.station - 1]
-        bearing_dofs.append(np.array([4 * node, 4 * node + 1]))
-        features.append(("bearing", b.name, b.station))
+        bearing_dofs.append((xy(b.station), None if b.n_link is None else xy(b.n_link)))
+        if b.station <= n_station:
+            features.append(("bearing", b.name, b.station))
     bearings = tuple(config.bearings)
     damping = config.damping
+    sup = n_shaft + 2 * np.arange(n_sup)
     base = 4 * np.arange(positions.size)
-    planes = (np.sort(np.r_[base, base + 3]), np.sort(np.r_[base + 1, base + 2]))
+    planes = (np.sort(np.r_[base, base + 3, sup]), np.sort(np.r_[base + 1, base + 2, sup + 1]))
     cache: OrderedDict[tuple[float, ...], Matrices] = OrderedDict()
-    names = ("kxx", "kxy", "kyx", "kyy", "cxx", "cxy", "cyx", "cyy")
+    names = ("kxx", "kxy", "kyx", "kyy", "cxx", "cxy", "cyx", "cyy", "mxx", "mxy", "myx", "myy")
 
     def key(speed_rpm: float) -> tuple[float, ...]:
         """The bearing coefficients at ``speed_rpm``: everything the matrices depend on."""
@@ -161,18 +248,24 @@ def build_rotor(config: RigConfig, modulus_factors: Mapping[int, float] | None =
     def compute(coefficients: tuple[float, ...]) -> Matrices:
         K = K0.copy()
         Cb = C0.copy()
-        for j, d in enumerate(bearing_dofs):
-            co = dict(zip(names, coefficients[8 * j : 8 * j + 8]))
-            sub = np.ix_(d, d)
-            K[sub] += [[co["kxx"], co["kxy"]], [co["kyx"], co["kyy"]]]
-            Cb[sub] += [[co["cxx"], co["cxy"]], [co["cyx"], co["cyy"]]]
+        Mb = M.copy()
+        for j, (a, link) in enumerate(bearing_dofs):
+            co = dict(zip(names, coefficients[12 * j : 12 * j + 12]))
+            for A, t in ((K, "k"), (Cb, "c"), (Mb, "m")):
+                blk = np.array([[co[t + "xx"], co[t + "xy"]], [co[t + "yx"], co[t + "yy"]]])
+                A[np.ix_(a, a)] += blk
+                if link is not None:
+                    A[np.ix_(link, link)] += blk
+                    A[np.ix_(a, link)] -= blk
+                    A[np.ix_(link, a)] -= blk
         if isinstance(damping, ModalDamping):
-            C = Cb + modal_damping_matrix(M, K, damping.ratios, planes)
+            C = Cb + modal_damping_matrix(Mb, K, damping.ratios, planes)
         elif isinstance(damping, RayleighDamping):
-            C = Cb + rayleigh_damping_matrix(M, K, damping.alpha, damping.beta)
+            Mr, Kr = (M_rotor, K_rotor) if damping.scope == "rotor" else (Mb, K)
+            C = Cb + rayleigh_damping_matrix(Mr, Kr, damping.alpha, damping.beta)
         else:
             C = Cb
-        return M, C, G, K
+        return Mb, C, G, K
 
     def matrices(speed_rpm: float) -> Matrices:
         k = key(speed_rpm)
@@ -184,14 +277,14 @@ def build_rotor(config: RigConfig, modulus_factors: Mapping[int, float] | None =
                 cache.popitem(last=False)
         else:
             cache.move_to_end(k)
-        M, C, G, K = hit
-        return M.copy(), C.copy(), G.copy(), K.copy()
+        M_, C, G_, K = hit
+        return M_.copy(), C.copy(), G_.copy(), K.copy()
 
     labels = tuple(
         f"n{node}.{d}" if node not in station_node else f"s{station_node.index(node) + 1}.{d}"
         for node in range(positions.size)
         for d in ("x", "y", "theta", "psi")
-    )
+    ) + tuple(f"s{n_station + k + 1}.{d}" for k in range(n_sup) for d in ("x", "y"))
     return MechanicalSystem(
         kind="rotor",
         n_dof=n_dof,
@@ -200,6 +293,8 @@ def build_rotor(config: RigConfig, modulus_factors: Mapping[int, float] | None =
         station_node=station_node,
         node_positions=positions,
         elements=infos,
+        layers=layers,
+        n_support=n_sup,
         features=tuple(features),
         _key=key,
     )

@@ -142,16 +142,21 @@ class TimoshenkoBeam:
 
     @classmethod
     def from_info(cls, info: BeamElementInfo, **kw: object) -> TimoshenkoBeam:
-        """The element described by a :class:`BeamElementInfo` (modulus factor already applied)."""
+        """The uniform element of a :class:`BeamElementInfo` (modulus factor already applied): a
+        tapered element's mid-length section, its shear coefficient and switches (its shape functions'
+        Phi; the tapered matrices themselves come from :mod:`rotorcheck.fe.shaft`)."""
+        args: dict[str, object] = {
+            "kappa": info.kappa, "shear": info.shear, "rotary": info.rotary_inertia, **kw
+        }
         return cls(
             length=info.length,
             youngs_modulus=info.youngs_modulus,
             shear_modulus=info.shear_modulus,
             density=info.density,
-            outer_diameter=info.outer_diameter,
-            inner_diameter=info.inner_diameter,
+            outer_diameter=info.mean_outer_diameter,
+            inner_diameter=info.mean_inner_diameter,
             poisson=info.poisson,
-            **kw,  # type: ignore[arg-type]
+            **args,  # type: ignore[arg-type]
         )
 
     @property

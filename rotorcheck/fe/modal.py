@@ -125,7 +125,7 @@ def _whirl_components(shapes: np.ndarray, lc: float) -> tuple[np.ndarray, np.nda
     return fwd, bwd
 
 
-def _circularize(lam: np.ndarray, vec: np.ndarray, lc: float) -> np.ndarray:
+def _circularize(lam: np.ndarray, vec: np.ndarray, lc: float, n_shaft: int | None = None) -> np.ndarray:
     """Rotate bases of degenerate eigenvalue pairs to (backward, forward) circular modes."""
     vec = vec.copy()
     i = 0
@@ -133,7 +133,7 @@ def _circularize(lam: np.ndarray, vec: np.ndarray, lc: float) -> np.ndarray:
         if abs(lam[i + 1] - lam[i]) <= _DEGENERATE_TOL * abs(lam[i]):
             Q = vec[:, [i, i + 1]]
             n = Q.shape[0] // 2
-            fwd, bwd = _whirl_components(Q[:n], lc)
+            fwd, bwd = _whirl_components(Q[: n if n_shaft is None else n_shaft], lc)
             # forward mode: combination with no backward component, and vice versa
             cf = np.linalg.svd(bwd, full_matrices=False)[2][-1].conj()
             cb = np.linalg.svd(fwd, full_matrices=False)[2][-1].conj()
@@ -144,9 +144,9 @@ def _circularize(lam: np.ndarray, vec: np.ndarray, lc: float) -> np.ndarray:
     return vec
 
 
-def _normalise(shapes: np.ndarray, kind: str) -> np.ndarray:
-    """Scale each shape so its largest translational component is 1 (real)."""
-    trans = shapes[0::4] if kind == "rotor" else shapes
+def _normalise(shapes: np.ndarray, kind: str, n_shaft: int | None = None) -> np.ndarray:
+    """Scale each shape so its largest translational (shaft) component is 1 (real)."""
+    trans = shapes[: n_shaft : 4] if kind == "rotor" else shapes
     idx = np.argmax(np.abs(trans), axis=0)
     ref = trans[idx, np.arange(shapes.shape[1])]
     ref = np.where(np.abs(ref) > 0, ref, 1.0)
@@ -238,12 +238,12 @@ def modes(
     if max_hz is not None:
         within = lam.imag <= TWO_PI * max_hz
         lam, vec = lam[within], vec[:, within]
-    n = system.n_dof
+    n, ns = system.n_dof, system.n_shaft_dof  # support-node DOF (x, y) follow the shaft's
     if system.kind == "rotor":
-        vec = _circularize(lam, vec, _characteristic_length(system))
-    shapes = _normalise(vec[:n], system.kind)
+        vec = _circularize(lam, vec, _characteristic_length(system), ns)
+    shapes = _normalise(vec[:n], system.kind, ns)
     if system.kind == "rotor":
-        ratio = whirl_ratio(shapes)
+        ratio = whirl_ratio(shapes[:ns])
     else:
         ratio = np.full(lam.size, np.nan)
     if n_modes is not None:
@@ -360,6 +360,10 @@ def _branch_order(lam: np.ndarray) -> np.ndarray:
     return np.asarray(order, dtype=int)
 
 
+#: damping ratio from which a mode has no resonance peak (|H| monotonic): not a critical speed
+NO_PEAK_DAMPING = 1.0 / np.sqrt(2.0)
+
+
 def campbell(
     system: MechanicalSystem,
     speeds_rpm: Sequence[float] | np.ndarray,
@@ -386,7 +390,9 @@ def campbell(
     if criticals and system.kind == "rotor":
         for j, b in enumerate(sel):
             for rpm in _branch_crossings(system, speeds, f[:, b], ratio[:, b], refs, b, order, window):
-                crit.append((rpm, j))
+                # a mode damped beyond 1/sqrt(2) has no resonance peak: its crossing is no critical speed
+                if np.interp(rpm, speeds, zeta[:, b]) < NO_PEAK_DAMPING:
+                    crit.append((rpm, j))
     crit.sort()
     return CampbellResult(
         speeds_rpm=speeds,
@@ -453,6 +459,23 @@ def critical_speeds(
 # summary for the CLI
 
 
+#: below this (unit-diagonal scaling) the static stiffness counts as not positive definite
+STATIC_MARGIN_TOL = 1e-9
+
+
+def static_stiffness_warnings(system: MechanicalSystem, speeds_rpm: list[float]) -> list[str]:
+    """Warnings where the assembled static stiffness (symmetric part) is not positive definite."""
+    out: list[str] = []
+    for sp in dict.fromkeys(float(x) for x in speeds_rpm):
+        margin = system.static_stiffness_margin(sp)
+        if margin <= STATIC_MARGIN_TOL:
+            what = "singular (a free rigid-body motion: no support?)" if margin > -STATIC_MARGIN_TOL else \
+                "indefinite (negative net stiffness: a negative-stiffness bearing or seal, or compressive load)"
+            out.append(f"static stiffness at {sp:g} rpm is {what}; smallest scaled eigenvalue {margin:.3g}; "
+                       "undamped frequencies of negative-stiffness modes are reported as 0")
+    return out
+
+
 def model_summary(
     config: RigConfig, speed_rpm: float = 0.0, system: MechanicalSystem | None = None
 ) -> dict[str, Any]:
@@ -483,6 +506,7 @@ def model_summary(
         "modes": entries,
         "critical_speeds_rpm": [],
         "undamped_frequencies_at_rest_hz": [float(x) for x in rest],
+        "warnings": static_stiffness_warnings(sys_, [0.0, float(speed_rpm)]),
     }
     if sys_.kind == "rotor":
         out["critical_speeds_rpm"] = critical_speeds(sys_, config.analysis.campbell_max_rpm)

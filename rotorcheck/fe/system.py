@@ -16,6 +16,8 @@ from typing import Any
 
 import numpy as np
 
+from rotorcheck.config import TaperedSection
+
 RPM_TO_RAD_S = 2.0 * np.pi / 60.0
 DIRECTION_OFFSET = {"x": 0, "y": 1, "theta": 2, "psi": 3}
 
@@ -31,7 +33,7 @@ def section_second_moment(outer_diameter: float, inner_diameter: float = 0.0) ->
 
 
 @dataclass(frozen=True)
-class BeamElementInfo:
+class BeamElementInfo(TaperedSection):
     """Geometry and material of one finite beam element (after refinement).
 
     ``segment`` is the 1-based config element (between config stations ``segment`` and
@@ -46,19 +48,39 @@ class BeamElementInfo:
     youngs_modulus: float  # Pa (after modulus_factor)
     shear_modulus: float  # Pa
     density: float  # kg/m^3
-    outer_diameter: float  # m
-    inner_diameter: float  # m
+    outer_diameter: float  # m (at node_i)
+    inner_diameter: float  # m (at node_i)
     poisson: float
+    outer_diameter_right: float | None = None  # m at node_j (a taper); None: as at node_i
+    inner_diameter_right: float | None = None
+    kappa: float | None = None  # shear coefficient; None: Hutchinson's of the section
+    shear: bool = True  # shear deformation (False: Euler-Bernoulli stiffness)
+    rotary_inertia: bool = True
+    gyroscopic: bool = True
+    axial_force: float = 0.0  # N, tension positive
+    torque: float = 0.0  # N m
+    layer: int = 0  # 0: the shaft; 1, 2, ...: concentric layers on the same nodes (sleeves, hubs)
+    taper: str = "exact"  # stiffness of a tapered element: "exact" | "greenhill" (rotorcheck.fe.shaft)
+
+    @property
+    def mean_outer_diameter(self) -> float:
+        """Outer diameter of the mid-length section (m)."""
+        return 0.5 * (self.outer_diameter + self.outer_right)
+
+    @property
+    def mean_inner_diameter(self) -> float:
+        """Inner diameter of the mid-length section (m)."""
+        return 0.5 * (self.inner_diameter + self.inner_right)
 
     @property
     def area(self) -> float:
-        """Cross-section area (m^2)."""
-        return section_area(self.outer_diameter, self.inner_diameter)
+        """Cross-section area of the mid-length section (m^2)."""
+        return section_area(self.mean_outer_diameter, self.mean_inner_diameter)
 
     @property
     def second_moment(self) -> float:
-        """Second moment of area I (m^4)."""
-        return section_second_moment(self.outer_diameter, self.inner_diameter)
+        """Second moment of area I of the mid-length section (m^4)."""
+        return section_second_moment(self.mean_outer_diameter, self.mean_inner_diameter)
 
     @property
     def dofs(self) -> np.ndarray:
@@ -86,7 +108,9 @@ class MechanicalSystem:
     _matrices: Callable[[float], tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]
     station_node: tuple[int, ...] = ()  # config station (1-based) -> 0-based mesh node
     node_positions: np.ndarray = field(default_factory=lambda: np.zeros(0))  # m, per mesh node
-    elements: tuple[BeamElementInfo, ...] = ()
+    elements: tuple[BeamElementInfo, ...] = ()  # the shaft's own elements, one per mesh element
+    layers: tuple[BeamElementInfo, ...] = ()  # concentric layers on the same nodes (sleeves, hubs)
+    n_support: int = 0  # support (pedestal) nodes after the shaft nodes: 2 DOF each (x, y)
     mass_index: dict[str, int] = field(default_factory=dict)  # lumped: mass name -> DOF
     # (kind, name, station): "bearing" | "disc" | "spring" parts of a rotor, for plots and reports
     features: tuple[tuple[str, str, int], ...] = ()
@@ -107,8 +131,11 @@ class MechanicalSystem:
             if mass is None or mass not in self.mass_index:
                 raise KeyError(f"unknown mass {mass!r}")
             return self.mass_index[mass]
-        if station is None or not (1 <= station <= len(self.station_node)):
-            raise KeyError(f"station {station} out of range 1..{len(self.station_node)}")
+        n = len(self.station_node)
+        if station is not None and n < station <= n + self.n_support and direction in ("x", "y"):
+            return self.n_shaft_dof + 2 * (station - n - 1) + DIRECTION_OFFSET[direction]
+        if station is None or not (1 <= station <= n):
+            raise KeyError(f"station {station} out of range 1..{n}")
         return 4 * self.station_node[station - 1] + DIRECTION_OFFSET[direction]
 
     def port_dof(self, port: object) -> int:
@@ -119,8 +146,13 @@ class MechanicalSystem:
 
     @property
     def n_nodes(self) -> int:
-        """Mesh nodes of a rotor (0 for lumped models)."""
-        return self.n_dof // 4 if self.kind == "rotor" else 0
+        """Shaft mesh nodes of a rotor (0 for lumped models); support nodes not counted."""
+        return (self.n_dof - 2 * self.n_support) // 4 if self.kind == "rotor" else 0
+
+    @property
+    def n_shaft_dof(self) -> int:
+        """DOF of the shaft nodes (4 per node); support-node DOF follow them."""
+        return 4 * self.n_nodes if self.kind == "rotor" else self.n_dof
 
     @property
     def station_positions(self) -> np.ndarray:
@@ -130,7 +162,8 @@ class MechanicalSystem:
     def plane_dofs(self) -> tuple[np.ndarray, np.ndarray]:
         """DOF indices of the x plane (u, psi) and the y plane (v, theta) of a rotor."""
         base = 4 * np.arange(self.n_nodes)
-        return np.sort(np.r_[base, base + 3]), np.sort(np.r_[base + 1, base + 2])
+        sup = self.n_shaft_dof + 2 * np.arange(self.n_support)
+        return np.sort(np.r_[base, base + 3, sup]), np.sort(np.r_[base + 1, base + 2, sup + 1])
 
     def plane_pairs(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """A rotor's DOF under a quarter turn about the shaft axis: ``(ix, iy, sign)`` with
@@ -139,10 +172,27 @@ class MechanicalSystem:
         hit = self.cache.get("plane_pairs")
         if hit is None:
             base = 4 * np.arange(self.n_nodes)
-            ix = np.stack([base, base + 3], axis=1).reshape(-1)
-            iy = np.stack([base + 1, base + 2], axis=1).reshape(-1)
-            hit = self.cache["plane_pairs"] = (ix, iy, np.tile([1.0, -1.0], self.n_nodes))
+            sup = self.n_shaft_dof + 2 * np.arange(self.n_support)
+            ix = np.r_[np.stack([base, base + 3], axis=1).reshape(-1), sup]
+            iy = np.r_[np.stack([base + 1, base + 2], axis=1).reshape(-1), sup + 1]
+            sign = np.r_[np.tile([1.0, -1.0], self.n_nodes), np.ones(self.n_support)]
+            hit = self.cache["plane_pairs"] = (ix, iy, sign)
         return hit
+
+    def static_stiffness_margin(self, speed_rpm: float = 0.0) -> float:
+        """Smallest eigenvalue of the symmetric part of K scaled to unit diagonal, ``D^-1/2 K_s D^-1/2``.
+
+        Positive: the static stiffness is positive definite. Zero (to round-off, below about 1e-9) or
+        negative: a free rigid-body motion or a statically unstable support (negative direct stiffness
+        of a seal or a magnetic bearing); the dynamics may still be stable (gyroscopics, damping) but
+        the modal-damping construction and the static response are then not defined.
+        """
+        K = self.matrices(speed_rpm)[3]
+        Ks = 0.5 * (K + K.T)
+        d = np.abs(np.diag(Ks))
+        d = np.where(d > 0, d, 1.0)
+        s = 1.0 / np.sqrt(d)
+        return float(np.linalg.eigvalsh(s[:, None] * Ks * s[None, :])[0])
 
     def dynamic_stiffness(self, freq_hz: np.ndarray, speed_rpm: float = 0.0) -> np.ndarray:
         """Z(w) = K - w^2 M + j w (C + Omega G), shape (f, n, n), complex (N/m).

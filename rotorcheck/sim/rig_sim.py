@@ -62,7 +62,8 @@ class RigPlant:
 
 def rig_channels(config: RigConfig) -> list[Channel]:
     """The sweep's channel table for the rig's actuator and sensor ports."""
-    return port_channels(config, [config.ports.actuator], [config.ports.sensor])
+    return port_channels(config, [config.io_ports("a simulated sweep").actuator],
+                         [config.io_ports("a simulated sweep").sensor])
 
 
 def port_channels(config: RigConfig, actuators: Sequence[Port], sensors: Sequence[Port]) -> list[Channel]:
@@ -127,8 +128,9 @@ def rig_plant(
     """The rig (optionally with a named fault) as a simulator plant at ``speed_rpm``; ``band_hz``:
     the highest excitation frequency that will be asked (lets a large mesh reduce once)."""
     system, breathing = _rig_system(config, fault)
-    in_dof = system.port_dof(config.ports.actuator)
-    out_dof = system.port_dof(config.ports.sensor)
+    ports = config.io_ports("the simulator")
+    in_dof = system.port_dof(ports.actuator)
+    out_dof = system.port_dof(ports.sensor)
     if breathing is not None:
         plant = simulator_plant(system, breathing, speed_rpm, in_dof, [out_dof], n_harmonics)
     else:
@@ -326,7 +328,7 @@ def simulate_rig_patterns(
     """
     if len(actuators) == 0:
         raise InputError(None, "actuators", "no actuator ports")
-    sens = list(sensors) if sensors is not None else [config.ports.sensor]
+    sens = list(sensors) if sensors is not None else [config.io_ports("the simulator").sensor]
     f = np.asarray(freq_hz, dtype=float)
     band = float(np.max(f)) if f.size else None
     rp = rig_plants(config, speed_rpm, actuators, sens, fault, n_harmonics, band)
