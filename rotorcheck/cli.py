@@ -717,6 +717,97 @@ def schema(
     return EXIT_OK
 
 
+@app.command()
+def detectability(
+    rig: Annotated[Path | None, typer.Argument(help="Rig YAML (default: configs/crack_rig.yaml).")] = None,
+    baseline: Annotated[Path | None, typer.Option(
+        "--baseline", help="Noise, grid and speed from this baseline (its healthy variance per point).")] = None,
+    noise_std: Annotated[float | None, typer.Option(
+        "--noise-std", help="Stated output noise per sample, m (default: the rig's measurement section).")] = None,
+    periods: Annotated[int | None, typer.Option(
+        "--periods", help="Periods averaged per frequency point (default: the rig's measurement).")] = None,
+    speed: Annotated[float | None, typer.Option(
+        "--speed", help="Spin speed, rpm (default: the baseline's, else the rig's first analysis speed).")] = None,
+    sensors: Annotated[str, typer.Option(
+        "--sensors", help="Sensor ports, e.g. 6x,6y,2x (default: the rig's sensor).")] = "",
+    actuators: Annotated[str, typer.Option(
+        "--actuators", help="Actuator ports, e.g. 8x,8y (default: the rig's actuator).")] = "",
+    elements: Annotated[str, typer.Option("--elements", help="Shaft elements, e.g. 3,4,6 (default: all).")] = "",
+    false_alarm: Annotated[float, typer.Option("--false-alarm", help="False-alarm rate per sweep.")] = 0.01,
+    candidate_sensors: Annotated[str, typer.Option(
+        "--candidate-sensors", help="Rank sensor sets from these ports, e.g. 2x,2y,4x,6x,6y (stated noise).")] = "",
+    max_sensors: Annotated[int, typer.Option(
+        "--max-sensors", help="Largest sensor set ranked (exact up to 64 sets, greedy beyond).")] = 2,
+    out: OutOpt = DEFAULT_OUT,
+    plots: Annotated[bool, typer.Option(help="Write the detectability plot along the shaft.")] = True,
+    plot_format: PlotFormatOpt = "png",
+    as_json: JsonOpt = False,
+    force: ForceOpt = False,
+) -> int:
+    """Before the crack: per shaft element, the smallest open-crack stiffness loss and breathing-crack depth
+    the default detector finds with 90 % power (noise only, and with the rig's benign ranges), beside the
+    likelihood-ratio limit. Writes <out>/detectability.json (and detectability.png)."""
+    from rotorcheck import workflow
+    from rotorcheck.baseline import read_baseline
+    from rotorcheck.fileio import atomic_write_text, check_writable
+    from rotorcheck.report.reports import render_json
+    from rotorcheck.resources import default_rig_path
+
+    rig_path = rig if rig is not None else default_rig_path("crack_rig")
+    cfg = workflow.load_rig(rig_path)
+    if not 0.0 < false_alarm < 1.0:
+        raise InputError(None, "--false-alarm", "must be in (0, 1)")
+    try:
+        els = tuple(int(x) for x in elements.replace(" ", "").split(",") if x) or None
+    except ValueError:
+        raise InputError(None, "--elements", f"{elements!r} is no list of element numbers (e.g. 3,4,5)") from None
+    split = lambda t: [x for x in t.replace(" ", "").split(",") if x]  # noqa: E731
+    formats = workflow.plot_formats(plot_format)
+    targets = [out / "detectability.json"] + (workflow.plot_paths(out, ("detectability",), formats) if plots else [])
+    check_writable(targets, force)
+    base = read_baseline(baseline) if baseline is not None else None
+    if base is not None and base.rig_id != cfg.rig_id:
+        raise InputError(baseline, "/@rig_id", f"baseline for rig {base.rig_id!r}, not {cfg.rig_id!r}")
+    with _progress(f"predicting what {cfg.rig_id} can detect, element by element"):
+        det = workflow.detectability_for_rig(cfg, speed, base, noise_std, periods, split(sensors), split(actuators),
+                                             false_alarm, els, source=str(baseline or rig_path))
+    doc = {"rig": str(rig_path), **det.to_dict()}
+    if candidate_sensors:
+        if base is not None:
+            raise InputError(None, "--candidate-sensors", "ranking sensors needs stated noise (--noise-std), "
+                             "not a baseline's channels")
+        with _progress(f"ranking sensor sets of up to {max_sensors} from {candidate_sensors}"):
+            doc["sensor_sets"] = workflow.sensor_ranking_for_rig(
+                cfg, split(candidate_sensors), max_sensors, speed, noise_std, periods, split(sensors),
+                split(actuators), false_alarm, source=str(rig_path))
+        ss = doc["sensor_sets"]
+        for k, s_ in enumerate(ss["best"], 1):
+            d_ = s_["worst_breathing_depth_min"]
+            err.print(f"sensor set #{k}: {', '.join(s_['sensors'])}: worst element {s_['worst_element']}, "
+                      + ("none up to 50 %" if d_ is None else f"breathing depth {100 * d_:.3g} %"))
+        cur = ss["current"]
+        if cur is not None:
+            d_ = cur["worst_breathing_depth_min"]
+            gain = ss["gain_worst_loss"]
+            err.print(f"current set {', '.join(cur['sensors'])}: worst element {cur['worst_element']}, "
+                      + ("no depth up to 50 %" if d_ is None else f"breathing depth {100 * d_:.3g} %")
+                      + ("" if gain is None else f"; the best set's worst open-crack loss is {gain:.3g}x smaller")
+                      + f" ({ss['method']})")
+    atomic_write_text(out / "detectability.json", render_json(doc))
+    written = [out / "detectability.json"]
+    if plots:
+        from rotorcheck.report.figures import save_figure
+        from rotorcheck.report.plots import detectability_figure
+
+        written += save_figure(detectability_figure(cfg, det), out / "detectability", formats)
+    err.print(det.summary())
+    for p_ in written:
+        err.print(f"wrote {p_}")
+    if as_json:
+        _emit_json(doc)
+    return EXIT_OK
+
+
 @app.command("import-ross")
 def import_ross_cmd(
     rotor: Annotated[Path, typer.Argument(help="A rotor saved by ROSS (Rotor.save), TOML.")],

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -751,6 +752,7 @@ class DetectionOutcome:
     beyond_benign: Any = None  # robust.real_box.BoxCertificate: per-point certificate beyond benign change
     damage_xy: Any = None  # DirectionalDamage: D at the damage station in x and y (several pairs)
     location: Any = None  # rotorcheck.location.LocationResult (detect --locate)
+    detectability: Any = None  # rotorcheck.detectability.Detectability of this sweep (a few elements)
 
     @property
     def exit_code(self) -> int:
@@ -826,6 +828,8 @@ class DetectionOutcome:
             rep.fault_beyond_benign_frequencies_hz = [float(x) for x in f[rem]]
         if self.location is not None:
             rep.location = self.location.to_dict()
+        if self.detectability is not None:
+            rep.detectability = self.detectability.to_dict()
         dxy = self.damage_xy
         if dxy is not None:
             rep.damage_dynamics_by_direction = {
@@ -1236,8 +1240,39 @@ def detect(
                          "functions plus an exact remainder bound), witness_re/witness_im the range attained inside "
                          "it; the model's receptances to and from the damage station taken as exact; "
                          "re_interval/im_interval: 95 % by Monte Carlo over the noise")
+    sweep_det = None
+    if joint is not None and joint.elements:
+        sweep_det = sweep_detectability(updated_rig(rig, baseline_updates(baseline)), baseline, run, joint)
     return DetectionOutcome(rig, baseline, run, model, det, ver, damage, dset, anchored, anchored_set, notes,
-                            measured, noise_only, joint, beyond, damage_xy)
+                            measured, noise_only, joint, beyond, damage_xy, detectability=sweep_det)
+
+
+def sweep_detectability(rig: RigConfig, baseline: Any, run: MeasuredRun, joint: Any) -> Any:
+    """What this sweep could have revealed (:mod:`rotorcheck.detectability` with this sweep's and the
+    baseline's variances): the element easiest to watch and the best candidate. The benign model is
+    linearized at the healthy state (re-solved per parameter once: on the crack rig within 3 % of the
+    re-solved model's figures, 15 % on element 6); learned benign directions are not included."""
+    from rotorcheck.detectability import detectability, linearized
+    from rotorcheck.signatures import stacked
+
+    f = run.frequency_hz
+    est = frf_estimate(run)
+    P = est.frf.shape[1]
+    th = _per_pair(np.asarray(baseline.healthy_frf), f, P, run)
+    vh = _per_pair(np.asarray(baseline.healthy_frf_var), f, P, run)
+    pairs = run.pairs if P > 1 else None
+    kappa = KAPPA_NOMINAL if baseline.benign_kappa is None else float(baseline.benign_kappa)
+    bm = benign_model(rig, f, baseline.speed_rpm, stacked(th), kappa, run.speed_rpm - baseline.speed_rpm,
+                      baseline.benign_correction, pairs)
+    if bm is not None:
+        bm = linearized(bm)
+    easiest = joint.elements[int(np.argmin(joint.detectable))]
+    els = sorted({easiest, joint.elements[joint.best]})
+    from rotorcheck.nominal import primary_pair
+
+    run_pairs = list(run.pairs) if run.pairs else [primary_pair(rig)]
+    return detectability(rig, f, baseline.speed_rpm, est.var, vh, run_pairs, th, joint.false_alarm, bm, els,
+                         noise_source="this sweep's and the baseline's variances", workers=1)
 
 
 def locate_damage(rig: RigConfig, baseline: Any, run: MeasuredRun, false_alarm: float = 0.01,
@@ -1283,7 +1318,7 @@ def locate_run(rig: RigConfig, run: MeasuredRun, healthy_frf: np.ndarray, health
     params = benign_at(rig, speed) if rig.variability else ()
     box = benign_box(rig, speed, params, run.speed_rpm - speed)
     pairs = list(run.pairs)
-    bm = _benign_model(rig, f, speed, th, KAPPA_NOMINAL, run.speed_rpm - speed, None, pairs if n_pairs > 1 else None)
+    bm = benign_model(rig, f, speed, th, KAPPA_NOMINAL, run.speed_rpm - speed, None, pairs if n_pairs > 1 else None)
     env = np.zeros(f.size * n_pairs) if bm is None else np.asarray(bm.envelope, dtype=float)
     res = locate(rig, box, pairs, f, speed, est.frf, est.var, th, vh, env, false_alarm, elements,
                  crack_section_length=section_length, **options)
@@ -1352,7 +1387,7 @@ KAPPA_NOMINAL = 2.0
 KAPPA_GRID = (KAPPA_NOMINAL, 3.0)
 
 
-def _benign_model(rig: RigConfig, f: np.ndarray, speed_rpm: float, Th: np.ndarray, kappa: float,
+def benign_model(rig: RigConfig, f: np.ndarray, speed_rpm: float, Th: np.ndarray, kappa: float,
                   speed_offset: float = 0.0, correction: np.ndarray | None = None, pairs: Any = None) -> Any:
     """The model's benign change (re-solved, anchored at ``Th``) for the joint test; None without a
     ``variability`` section. A recorded speed offset shifts the speed parameter's range. ``correction``
@@ -1424,7 +1459,7 @@ def joint_detection(rig: RigConfig, Th: np.ndarray, var_h: np.ndarray, run: Meas
     th, vh = _per_pair(Th, f, est.frf.shape[1], run), _per_pair(var_h, f, est.frf.shape[1], run)
     pairs = run.pairs if run.n_pairs > 1 else None
     els, S = crack_signatures(rig, f, speed, th, pairs=pairs)
-    benign = _benign_model(rig, f, speed, th, kappa, run.speed_rpm - speed, correction, pairs)
+    benign = benign_model(rig, f, speed, th, kappa, run.speed_rpm - speed, correction, pairs)
     return joint_test(stacked(est.frf - th), stacked(est.var + vh), S, els, benign, learned, false_alarm)
 
 
@@ -1562,7 +1597,7 @@ def learn_benign(rig: RigConfig, runs: list[MeasuredRun], false_alarm: float = 0
     wgt = 1.0 / var_flat  # whitening of a difference of two sweeps (real parts): 2 / (2 var)
     share: dict[str, tuple[float, float]] = {}
     if C is not None:
-        bm = _benign_model(rig, runs[0].frequency_hz, speed, mean, 0.0,
+        bm = benign_model(rig, runs[0].frequency_hz, speed, mean, 0.0,
                            pairs=runs[0].pairs if runs[0].n_pairs > 1 else None)
         zero = np.zeros(len(params))
         for j, prm in enumerate(params):
@@ -1611,11 +1646,14 @@ def joint_summary(outcome: DetectionOutcome) -> str:
         lines.append(f"points certified beyond every benign change in the ranges: {int(c.unexplained.sum())} of "
                      f"{c.status.size} ({int(c.undecided.sum())} undecided; parameters as complex discs: "
                      f"{int(c.complex_unexplained.sum())})")
-    if j.elements:
-        k = int(np.argmin(j.detectable))
-        lines.append(f"smallest stiffness loss this sweep could reveal (90 % power at {j.false_alarm:g}): "
-                     f"{100 * j.detectable[k]:.3g} % in element {j.elements[k]}; element "
-                     f"{j.elements[j.best]}: {100 * j.detectable[j.best]:.3g} %")
+    d = outcome.detectability
+    if d is not None:
+        def pct(x: float | None) -> str:
+            return "none up to 50 %" if x is None else f"{100 * x:.3g} %"
+        for e in d.elements:
+            lines.append(f"this sweep could have revealed a breathing crack of at least {pct(e.breathing_depth_min)} "
+                         f"depth in element {e.element} (open-crack loss {pct(e.open_loss_min)}; noise alone: "
+                         f"{pct(e.breathing_depth_min_noise_only)}), 90 % power at {d.false_alarm:g}")
     return "\n".join(lines)
 
 
@@ -1812,3 +1850,151 @@ def crack_report(
             files += [str(p) for p in save_figure(figs[key], stem, formats)]
     return {"rig_id": config.rig_id, "fault": fault, "station": st, "unbalance_g_m": unbalance_g_m,
             "harmonics": harmonics, "critical_speeds": crit, "files": files}
+
+
+DETECTABILITY_POINTS = 262  # grid of a prediction from stated noise without analysis.n_points
+
+
+def detectability_for_rig(
+    config: RigConfig,
+    speed_rpm: float | None = None,
+    baseline: Any = None,
+    noise_std_m: float | None = None,
+    periods: int | None = None,
+    sensors: Sequence[str] | None = None,
+    actuators: Sequence[str] | None = None,
+    false_alarm: float = 0.01,
+    elements: Sequence[int] | None = None,
+    workers: int | None = None,
+    source: str = "",
+) -> Any:
+    """:func:`rotorcheck.detectability.detectability` with its inputs resolved the way the CLI does. Grid and speed: the
+    baseline's (``baseline``, a :class:`rotorcheck.baseline.Baseline`), else the rig's ``analysis``
+    (band, ``n_points`` or 262 points; its first speed). Noise: the baseline's healthy variance (the
+    new sweep taken as one sweep like those it averaged), else ``noise_std_m`` over ``periods`` (default:
+    the rig's ``measurement``), else the rig's own ``measurement.output_noise_std``; none of them: an
+    :class:`~rotorcheck.errors.InputError`. Sensors and actuators: ports as ``6x``, ``s2.y`` (default: the
+    rig's); every sensor with every actuator is one channel pair."""
+    from rotorcheck.detectability import detectability, stated_noise_variance
+    from rotorcheck.nominal import ChannelPair
+    from rotorcheck.signatures import io_frf, stacked
+
+    ports = config.ports
+    acts = [parse_port(a, "--actuators") for a in actuators] if actuators else (
+        [ports.actuator] if ports is not None else [])
+    sens = [parse_port(s, "--sensors") for s in sensors] if sensors else ([ports.sensor] if ports is not None else [])
+    if not acts or not sens:
+        raise InputError(source or None, "ports", "the rig has no ports: give --sensors and --actuators")
+    pairs = [ChannelPair(o, i, "") for o in sens for i in acts]
+    n = len(config.stations)
+    for p in (*acts, *sens):
+        if p.station is None or not 1 <= p.station <= n:
+            raise InputError(None, "--sensors/--actuators", f"station {p.station} out of range 1..{n}")
+    m = config.measurement
+    if baseline is not None:
+        if baseline.frequency_hz is None or baseline.healthy_frf_var is None or baseline.healthy_frf is None:
+            raise InputError(source or None, "healthy_frf_var", "the baseline holds no healthy FRF and variance "
+                             "(run rotorcheck validate)")
+        if sensors or actuators:
+            raise InputError(None, "--sensors", "with --baseline the channels are the baseline's; give stated noise "
+                             "(--noise-std) to try other sensors")
+        f = np.asarray(baseline.frequency_hz, dtype=float)
+        var_b = np.asarray(baseline.healthy_frf_var, dtype=float)
+        var_n = var_b * max(int(baseline.n_healthy), 1)
+        th = np.asarray(baseline.healthy_frf)
+        if th.ndim == 2 and th.shape[1] != len(pairs):
+            raise InputError(source or None, "healthy_frf", f"the baseline has {th.shape[1]} channel pairs; "
+                             "detectability from a baseline takes the rig's own pair only")
+        speed = float(baseline.speed_rpm) if speed_rpm is None else float(speed_rpm)
+        noise = (f"noise from the baseline {source} (healthy variance per point, {baseline.n_healthy} healthy "
+                 "sweep(s); the new sweep as one)")
+        th = th.reshape(f.size, -1)
+        kappa = KAPPA_NOMINAL if baseline.benign_kappa is None else float(baseline.benign_kappa)
+        bm = benign_model(config, f, speed, th[:, 0], kappa)
+        return detectability(config, f, speed, var_n.reshape(f.size, -1), var_b.reshape(f.size, -1), pairs,
+                             th, false_alarm, bm, elements, None, noise, workers)
+    sigma = noise_std_m if noise_std_m is not None else (m.output_noise_std or None)
+    if sigma is None or sigma <= 0:
+        raise InputError(source or None, "measurement.output_noise_std", "no noise to predict from: give "
+                         "--baseline or --noise-std (m)")
+    n_per = int(periods) if periods is not None else m.n_periods
+    if n_per < 1:
+        raise InputError(None, "--periods", "must be >= 1")
+    f = np.linspace(*config.analysis.band_hz, config.analysis.n_points or DETECTABILITY_POINTS)
+    v = stated_noise_variance(float(sigma), n_per, m.samples_per_period, m.force_amplitude)
+    speed = float(config.analysis.speeds_rpm[0]) if speed_rpm is None else float(speed_rpm)
+    noise = (f"stated noise: output sigma {sigma:.3g} m, {n_per} periods of {m.samples_per_period} samples at "
+             f"{m.force_amplitude:g} N (FRF variance {v:.3g} m^2/N^2 per point and sweep)")
+    var = np.full((f.size, len(pairs)), v)
+    multi = pairs if len(pairs) > 1 else None
+    th = io_frf(config, f, speed, multi)
+    bm = benign_model(config, f, speed, stacked(th), KAPPA_NOMINAL, 0.0, None, multi)
+    return detectability(config, f, speed, var, var, pairs, th, false_alarm, bm, elements, None, noise, workers)
+
+
+def sensor_ranking_for_rig(
+    config: RigConfig,
+    candidates: Sequence[str],
+    max_sensors: int,
+    speed_rpm: float | None = None,
+    noise_std_m: float | None = None,
+    periods: int | None = None,
+    sensors: Sequence[str] | None = None,
+    actuators: Sequence[str] | None = None,
+    false_alarm: float = 0.01,
+    source: str = "",
+) -> dict[str, Any]:
+    """Sensor sets from ``candidates`` (ports like ``2x``) ranked by their worst element's detectable
+    breathing depth with the benign ranges (:func:`rotorcheck.detectability.rank_sensor_sets`; stated
+    noise as :func:`detectability_for_rig`), with the current set (``sensors`` or the rig's) scored the
+    same way. Returns the JSON section ``sensor_sets``."""
+    from rotorcheck.detectability import (
+        DETECTABILITY_RULE_SETS,
+        rank_sensor_sets,
+        score_sensor_set,
+        stated_noise_variance,
+    )
+    from rotorcheck.nominal import ChannelPair
+
+    if max_sensors < 1:
+        raise InputError(None, "--max-sensors", "must be >= 1")
+    cand = [parse_port(c, "--candidate-sensors") for c in candidates]
+    ports = config.ports
+    acts = [parse_port(a, "--actuators") for a in actuators] if actuators else (
+        [ports.actuator] if ports is not None else [])
+    current = [parse_port(s, "--sensors") for s in sensors] if sensors else (
+        [ports.sensor] if ports is not None else [])
+    if not acts:
+        raise InputError(source or None, "ports", "the rig has no actuator: give --actuators")
+    n = len(config.stations)
+    for p in (*cand, *acts, *current):
+        if p.station is None or not 1 <= p.station <= n:
+            raise InputError(None, "--candidate-sensors", f"station {p.station} out of range 1..{n}")
+    m = config.measurement
+    sigma = noise_std_m if noise_std_m is not None else (m.output_noise_std or None)
+    if sigma is None or sigma <= 0:
+        raise InputError(source or None, "measurement.output_noise_std", "ranking sensors needs stated noise: "
+                         "give --noise-std (m)")
+    v = stated_noise_variance(float(sigma), int(periods or m.n_periods), m.samples_per_period, m.force_amplitude)
+    f = np.linspace(*config.analysis.band_hz, config.analysis.n_points or DETECTABILITY_POINTS)
+    speed = float(config.analysis.speeds_rpm[0]) if speed_rpm is None else float(speed_rpm)
+
+    def benign_for(pairs: list[ChannelPair], th: np.ndarray) -> Any:
+        from rotorcheck.signatures import stacked
+
+        return benign_model(config, f, speed, stacked(th), KAPPA_NOMINAL, 0.0, None, pairs if len(pairs) > 1 else None)
+
+    ranked, method, seen = rank_sensor_sets(config, f, speed, v, cand, acts, max_sensors, benign_for, false_alarm)
+    now = score_sensor_set(config, f, speed, v, current, acts, benign_for, false_alarm, seen) if current else None
+    best = ranked[0]
+    def ratio(a: float | None, b: float | None) -> float | None:
+        """How many times smaller the best set's figure is (inf: the current set cannot watch it at all)."""
+        if b is None or b <= 0:
+            return None
+        return float("inf") if a is None else a / b
+
+    return {"method": method, "max_sensors": max_sensors, "rule": DETECTABILITY_RULE_SETS,
+            "elements_scored": list(seen), "best": [s.to_dict() for s in ranked[:5]],
+            "current": None if now is None else now.to_dict(),
+            "gain_worst_depth": None if now is None else ratio(now.worst_depth, best.worst_depth),
+            "gain_worst_loss": None if now is None else ratio(now.worst_loss, best.worst_loss)}

@@ -28,6 +28,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("rotorcheck.signatures",),  # crack and benign change shapes by re-solving the model
     ("rotorcheck.updating",),  # model updating on the benign parameters
     ("rotorcheck.location",),  # candidate elements with certified severity intervals
+    ("rotorcheck.detectability",),  # what a rig, its sensors and noise can detect, per element
     ("rotorcheck.baseline", "rotorcheck.report"),
     ("rotorcheck.workflow",),
     ("rotorcheck.cli",),

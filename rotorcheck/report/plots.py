@@ -161,12 +161,83 @@ def damage_dynamics_figure(
     return fig
 
 
+def shaft_drawing(ax: Any, config: Any, colour_of: Any = None, actuators: Any = (), sensors: Any = ()) -> None:
+    """The rotor along its axis (m) on ``ax``: shaft elements (numbered, filled by ``colour_of(element)``),
+    discs, bearings on the shaft, actuator (v) and sensor (o) ports."""
+    from matplotlib.patches import Rectangle
+
+    z = np.asarray(config.stations, dtype=float)
+    for el in config.shaft:
+        col = colour_of(el.start) if colour_of is not None else "white"
+        r0, r1 = 0.5 * el.outer_diameter, 0.5 * el.outer_right
+        x0, x1 = z[el.start - 1], z[el.end - 1]
+        ax.fill([x0, x1, x1, x0], [-r0, -r1, r1, r0], facecolor=col, edgecolor="k", lw=0.6)
+        ax.text(0.5 * (x0 + x1), 1.6 * max(r0, r1), str(el.start), ha="center", va="bottom", fontsize=7)
+    dmax = max(el.outer_diameter for el in config.shaft)
+    for d in config.discs:
+        ax.add_patch(Rectangle((z[d.station - 1] - 0.004, -1.5 * dmax), 0.008, 3.0 * dmax, facecolor="0.4"))
+    for b in config.bearings:
+        if b.station <= z.size:  # support nodes (pedestals) are not on the shaft
+            ax.plot(z[b.station - 1], -1.3 * dmax, "^", color="k", ms=9)
+    for ports, mark, name in ((actuators, "v", "actuator"), (sensors, "o", "sensor")):
+        for port in ports:
+            if getattr(port, "station", None) is not None:
+                ax.plot(z[port.station - 1], 1.3 * dmax, mark, color="tab:green", ms=8,
+                        label=f"{name} s{port.station}{port.direction}")
+    ax.plot([], [], "^", color="k", label="bearing")
+    ax.set_ylim(-2.2 * dmax, 2.2 * dmax)
+    ax.set_yticks([])
+
+
+def detectability_figure(config: Any, det: Any) -> Figure:
+    """The rotor drawing (elements shaded by their detectable breathing depth with benign ranges) over the
+    smallest detectable breathing-crack depth (% of diameter) per element: with the benign ranges, noise
+    only, and the likelihood-ratio limit."""
+    import textwrap
+
+    from matplotlib import colormaps
+
+    from rotorcheck.config import Port
+
+    def parse_port(label: str) -> Port:  # "s6.x"
+        station, direction = label[1:].split(".")
+        return Port(station=int(station), direction=direction)  # type: ignore[arg-type]
+
+    fig = Figure(figsize=(8.0, 5.0), layout="constrained")
+    ax, bx = fig.subplots(2, 1, sharex=True, height_ratios=(1.0, 1.4))
+    depth = {e.element: e.breathing_depth_min for e in det.elements}
+    cmap = colormaps["RdYlGn_r"]
+
+    def colour_of(element: int) -> Any:
+        d = depth.get(element)
+        return "0.6" if d is None else cmap(min(float(d) / 0.5, 1.0))
+
+    shaft_drawing(ax, config, colour_of, [parse_port(a) for a in det.actuators], [parse_port(s) for s in det.sensors])
+    ax.legend(loc="upper right", fontsize=7)
+    ax.set_title("\n".join(textwrap.wrap(
+        f"{det.rig_id} at {det.speed_rpm:g} rpm: smallest breathing crack found with 90 % power at "
+        f"{det.false_alarm:g} false alarms; {det.noise_source}", 110)), fontsize=8)
+    mids = np.array([0.5 * (e.z_start_m + e.z_end_m) for e in det.elements])
+    for key, style, label in (("breathing_depth_min", "o-", "with the benign ranges"),
+                              ("breathing_depth_min_noise_only", "s--", "noise only"),
+                              ("limit_breathing_depth_noise_only", ":", "likelihood-ratio limit (noise only)")):
+        vals = np.array([np.nan if getattr(e, key) is None else 100 * getattr(e, key) for e in det.elements])
+        bx.plot(mids, vals, style, label=label)
+    bx.set_yscale("log")
+    bx.set_ylabel("breathing crack depth (% of diameter)")
+    bx.set_xlabel("axial position (m); grey: not seen by these channels, or no detectable depth up to 50 %")
+    bx.grid(True, which="both", alpha=0.3)
+    bx.legend(fontsize=7)
+    z = np.asarray(config.stations, dtype=float)
+    bx.set_xlim(z[0] - 0.01, z[-1] + 0.01)
+    return fig
+
+
 def location_figure(config: Any, location: Any, title: str = "") -> Figure:
     """The shaft along its axis (m): each candidate element coloured by its status (excluded: grey,
     consistent: blue, the best ranked: red), stations, discs, bearings, actuator and sensor marked; below,
     the certified stiffness-loss interval of every candidate not excluded (and its estimate), with the
     depth interval (% of the diameter) of the three best ranked."""
-    from matplotlib.patches import Rectangle
 
     fig = Figure(figsize=(8.0, 5.0), layout="constrained")
     ax, bx = fig.subplots(2, 1, sharex=True, height_ratios=(1.0, 1.4))
@@ -174,27 +245,14 @@ def location_figure(config: Any, location: Any, title: str = "") -> Figure:
     status = {c.element: c for c in location.candidates}
     best = location.best.element if location.best is not None else None
     colour = {"excluded": "0.8", "consistent": "tab:blue"}
-    for el in config.shaft:
-        c = status.get(el.start)
-        col = "tab:red" if el.start == best else colour.get(c.status if c is not None else "", "white")
-        r = 0.5 * el.outer_diameter
-        ax.add_patch(Rectangle((z[el.start - 1], -r), z[el.end - 1] - z[el.start - 1], 2 * r, facecolor=col,
-                               edgecolor="k", lw=0.6))
-        ax.text(0.5 * (z[el.start - 1] + z[el.end - 1]), 1.6 * r, str(el.start), ha="center", va="bottom", fontsize=7)
-    dmax = max(el.outer_diameter for el in config.shaft)
-    for d in config.discs:
-        ax.add_patch(Rectangle((z[d.station - 1] - 0.004, -1.5 * dmax), 0.008, 3.0 * dmax, facecolor="0.4"))
-    for b in config.bearings:
-        ax.plot(z[b.station - 1], -1.3 * dmax, "^", color="k", ms=9)
+
+    def colour_of(element: int) -> str:
+        c = status.get(element)
+        return "tab:red" if element == best else colour.get(c.status if c is not None else "", "white")
+
     ports = getattr(config, "ports", None)
-    for port, mark, name in ((getattr(ports, "actuator", None), "v", "actuator"),
-                             (getattr(ports, "sensor", None), "o", "sensor")):
-        if port is not None and getattr(port, "station", None) is not None:
-            ax.plot(z[port.station - 1], 1.3 * dmax, mark, color="tab:green", ms=8,
-                    label=f"{name} s{port.station}{port.direction}")
-    ax.plot([], [], "^", color="k", label="bearing")
-    ax.set_ylim(-2.2 * dmax, 2.2 * dmax)
-    ax.set_yticks([])
+    shaft_drawing(ax, config, colour_of, [p for p in (getattr(ports, "actuator", None),) if p is not None],
+                  [p for p in (getattr(ports, "sensor", None),) if p is not None])
     import textwrap
 
     ax.set_title("\n".join(textwrap.wrap(title or location.summary(), 110)), fontsize=8)

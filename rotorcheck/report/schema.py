@@ -95,6 +95,7 @@ class DetectionReport:
     damage_anchored_noise_max_abs: FloatArray | None = None
     damage_dynamics_by_direction: dict[str, dict[str, Any]] | None = None  # {"x"|"y": {"re", "im"} (f,)} N/m
     location: dict[str, Any] | None = None  # rotorcheck.location.LocationResult.to_dict() (detect --locate)
+    detectability: dict[str, Any] | None = None  # what this sweep could have revealed (rotorcheck.detectability)
     channel_pairs: list[str] | None = None  # measured FRFs "output<-input" (port labels), the rig's io pair first
     # the joint test (verdict_rule names it when it decided)
     joint_statistic: float | None = None  # T = max_e T_e (chi-square units)

@@ -1,0 +1,146 @@
+"""What a rig, its sensors and its noise can detect (issue 19), against independent references: the
+closed-form likelihood-ratio limit, limits.md's noise formula, a Monte Carlo of the joint test itself,
+and the rule that more channels can only help."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from rotorcheck.cli import EXIT_INPUT, EXIT_OK, main
+from rotorcheck.config import Port, RigConfig, load_config
+from rotorcheck.detectability import detectability, stated_noise_variance, z_upper
+from rotorcheck.nominal import ChannelPair, primary_pair
+from rotorcheck.resources import configs_dir
+from rotorcheck.robust.joint import POWER_Z, joint_test
+from rotorcheck.signatures import crack_signatures, io_frf
+
+F = np.linspace(30.0, 600.0, 131)
+V = stated_noise_variance(2e-7, 64, 64, 1.0)
+
+
+@pytest.fixture(scope="module")
+def rig() -> RigConfig:
+    return load_config(configs_dir() / "crack_rig.yaml")
+
+
+def _noise_only(cfg: RigConfig) -> RigConfig:
+    return cfg.model_copy(update={"variability": []})
+
+
+def test_stated_noise_variance_is_limits_md_figure() -> None:
+    # limits.md: "v = 4 sigma^2 / (M N) = 3.9e-17 m^2 per point at 1x" (sigma 2e-7 m, 64 x 64 samples, 1 N)
+    assert V == pytest.approx(3.9e-17, rel=2e-3)
+
+
+def test_one_candidate_detector_equals_the_closed_form_limit(rig: RigConfig) -> None:
+    """With one candidate element the joint test's threshold is z_(1-alpha)^2 (one-sided normal squared),
+    so its 90 % detectable loss equals the likelihood-ratio limit (z_(1-alpha) + z_0.9) / ||s||_w; the
+    test's threshold comes from its Monte Carlo, the limit from the normal quantile."""
+    var = np.full(F.size, V)
+    d = detectability(_noise_only(rig), F, 1000.0, var, var, [primary_pair(rig)], elements=[4])
+    e = next(x for x in d.elements if x.element == 4)
+    assert e.open_loss_min_noise_only == pytest.approx(e.limit_open_loss_noise_only, rel=0.015)
+    th = io_frf(rig, F, 1000.0)
+    _, S = crack_signatures(rig, F, 1000.0, th, [4])
+    norm = np.sqrt(np.sum(2.0 * np.abs(S[0]) ** 2 / (2 * V)))
+    assert e.limit_open_loss_noise_only == pytest.approx((z_upper(0.01) + POWER_Z) / norm, rel=1e-9)
+    assert e.open_loss_min == e.open_loss_min_noise_only  # no benign ranges: the same
+    assert any("no benign variability" in n for n in d.notes)
+
+
+def test_noise_only_prediction_holds_in_a_monte_carlo_of_the_joint_test(rig: RigConfig) -> None:
+    """Draw both sweeps' noise at the stated variance onto a crack of the predicted loss in element 4 and
+    run the joint test (every candidate element) 300 times: about 90 % detected; at 1/1.5 of it, far fewer."""
+    cfg = _noise_only(rig)
+    var = np.full(F.size, V)
+    d = detectability(cfg, F, 1000.0, var, var, [primary_pair(cfg)])
+    a = next(x for x in d.elements if x.element == 4).open_loss_min_noise_only
+    assert a is not None
+    th = io_frf(cfg, F, 1000.0)
+    els, S = crack_signatures(cfg, F, 1000.0, th)
+    s4 = S[els.index(4)]
+    rng = np.random.default_rng(19)
+    tot = 2 * V
+
+    def rate(loss: float, n: int = 300) -> float:
+        hits = 0
+        for _ in range(n):
+            noise = np.array([1.0, 1j]) @ rng.normal(scale=np.sqrt(tot / 2), size=(2, F.size))
+            hits += joint_test(loss * s4 + noise, np.full(F.size, tot), S, els, draws=20_000).damage
+        return hits / n
+
+    assert 0.85 <= rate(a) <= 0.95
+    assert rate(a / 1.5) < 0.75
+
+
+def test_benign_ranges_cost_detectability_and_more_channels_help(rig: RigConfig) -> None:
+    from rotorcheck.workflow import KAPPA_NOMINAL, benign_model
+
+    var = np.full(F.size, V)
+    th = io_frf(rig, F, 1000.0)
+    bm = benign_model(rig, F, 1000.0, th, KAPPA_NOMINAL)
+    d = detectability(rig, F, 1000.0, var, var, [primary_pair(rig)], th, 0.01, bm, elements=[3, 4], workers=1)
+    for e in d.elements:
+        assert e.open_loss_min is not None and e.open_loss_min_noise_only is not None
+        assert e.open_loss_min > 10 * e.open_loss_min_noise_only  # limits.md 3: benign change, not noise, limits
+        assert e.breathing_depth_min is not None and e.breathing_depth_min > e.breathing_depth_min_noise_only
+    # x and y probes at two stations see more than one probe: every element's limit drops
+    act = rig.io_ports("test").actuator
+    probes = [Port(station=6, direction="x"), Port(station=6, direction="y"), Port(station=2, direction="x"),
+              Port(station=2, direction="y")]
+    pairs = [ChannelPair(p, act, "") for p in probes]
+    cfg = _noise_only(rig)
+    one = detectability(cfg, F, 1000.0, var, var, [primary_pair(cfg)])
+    four = detectability(cfg, F, 1000.0, np.full((F.size, 4), V), np.full((F.size, 4), V), pairs)
+    for a, b in zip(one.elements, four.elements):
+        if a.limit_open_loss_noise_only is not None:
+            assert b.limit_open_loss_noise_only is not None
+            assert b.limit_open_loss_noise_only <= a.limit_open_loss_noise_only * (1 + 1e-9)
+    assert four.sensors == ("s6.x", "s6.y", "s2.x", "s2.y")
+
+
+def test_detectability_cli(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    quiet = tmp_path / "rig.yaml"
+    text = (configs_dir() / "crack_rig.yaml").read_text()
+    quiet.write_text(text[: text.index("variability:")])  # noise only: fast
+    out = tmp_path / "out"
+    args = ["detectability", str(quiet), "--noise-std", "2e-7", "--speed", "1000", "--elements", "3,4", "--out",
+            str(out), "--json"]
+    assert main(args) == EXIT_OK
+    doc = json.loads(capsys.readouterr().out)
+    assert {"speed_rpm", "false_alarm", "sensors", "elements"} <= set(doc)
+    assert doc["speed_rpm"] == 1000.0 and doc["sensors"] == ["s6.x"]
+    keys = {"element", "z_start_m", "z_end_m", "open_loss_min", "open_loss_min_noise_only", "breathing_depth_min",
+            "breathing_depth_min_noise_only", "limit_breathing_depth_noise_only"}
+    assert [e["element"] for e in doc["elements"]] == [3, 4] and keys <= set(doc["elements"][0])
+    assert (out / "detectability.png").exists()
+    assert main(args) == EXIT_INPUT  # exists, no --force
+    capsys.readouterr()
+    assert main(["detectability", str(quiet), "--out", str(tmp_path / "o2")]) == EXIT_INPUT  # no noise stated
+    assert "output_noise_std" in capsys.readouterr().err
+
+
+def test_sensor_sets_are_ranked_exhaustively_then_greedily(rig: RigConfig) -> None:
+    """Every set of up to 2 of 3 ports is scored once (3 + 3); the ranking is sorted by the worst element;
+    the best pair watches its worst element at least as well as the best single probe (LR: more data); with
+    the exhaustive limit at 0 the greedy search evaluates 3 + 2 sets and ends on a 2-port set."""
+    from rotorcheck.detectability import rank_sensor_sets, score_sensor_set
+
+    cfg = _noise_only(rig)
+    act = [cfg.io_ports("test").actuator]
+    cand = [Port(station=6, direction="x"), Port(station=2, direction="x"), Port(station=4, direction="x")]
+    ranked, method, seen = rank_sensor_sets(cfg, F, 1000.0, V, cand, act, 2, lambda p, t: None, workers=1)
+    assert method == "exhaustive" and len(ranked) == 6
+    keys = [s.key() for s in ranked]
+    assert keys == sorted(keys)
+    singles = [s for s in ranked if len(s.sensors) == 1]
+    assert ranked[0].key() <= min(s.key() for s in singles)
+    alone = score_sensor_set(cfg, F, 1000.0, V, [cand[0]], act, lambda p, t: None, 0.01, seen)
+    assert alone.key() == next(s for s in singles if s.sensors == ("s6.x",)).key()
+    greedy, method, _ = rank_sensor_sets(cfg, F, 1000.0, V, cand, act, 2, lambda p, t: None, exhaustive_limit=0,
+                                         workers=1)
+    assert method == "greedy" and len(greedy) == 5 and len(greedy[0].sensors) == 2
