@@ -68,9 +68,9 @@ class Strict(BaseModel):
 
 
 class Material(Strict):
-    density: Density = Field(gt=0, description="kg/m^3")
-    youngs_modulus: Pressure = Field(gt=0, description="Pa")
-    shear_modulus: Pressure | None = Field(default=None, gt=0, description="Pa")
+    density: Density = Field(gt=0, le=1e5, description="kg/m^3 (plausible: up to 1e5)")
+    youngs_modulus: Pressure = Field(gt=0, le=1e13, description="Pa (plausible: up to 1e13)")
+    shear_modulus: Pressure | None = Field(default=None, gt=0, le=1e13, description="Pa")
     poisson: Ratio | None = Field(default=None, ge=0, lt=0.5, description="Poisson's ratio")
 
     @model_validator(mode="after")
@@ -78,6 +78,17 @@ class Material(Strict):
         if self.shear_modulus is None and self.poisson is None:
             raise ValueError("give shear_modulus or poisson")
         return self
+
+    def consistency_note(self, name: str) -> str | None:
+        """With E, G and Poisson's ratio all given, a note when ``E / 2G - 1`` differs from ``poisson`` by
+        more than 0.02: G is what the shear stiffness uses, ``poisson`` what the shear coefficient uses."""
+        if self.shear_modulus is None or self.poisson is None:
+            return None
+        implied = self.youngs_modulus / (2.0 * self.shear_modulus) - 1.0
+        if abs(implied - self.poisson) <= 0.02:
+            return None
+        return (f"materials.{name}: E / 2G - 1 = {implied:.3f} beside poisson {self.poisson:g}: the shear stiffness "
+                f"uses shear_modulus, the shear coefficient (and crack compliance) poisson")
 
     @property
     def G(self) -> float:
@@ -137,7 +148,7 @@ class ShaftElement(Strict, TaperedSection):
     start: int = Field(ge=1, description="first station (1-based)")
     end: int = Field(ge=1, description="second station (1-based)")
     material: str
-    outer_diameter: Length = Field(gt=0, description="m, at the start station")
+    outer_diameter: Length = Field(gt=0, le=100.0, description="m, at the start station")
     inner_diameter: Length = Field(default=0.0, ge=0, description="m, at the start station")
     outer_diameter_right: Length | None = Field(default=None, gt=0, description="m, at the end station (taper)")
     inner_diameter_right: Length | None = Field(default=None, ge=0, description="m, at the end station (taper)")
@@ -180,9 +191,9 @@ class Disc(Strict):
 
     name: str = "disc"
     station: int = Field(ge=1)
-    mass: Mass | None = Field(default=None, gt=0, description="kg")
-    polar_inertia: Inertia | None = Field(default=None, ge=0, description="kg m^2")
-    transverse_inertia: Inertia | None = Field(default=None, ge=0, description="kg m^2")
+    mass: Mass | None = Field(default=None, gt=0, le=1e7, description="kg")
+    polar_inertia: Inertia | None = Field(default=None, ge=0, le=1e9, description="kg m^2")
+    transverse_inertia: Inertia | None = Field(default=None, ge=0, le=1e9, description="kg m^2")
     material: str | None = Field(default=None, description="by geometry: material name")
     width: Length | None = Field(default=None, gt=0, description="by geometry: axial width, m")
     outer_diameter: Length | None = Field(default=None, gt=0, description="by geometry: m")
@@ -227,9 +238,9 @@ class PointMass(Strict):
 
     name: str = "point_mass"
     station: int = Field(ge=1, description="shaft station, or a support node numbered after the last station")
-    mass: Mass | None = Field(default=None, gt=0, description="kg, both directions")
-    mx: Mass | None = Field(default=None, gt=0, description="kg, x only (with my)")
-    my: Mass | None = Field(default=None, gt=0, description="kg, y only (with mx)")
+    mass: Mass | None = Field(default=None, gt=0, le=1e7, description="kg, both directions")
+    mx: Mass | None = Field(default=None, gt=0, le=1e7, description="kg, x only (with my)")
+    my: Mass | None = Field(default=None, gt=0, le=1e7, description="kg, y only (with mx)")
 
     @model_validator(mode="after")
     def _form(self) -> PointMass:
@@ -740,6 +751,13 @@ class RigConfig(Strict):
             self._check_lumped()
         if self.variability:
             resolve_benign(self)
+        if self.uncertainty.structure == "parametric" and self.uncertainty.parameter:
+            self._check_uncertainty_parameter(self.uncertainty.parameter)
+        if "n_modes" in self.analysis.model_fields_set and self.analysis.n_modes > self.n_dof:
+            raise ValueError(f"analysis.n_modes: {self.analysis.n_modes} modes asked; the model has {self.n_dof} "
+                             "degrees of freedom")
+        if self.kind == "rotor" and any(abs(z) > 1e4 for z in self.stations):
+            raise ValueError("stations: positions beyond 10 km: not a rotor (give metres, or units such as '160 mm')")
         return self
 
     # -- rotor checks ------------------------------------------------------------------------
@@ -862,6 +880,37 @@ class RigConfig(Strict):
             raise ConfigError(f"rig {self.rig_id}", "ports", f"{purpose} needs ports.actuator and ports.sensor; "
                               "this rig has none (a rig without ports serves modal analysis only)")
         return self.ports
+
+    def _check_uncertainty_parameter(self, name: str) -> None:
+        """The parametric structure's parameter exists (checked at load, not when the model is built)."""
+        parts = name.split(".")
+        known: dict[tuple[str, str], list[str]] = {
+            ("masses", "mass"): [m.name for m in self.masses],
+            ("lumped_springs", "stiffness"): [k.name for k in self.lumped_springs],
+            ("bearings", "kxx"): [b.name for b in self.bearings if b.n_link is None],
+            ("bearings", "kyy"): [b.name for b in self.bearings if b.n_link is None],
+        }
+        names = known.get((parts[0], parts[2])) if len(parts) == 3 else None
+        if names is None:
+            raise ValueError(f"uncertainty.parameter: {name!r} is not a supported rank-one parameter "
+                             "(masses.<m>.mass, lumped_springs.<k>.stiffness, bearings.<b>.kxx|kyy)")
+        if parts[1] not in names:
+            raise ValueError(f"uncertainty.parameter: no {parts[0]} entry named {parts[1]!r} "
+                             f"(known: {', '.join(names) or 'none'})")
+
+    def notes(self) -> list[str]:
+        """What the loader accepted but a user should know (inconsistent material constants)."""
+        return [n for k, m in self.materials.items() if (n := m.consistency_note(k)) is not None]
+
+    @property
+    def n_dof(self) -> int:
+        """Degrees of freedom of the assembled model (rotor: 4 per mesh node plus 2 per support node)."""
+        if self.kind == "lumped":
+            return len(self.masses)
+        per_span: dict[int, int] = {}
+        for e in self.shaft:
+            per_span.setdefault(e.start, e.refine)
+        return 4 * (1 + sum(per_span.values())) + 2 * self.n_support_nodes
 
     # -- lumped checks -----------------------------------------------------------------------
     def _check_lumped(self) -> None:

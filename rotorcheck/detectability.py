@@ -219,13 +219,15 @@ def detectability(
     section_length: float | None = None,
     noise_source: str = "",
     workers: int | None = None,
+    candidates: Sequence[int] | None = None,
 ) -> Detectability:
     """The detectability table (module docstring). ``var_new``, ``var_base``: (f, P) or (f,) variances of
     one FRF point of the new sweep and of the baseline (m^2/N^2), P = len(pairs); ``healthy_frf`` (f, P):
     the level the signatures are anchored at (default: the model's own receptance); ``benign``: the joint
     test's benign model at these points, stacked like the signatures (None: noise only; see
     :func:`rotorcheck.workflow.benign_model`); ``workers``: processes for the benign-case searches
-    (default: up to 2)."""
+    (default: up to 2); ``elements``: the elements reported (default: all); ``candidates``: the joint test's
+    candidate elements (default: every element the channels see, as ``detect`` has)."""
 
     f = np.asarray(freq_hz, dtype=float)
     P = len(pairs)
@@ -237,11 +239,14 @@ def detectability(
         return a.reshape(th.shape) if a.size == th.size else np.broadcast_to(a, th.shape)
 
     var = stacked(as_th(var_new) + as_th(var_base))
-    els, S = crack_signatures(config, f, speed_rpm, th, elements, pairs=multi)
+    # the detector's candidates are every element the channels see (or ``candidates``); ``elements`` only
+    # chooses which of them are reported (the threshold is that of the whole candidate set)
+    els, S = crack_signatures(config, f, speed_rpm, th, candidates, pairs=multi)
     del multi
     notes: list[str] = []
-    if elements is not None and len(els) < len(elements):
-        unseen = sorted(set(elements) - set(els))
+    wanted = set(els) if elements is None else set(elements)
+    if elements is not None and not wanted <= set(els):
+        unseen = sorted(wanted - set(els))
         notes.append(f"elements {unseen}: not seen by these channels (no bending moment there): undetectable")
     nrm = np.linalg.norm(np.concatenate([S.real, S.imag], axis=1) * whitening(var), axis=1)
     zero = np.zeros(var.size, dtype=complex)
@@ -259,12 +264,14 @@ def detectability(
     a_noise_all = [float(x) if np.isfinite(x) else None for x in noise_only.detectable]
     a_benign_all: list[float | None] = list(a_noise_all)
     if bm is not None and start is not None:
-        todo = [i for i, a in enumerate(a_noise_all) if a is not None]
+        todo = [i for i, a in enumerate(a_noise_all) if a is not None and els[i] in wanted]
         job = _BenignSearch(var, S, els, bm, false_alarm)
         starts = [max(float(a_noise_all[i] or 0.0), float(min(start[i], MAX_LOSS))) for i in todo]
         for i, a in zip(todo, _map(job, list(zip(todo, starts)), workers)):
             a_benign_all[i] = a
     for i, e in enumerate(els):
+        if e not in wanted:
+            continue
         a_noise, a_benign = a_noise_all[i], a_benign_all[i]
         relation = _relation(config, e, "breathing", section_length)
 

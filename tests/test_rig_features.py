@@ -210,3 +210,35 @@ def test_every_accepted_key_is_used_or_refused() -> None:
     lumped.pop("point_masses")
     lumped["gyroscopic"] = False
     _bad(lumped, "gyroscopic", "applies to kind: rotor only")
+
+
+def test_implausible_values_and_inconsistent_constants() -> None:
+    """Issue 16: physical ranges by field; more modes than the model has; E, G and poisson that disagree
+    are accepted with a note saying which one is used where (the bundled ss416: E/2G - 1 = 0.350)."""
+    d = _base()
+    d["materials"]["steel"]["density"] = 1e308
+    _bad(d, "materials.steel.density", "<= 100000")
+    d = _base()
+    d["discs"][0] = {"name": "disk0", "station": 3, "mass": 1e300, "polar_inertia": 0.1, "transverse_inertia": 0.1}
+    _bad(d, "discs[0].mass", "<= 10000000")
+    d = _base()
+    d["analysis"] = {"n_modes": 40}
+    _bad(d, "analysis.n_modes", "the model has 28 degrees of freedom")
+    from rotorcheck.config import load_config
+    from rotorcheck.resources import configs_dir
+
+    notes = load_config(configs_dir() / "crack_rig.yaml").notes()
+    assert len(notes) == 1 and "0.350" in notes[0] and "poisson 0.3" in notes[0]
+    d = _base()
+    d["materials"]["steel"]["poisson"] = 211 / (2 * 81.2) - 1  # consistent: no note
+    assert parse_config(d).notes() == []
+
+
+def test_a_parametric_uncertainty_names_an_existing_parameter_at_load() -> None:
+    d = _base()
+    d["uncertainty"] = {"structure": "parametric", "parameter": "bearings.nosuch.kxx"}
+    _bad(d, "uncertainty.parameter", "no bearings entry named 'nosuch'")
+    d["uncertainty"]["parameter"] = "bearings.bearing0.cxx"
+    _bad(d, "uncertainty.parameter", "not a supported rank-one parameter")
+    d["uncertainty"]["parameter"] = "bearings.bearing0.kxx"
+    assert parse_config(d).uncertainty.parameter == "bearings.bearing0.kxx"

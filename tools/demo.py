@@ -9,6 +9,7 @@ names (``--rig`` defaults to the bundled rig named by the sweep, ``--out`` to ``
     rotorcheck validate   <healthy sweep>
     rotorcheck detect     <new sweep>
     rotorcheck locate     <new sweep>      (the open crack at 0 rpm: where and how big)
+    rotorcheck detectability --baseline    (1000 rpm: what this rig and noise can detect, per element)
 
 Cases: the open crack at 0 rpm, the breathing crack at 1000 rpm, the repeat healthy sweep at
 1000 rpm and a free-running (random start angle) healthy pair at 2000 rpm (false-alarm checks); with
@@ -28,6 +29,8 @@ from rotorcheck.resources import configs_dir, samples_dir
 
 #: the cases where the demo also locates the change (every shaft element a candidate)
 LOCATE = ("open_crack_0rpm",)
+#: the cases where the demo also predicts what the rig can detect, from the baseline's noise
+DETECTABILITY = ("breathing_crack_1000rpm",)
 CASES = (
     ("open_crack_0rpm", "crack_rig/healthy_0rpm.h5", "crack_rig/open_crack_0rpm.h5"),
     ("breathing_crack_1000rpm", "crack_rig/healthy_1000rpm.h5", "crack_rig/breathing_crack_1000rpm.h5"),
@@ -73,6 +76,8 @@ def main(root: str | Path = "demo") -> int:
             return 2
         summary.append((name, VERDICTS.get(rc, str(rc)), work / "rotorcheck-out"))
         if name in LOCATE and _run(["locate", n], work) == 2:
+            return 2
+        if name in DETECTABILITY and _run(["detectability", "--baseline", "rotorcheck-out/baseline.h5"], work) != 0:
             return 2
     print("\nsummary")
     for name, verdict, out in summary:

@@ -506,7 +506,7 @@ def model_summary(
         "modes": entries,
         "critical_speeds_rpm": [],
         "undamped_frequencies_at_rest_hz": [float(x) for x in rest],
-        "warnings": static_stiffness_warnings(sys_, [0.0, float(speed_rpm)]),
+        "warnings": config.notes() + static_stiffness_warnings(sys_, [0.0, float(speed_rpm)]),
     }
     if sys_.kind == "rotor":
         out["critical_speeds_rpm"] = critical_speeds(sys_, config.analysis.campbell_max_rpm)
