@@ -69,8 +69,8 @@ class Strict(BaseModel):
 
 class Material(Strict):
     density: Density = Field(gt=0, le=1e5, description="kg/m^3 (plausible: up to 1e5)")
-    youngs_modulus: Pressure = Field(gt=0, le=1e13, description="Pa (plausible: up to 1e13)")
-    shear_modulus: Pressure | None = Field(default=None, gt=0, le=1e13, description="Pa")
+    youngs_modulus: Pressure = Field(gt=0, le=1e20, description="Pa (up to 1e20: a near-rigid stand-in)")
+    shear_modulus: Pressure | None = Field(default=None, gt=0, le=1e20, description="Pa")
     poisson: Ratio | None = Field(default=None, ge=0, lt=0.5, description="Poisson's ratio")
 
     @model_validator(mode="after")

@@ -40,7 +40,7 @@ from rotorcheck.config import RigConfig
 from rotorcheck.location import _relation, depth_of_loss
 from rotorcheck.nominal import ChannelPair
 from rotorcheck.robust.joint import POWER_Z, BenignModel, joint_test, whitening
-from rotorcheck.signatures import crack_signatures, io_frf, stacked
+from rotorcheck.signatures import crack_signatures, io_frf, stacked, unstacked
 
 #: largest stiffness loss searched (fraction); beyond it an element counts as undetectable (None)
 MAX_LOSS = 0.8
@@ -233,10 +233,10 @@ def detectability(
     P = len(pairs)
     multi = list(pairs) if P > 1 else None
     th = np.asarray(healthy_frf) if healthy_frf is not None else io_frf(config, f, speed_rpm, multi)
-    th = th.reshape(f.size, P) if P > 1 else th.reshape(f.size)
+    th = unstacked(th, (f.size, P)) if P > 1 else th.reshape(f.size)
     def as_th(x: np.ndarray) -> np.ndarray:
         a = np.asarray(x, dtype=float)
-        return a.reshape(th.shape) if a.size == th.size else np.broadcast_to(a, th.shape)
+        return unstacked(a, th.shape) if a.size == th.size else np.broadcast_to(a, th.shape)
 
     var = stacked(as_th(var_new) + as_th(var_base))
     # the detector's candidates are every element the channels see (or ``candidates``); ``elements`` only

@@ -51,6 +51,15 @@ def relative(g: np.ndarray, g0: np.ndarray) -> np.ndarray:
     return np.where(quiet, 1.0, np.asarray(g) / np.where(quiet, 1.0, g0))
 
 
+def unstacked(x: np.ndarray, shape: tuple[int, ...]) -> np.ndarray:
+    """An array as ``shape`` (f, P); a 1-D array of f P values is taken as :func:`stacked` (pair after pair),
+    never reshaped row-major (that would interleave the pairs)."""
+    a = np.asarray(x)
+    if len(shape) == 2 and a.ndim == 1 and a.size == shape[0] * shape[1]:
+        return a.reshape(shape[1], shape[0]).T
+    return a.reshape(shape)
+
+
 def stacked(x: np.ndarray) -> np.ndarray:
     """An (f, P) array as one vector, channel pair after channel pair (P f,); an (f,) array as it is."""
     x = np.asarray(x)
@@ -78,7 +87,7 @@ def crack_signatures(config: RigConfig, freq_hz: np.ndarray, speed_rpm: float, h
     f = np.asarray(freq_hz, dtype=float)
     els = tuple(elements) if elements is not None else candidate_elements(config)
     g0 = io_frf(config, f, speed_rpm, pairs)
-    th = np.asarray(healthy_frf).reshape(g0.shape)
+    th = unstacked(healthy_frf, g0.shape)
     S = np.array([stacked(th * (relative(io_frf(with_element_loss(config, e, loss), f, speed_rpm, pairs), g0) - 1.0)
                           / loss)
                   for e in els], dtype=complex).reshape(len(els), th.size)
@@ -120,7 +129,7 @@ def benign_prediction(config: RigConfig, freq_hz: np.ndarray, speed_rpm: float, 
     f = np.asarray(freq_hz, dtype=float)
     params = tuple(parameters) if parameters is not None else benign_parameters(config)
     g0 = io_frf(config, f, speed_rpm, pairs)
-    th = np.asarray(healthy_frf).reshape(g0.shape)
+    th = unstacked(healthy_frf, g0.shape)
     cache: dict[tuple[float, ...], np.ndarray] = {}
 
     def predict(theta: np.ndarray) -> np.ndarray:

@@ -145,3 +145,22 @@ def test_sensor_sets_are_ranked_exhaustively_then_greedily(rig: RigConfig) -> No
     greedy, method, _ = rank_sensor_sets(cfg, F, 1000.0, V, cand, act, 2, lambda p, t: None, exhaustive_limit=0,
                                          workers=1)
     assert method == "greedy" and len(greedy) == 5 and len(greedy[0].sensors) == 2
+
+
+def test_a_stacked_healthy_frf_is_read_pair_after_pair(rig: RigConfig) -> None:
+    """The benign prediction of several channel pairs is the same whether the healthy FRF comes as (f, P)
+    or stacked (pair after pair): a row-major reshape of the stacked vector interleaved the pairs (a defect
+    that made x/y probes look immune to benign change)."""
+    from rotorcheck.signatures import benign_prediction, stacked
+
+    act = rig.io_ports("test").actuator
+    pairs = [ChannelPair(Port(station=s, direction=d), act, "") for s in (6, 2) for d in "xy"]
+    th = io_frf(rig, F, 1000.0, pairs)
+    a = benign_prediction(rig, F, 1000.0, th, pairs=pairs).predict(np.array([0.01, 0.0, 0.0, 0.0, 0.0]))
+    b = benign_prediction(rig, F, 1000.0, stacked(th), pairs=pairs).predict(np.array([0.01, 0.0, 0.0, 0.0, 0.0]))
+    np.testing.assert_array_equal(a, b)
+    # E +1 %: the largest change is on the pair that responds most (6x), as the re-solved model says
+    g = io_frf(rig.model_copy(update={"materials": {k: m.model_copy(update={
+        "youngs_modulus": 1.01 * m.youngs_modulus, "shear_modulus": 1.01 * (m.shear_modulus or 0) or None})
+        for k, m in rig.materials.items()}}), F, 1000.0, pairs)
+    np.testing.assert_allclose(a, stacked(g - th), rtol=1e-6, atol=1e-6 * np.abs(th).max())
