@@ -103,6 +103,58 @@ def _write_into(h5: h5py.Group, baseline: Baseline) -> None:
         h5.create_dataset("gamma_status", data=np.asarray(baseline.gamma_status, dtype="S"))
 
 
+#: attribute holding each item's digest (JSON ``{name: sha256}``) over everything detection reads
+DIGEST_ATTR = "content_digests"
+
+
+def _item_bytes(value: object) -> bytes:
+    """Canonical bytes of an attribute or dataset value (type, shape and content)."""
+    a = np.asarray(value)
+    if a.dtype.kind in "OUS":
+        text = repr(a.tolist() if a.ndim else (value.decode() if isinstance(value, bytes) else str(value)))
+        return b"str:" + text.encode()
+    a = np.ascontiguousarray(a)
+    return f"{a.dtype.str}:{a.shape}:".encode() + a.tobytes()
+
+
+def _digests(h5: h5py.Group) -> dict[str, str]:
+    """sha256 of each attribute (``@name``) and dataset of one group (not its subgroups, not the digest)."""
+    import hashlib
+
+    out = {f"@{k}": hashlib.sha256(_item_bytes(v)).hexdigest() for k, v in h5.attrs.items() if k != DIGEST_ATTR}
+    for k, v in h5.items():
+        if isinstance(v, h5py.Dataset):
+            out[k] = hashlib.sha256(_item_bytes(v[()])).hexdigest()
+    return dict(sorted(out.items()))
+
+
+def _seal(h5: h5py.Group) -> None:
+    import json
+
+    h5.attrs[DIGEST_ATTR] = json.dumps(_digests(h5))
+
+
+def _verify(h5: h5py.Group, p: Path, where: str) -> None:
+    """Every item detection reads is as rotorcheck wrote it: exit 2 naming what does not match."""
+    import json
+
+    raw = h5.attrs.get(DIGEST_ATTR)
+    if raw is None:
+        raise InputError(p, f"{where}/@{DIGEST_ATTR}", "no content digest: written by an older rotorcheck or "
+                         "stripped; recreate the baseline (rotorcheck fit-noise and validate)")
+    try:
+        stored = json.loads(raw.decode() if isinstance(raw, bytes) else str(raw))
+        if not isinstance(stored, dict):
+            raise ValueError
+    except ValueError:
+        raise InputError(p, f"{where}/@{DIGEST_ATTR}", "unreadable content digest") from None
+    now = _digests(h5)
+    changed = sorted(k for k in set(stored) | set(now) if stored.get(k) != now.get(k))
+    if changed:
+        raise InputError(p, f"{where}/{changed[0]}", "changed since rotorcheck wrote the baseline (content digest "
+                         f"mismatch: {', '.join(changed)}); an edited or corrupt baseline is not used: recreate it")
+
+
 def write_baseline(baseline: Baseline, path: str | Path, others: list[Baseline] | None = None) -> None:
     """Write atomically (temp file in the same folder, then rename). Overwrite policy is the caller's.
     ``others``: the validated sets of a file's further runs (speeds), each in ``/runs/<run_id>``."""
@@ -114,7 +166,10 @@ def write_baseline(baseline: Baseline, path: str | Path, others: list[Baseline] 
         _write_into(h5, baseline)
         for b in others or []:
             b.created_utc = b.created_utc or baseline.created_utc
-            _write_into(h5.require_group("runs").create_group(b.run_id), b)
+            g = h5.require_group("runs").create_group(b.run_id)
+            _write_into(g, b)
+            _seal(g)
+        _seal(h5)  # the root's own items (each run group carries its own digest)
 
 
 def read_baseline(path: str | Path) -> Baseline:
@@ -135,9 +190,13 @@ def read_baselines(path: str | Path) -> list[Baseline]:
     with h5:
         if h5.attrs.get("schema") != SCHEMA:
             raise InputError(p, "/@schema", f"not a rotorcheck baseline (schema {h5.attrs.get('schema')!r})")
-        if int(h5.attrs.get("schema_version", -1)) != SCHEMA_VERSION:
-            version = h5.attrs.get("schema_version")
-            raise InputError(p, "/@schema_version", f"unknown schema_version {version}")
+        version = h5.attrs.get("schema_version")
+        try:
+            known = int(version) == SCHEMA_VERSION
+        except (TypeError, ValueError):
+            known = False
+        if not known:
+            raise InputError(p, "/@schema_version", f"unknown schema_version {version!r}")
         out = [_read_from(h5, p, "")]
         if "runs" in h5:
             out += [_read_from(h5["runs"][rid], p, f"/runs/{rid}") for rid in h5["runs"]]
@@ -196,4 +255,5 @@ def _read_from(h5: h5py.Group, p: Path, where: str) -> Baseline:
         raise InputError(p, f"{where}/noise_bound_per_point_m", "must be a 1-D array of values >= 0 (NaN: no estimate)")
     if not np.isfinite(b.noise_bound_m) or b.noise_bound_m < 0:
         raise InputError(p, f"{where}/@noise_bound_m", f"must be finite and >= 0, got {b.noise_bound_m}")
+    _verify(h5, p, where)
     return b

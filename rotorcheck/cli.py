@@ -335,6 +335,9 @@ def validate(
                          "benign change around the updated model.")] = False,
     plot_format: PlotFormatOpt = "png",
     fail_at: FailAtOpt = "",
+    reuse_noise: Annotated[bool, typer.Option(
+        "--reuse-noise", help="Validate with a noise bound fitted on another sweep (recorded in the baseline).")
+    ] = False,
     as_json: JsonOpt = False,
     force: ForceOpt = False,
 ) -> int:
@@ -349,10 +352,17 @@ def validate(
     cfg, rig_path, firsts = workflow.load_rig_and_runs(sweeps[0], rig, target, run, every_run=True)
     others = [workflow.read_runs(p, cfg, [r.run_id for r in firsts]) for p in sweeps[1:]]
     run_ids = [r.run_id for r in firsts]
-    noise = workflow.prior_noise(target, cfg, force)
-    prior_run = read_baseline(target).run_id if noise is not None else None
-    if noise is not None:
+    noise = workflow.prior_noise(target, cfg, force, firsts[0].sha256, reuse_noise)
+    prior = read_baseline(target) if noise is not None else None
+    prior_run = prior.run_id if prior is not None else None
+    reused_from = ""
+    if prior is not None and noise is not None:
         err.print(f"noise bound V = {noise.value_m * 1e6:.4g} um from {target} ({noise.method}, run {prior_run})")
+        fitted_on = [s_ for s_ in prior.sweep_sha256 if s_]
+        if fitted_on and firsts[0].sha256 not in fitted_on and noise.method != "manual":
+            reused_from = fitted_on[0]
+            err.print(f"[yellow]the noise bound was fitted on another sweep (sha256 {reused_from[:12]}); used as "
+                      "asked (--reuse-noise), recorded in the baseline[/]")
     several = len(run_ids) > 1  # a file of several runs (speeds): one validated set per run
     plot_dirs = [out / rid if several else out for rid in run_ids]
     check_writable([p for d in plot_dirs for p in workflow.plot_paths(d, workflow.PLOT_STEMS_VALIDATE, formats)]
@@ -369,6 +379,8 @@ def validate(
             outcome = workflow.validate(cfg, runs, nb, enclose=enclose, fail_at=_fail_at(fail_at), update=update,
                                         learn_drift=learn_drift)
         outcome.baseline.extra["rig_path"] = str(Path(rig_path).resolve())  # later commands need no --rig
+        if reused_from and nb is noise:
+            outcome.baseline.extra["noise_fitted_on_sweep"] = reused_from
         outcomes.append(outcome)
         for line in (workflow.update_summary(outcome), workflow.learning_summary(outcome)):
             if line:
@@ -860,6 +872,13 @@ def main(argv: list[str] | None = None) -> int:
         if hasattr(exc, "show") and hasattr(exc, "exit_code"):  # click/typer usage errors
             exc.show(file=sys.stderr)
             return EXIT_INPUT if exc.exit_code else EXIT_OK
+        if os.environ.get("ROTORCHECK_DEBUG"):
+            raise
+        err.print(f"[bold red]internal error:[/] {type(exc).__name__}: {escape(str(exc))}")
+        return EXIT_INPUT
+    except (KeyboardInterrupt, SystemExit, GeneratorExit):
+        raise
+    except BaseException as exc:  # a native panic (pyo3's PanicException) outside a guarded solver call: still 2
         if os.environ.get("ROTORCHECK_DEBUG"):
             raise
         err.print(f"[bold red]internal error:[/] {type(exc).__name__}: {escape(str(exc))}")

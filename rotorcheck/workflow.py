@@ -427,11 +427,15 @@ def noise_baseline(rig: RigConfig, run: MeasuredRun, noise_bound: Any) -> Any:
                     noise_bound_per_point_m=noise_bound.details.get("per_point_m"))
 
 
-def prior_noise(baseline_path: str | Path, rig: RigConfig, force: bool) -> Any:
-    """The noise bound of an existing stage-'noise' baseline at ``baseline_path`` (None if there is none).
+def prior_noise(baseline_path: str | Path, rig: RigConfig, force: bool, sweep_sha256: str | None = None,
+                reuse: bool = False) -> Any:
+    """The noise bound of an existing baseline at ``baseline_path`` to validate with (None: fit anew).
 
-    A validated baseline there is refused unless ``force`` (it would be overwritten); a noise fit made
-    for another rig description is refused (InputError naming the field).
+    A stage-'noise' baseline (``fit-noise``) gives its bound. A validated one is refused unless ``force``
+    (it would be overwritten); with ``force`` a manual bound (``fit-noise --method manual``) survives, a
+    fitted one is fitted anew. A bound fitted on another sweep than ``sweep_sha256`` is refused unless
+    ``reuse`` (the caller records it); a noise fit made for another rig description is refused
+    (InputError naming the field).
     """
     from rotorcheck.baseline import read_baseline
     from rotorcheck.robust.noise import NoiseBound
@@ -443,9 +447,16 @@ def prior_noise(baseline_path: str | Path, rig: RigConfig, force: bool) -> Any:
     if prior.validated:
         if not force:
             raise InputError(path, "", "a validated baseline exists; refusing to overwrite (use --force)")
-        return None
+        if prior.noise_method != "manual":
+            return None
     if prior.rig_sha256 != rig.sha256():
         raise InputError(path, "/@rig_sha256", "the noise fit was made for another rig description")
+    fitted_on = [s for s in prior.sweep_sha256 if s]
+    if (prior.noise_method != "manual" and sweep_sha256 and fitted_on and sweep_sha256 not in fitted_on
+            and not reuse):
+        raise InputError(path, "/@sweep_sha256", f"the noise bound was fitted on another sweep (sha256 "
+                         f"{fitted_on[0][:12]}, this one {sweep_sha256[:12]}): run fit-noise on this sweep, or "
+                         "pass --reuse-noise to validate with it (recorded in the baseline)")
     per = prior.noise_bound_per_point_m
     return NoiseBound(prior.noise_bound_m, prior.noise_method, prior.noise_confidence,
                       {} if per is None else {"per_point_m": per})
