@@ -472,7 +472,7 @@ def _detect_one(base: Any, cfg: Any, mrun: Any, sweep: Path, base_path: Path, co
     from rotorcheck import workflow
 
     mrun = _resampled(base, mrun, sweep, resample)
-    workflow.check_baseline(base, cfg, mrun, base_path)
+    mrun = workflow.check_baseline(base, cfg, mrun, base_path)
     outcome = workflow.detect(cfg, base, mrun, fail_at=_fail_at(fail_at), confidence=confidence, rule=rule,
                               false_alarm=false_alarm)
     if locate and outcome.verdict.verdict == "damage":
@@ -591,7 +591,7 @@ def locate(
     check_writable(targets, force)
     base = read_baseline(base_path)
     mrun = _resampled(base, mrun, sweep, resample)
-    workflow.check_baseline(base, cfg, mrun, base_path)
+    mrun = workflow.check_baseline(base, cfg, mrun, base_path)
     with _progress(f"locating the change of {sweep.name} (every candidate element, certified)"):
         res = workflow.locate_damage(cfg, base, mrun, false_alarm, els, section_length)
     doc = {"sweep": str(sweep), "sweep_sha256": mrun.sha256, "baseline": str(base_path), "rig_id": cfg.rig_id,

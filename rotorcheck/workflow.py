@@ -576,6 +576,7 @@ def validate(
 
     if enclose not in ENCLOSE_MODES:
         raise InputError(None, "--enclose", f"must be one of {', '.join(ENCLOSE_MODES)}, got {enclose!r}")
+    runs = [runs[0]] + [aligned_pairs(r, pair_keys(runs[0])) for r in runs[1:]]  # same pairs, rows reordered
     first = runs[0]
     for r in runs[1:]:
         why = grid_mismatch(r.frequency_hz, first.frequency_hz)
@@ -880,8 +881,25 @@ def speed_tolerance(rig: RigConfig) -> float:
     return max((max(abs(p.lo), abs(p.hi)) for p in benign_parameters(rig) if p.is_speed), default=0.0)
 
 
-def check_baseline(baseline: Any, rig: RigConfig, run: MeasuredRun, baseline_path: str | Path) -> None:
-    """Refuse a baseline made for another rig, speed or grid (InputError naming the field)."""
+def aligned_pairs(run: MeasuredRun, keys: list[list[str]] | None) -> MeasuredRun:
+    """``run`` with its channel pairs in the order ``keys`` (``[output, input]`` labels) when it holds the
+    same pairs in another order (a channel table with its rows in another order); as it is otherwise."""
+    have = pair_keys(run)
+    if keys is None or have == keys or sorted(have) != sorted(keys) or run.n_pairs < 2:
+        return run
+    order = [have.index(k) for k in keys]
+
+    def cols(a: np.ndarray | None) -> np.ndarray | None:
+        return None if a is None else np.asarray(a)[:, order]
+
+    # the rig's own pair stays first in both (it is placed first on reading), so W, Zt, output_var hold
+    return dataclasses.replace(run, pairs=tuple(run.pairs[k] for k in order), frf_pairs=cols(run.frf_pairs),
+                               var_pairs=cols(run.var_pairs), dof_pairs=cols(run.dof_pairs))
+
+
+def check_baseline(baseline: Any, rig: RigConfig, run: MeasuredRun, baseline_path: str | Path) -> MeasuredRun:
+    """Refuse a baseline made for another rig, speed or grid (InputError naming the field); returns ``run``
+    with its channel pairs in the baseline's order (:func:`aligned_pairs`)."""
     if not baseline.validated:
         raise InputError(baseline_path, "/@stage", "baseline holds only a noise fit; run 'rotorcheck validate'")
     if baseline.rig_sha256 != rig.sha256():
@@ -907,10 +925,13 @@ def check_baseline(baseline: Any, rig: RigConfig, run: MeasuredRun, baseline_pat
         raise InputError(run.path, f"/runs/{run.run_id}/frequency",
                          f"grid differs from the baseline's: {grid}; detection compares point by point "
                          "(--resample interpolates the new sweep onto the baseline's grid)")
-    have, want = pair_keys(run), baseline_pairs(baseline)
+    want = baseline_pairs(baseline)
+    run = aligned_pairs(run, want)
+    have = pair_keys(run)
     if want is not None and have != want:
         raise InputError(run.path, "/channels", f"channel pairs {_show_pairs(have)} differ from the baseline's "
                          f"({_show_pairs(want)}); detection compares the same channels")
+    return run
 
 
 def _show_pairs(keys: list[list[str]]) -> str:
