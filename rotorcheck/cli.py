@@ -162,6 +162,12 @@ def info(
     doc["sha256"] = sweep_sha256(sweep)
     err.print(f"{sweep}: valid rotorcheck.sweep v{doc['schema_version']}, rig_id {sw.rig_id!r}, source {sw.source}, "
               f"{sw.generator}")
+    from rotorcheck.resources import configs_dir
+
+    doc["rig_bundled"] = (configs_dir() / f"{sw.rig_id}.yaml").exists()
+    if not doc["rig_bundled"]:
+        err.print(f"[yellow]rig_id {sw.rig_id!r} is not a bundled rig: fit-noise, validate, detect and locate "
+                  "need --rig (or a baseline that names the rig file)[/]")
     chans = ", ".join(f"{c.name} ({c.role} s{c.node}.{c.direction} {c.unit})" for c in sw.channels)
     err.print(f"channels: {chans}")
     for run in doc["runs"]:

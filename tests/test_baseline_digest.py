@@ -175,3 +175,20 @@ def test_a_channel_table_in_another_order_is_read_by_its_labels(tmp_path: Path,
     capsys.readouterr()
     assert main(["detect", str(b), "--out", str(out), "--no-plots"]) in (EXIT_OK, EXIT_DAMAGE)
     assert "differ from the baseline" not in capsys.readouterr().err
+
+
+def test_info_says_when_the_rig_id_is_not_a_bundled_rig(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    import json
+
+    from rotorcheck.resources import configs_dir
+
+    p = tmp_path / "s.h5"
+    assert main(["simulate", str(p), "--rig", str(configs_dir() / "overhung_rig.yaml"), "--points", "5"]) == 0
+    with h5py.File(p, "r+") as h5:
+        h5.attrs["rig_id"] = "my_own_rig"
+    capsys.readouterr()
+    assert main(["info", str(p), "--json"]) == EXIT_OK
+    out = capsys.readouterr()
+    assert json.loads(out.out)["rig_bundled"] is False and "not a bundled rig" in out.err
+    assert main(["info", str(CR / "healthy_0rpm.h5"), "--json"]) == EXIT_OK
+    assert json.loads(capsys.readouterr().out)["rig_bundled"] is True
