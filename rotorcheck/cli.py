@@ -407,6 +407,8 @@ def validate(
         for p_ in files:
             err.print(f"wrote {p_}")
         docs.append(outcome.typed_report(nb, target).to_dict())
+        if "noise_fitted_on_sweep" in outcome.baseline.extra:  # a bound from another sweep, as asked
+            docs[-1]["noise_fitted_on_sweep"] = outcome.baseline.extra["noise_fitted_on_sweep"]
     write_baseline(outcomes[0].baseline, target, [o.baseline for o in outcomes[1:]])
     err.print(f"wrote {target}" + (f" ({len(outcomes)} runs: {', '.join(run_ids)})" if several else ""))
     if as_json:

@@ -117,8 +117,12 @@ def test_a_manual_noise_bound_survives_validate_force_and_a_foreign_fit_needs_a_
     repeat = str(CR / "healthy_1000rpm_repeat.h5")
     assert main(["validate", repeat, "--out", str(other), "--no-plots"]) == EXIT_INPUT
     assert "fitted on another sweep" in capsys.readouterr().err
-    assert main(["validate", repeat, "--out", str(other), "--no-plots", "--reuse-noise"]) == EXIT_OK
-    assert read_baseline(other / "baseline.h5").extra.get("noise_fitted_on_sweep")
+    assert main(["validate", repeat, "--out", str(other), "--no-plots", "--reuse-noise", "--force", "--json"]) \
+        == EXIT_OK
+    import json
+
+    fitted_on = read_baseline(other / "baseline.h5").extra.get("noise_fitted_on_sweep")
+    assert fitted_on and json.loads(capsys.readouterr().out)["noise_fitted_on_sweep"] == fitted_on
 
 
 def test_a_native_panic_outside_a_solver_is_exit_2(monkeypatch: pytest.MonkeyPatch,
