@@ -242,3 +242,11 @@ def test_a_parametric_uncertainty_names_an_existing_parameter_at_load() -> None:
     _bad(d, "uncertainty.parameter", "not a supported rank-one parameter")
     d["uncertainty"]["parameter"] = "bearings.bearing0.kxx"
     assert parse_config(d).uncertainty.parameter == "bearings.bearing0.kxx"
+
+
+def test_an_endless_device_as_rig_file_is_refused_without_reading_it_whole(capsys: pytest.CaptureFixture) -> None:
+    """Issue 16: /dev/zero as the rig: exit 2 naming the file (at most MAX_RIG_BYTES + 1 bytes are read)."""
+    if not Path("/dev/zero").exists():
+        pytest.skip("no /dev/zero here")
+    assert main(["model", "/dev/zero", "--no-plots"]) == EXIT_INPUT
+    assert "/dev/zero" in capsys.readouterr().err
