@@ -267,6 +267,14 @@ def crack(
     return EXIT_OK
 
 
+def _element_list(text: str) -> tuple[int, ...] | None:
+    """``--elements 3,4,5`` as element numbers (None: every element)."""
+    try:
+        return tuple(int(x) for x in text.replace(" ", "").split(",") if x) or None
+    except ValueError:
+        raise InputError(None, "--elements", f"{text!r} is no list of element numbers (e.g. 3,4,5)") from None
+
+
 def _fail_at(spec: str) -> tuple[int, ...]:
     """Testing hook ``--fail-at 3,17`` (hidden): the solver fails at those point indices."""
     try:
@@ -589,10 +597,7 @@ def locate(
 
     formats = workflow.plot_formats(plot_format)
     base_path = baseline if baseline is not None else out / "baseline.h5"
-    try:
-        els = tuple(int(x) for x in elements.replace(" ", "").split(",") if x) or None
-    except ValueError:
-        raise InputError(None, "--elements", f"{elements!r} is no list of element numbers (e.g. 3,4,5)") from None
+    els = _element_list(elements)
     cfg, _, mruns = workflow.load_rig_and_runs(sweep, rig, base_path, run)
     mrun = mruns[0]
     targets = [out / "location.json"] + (workflow.plot_paths(out, ("location",), formats) if plots else [])
@@ -777,10 +782,7 @@ def detectability(
     cfg = workflow.load_rig(rig_path)
     if not 0.0 < false_alarm < 1.0:
         raise InputError(None, "--false-alarm", "must be in (0, 1)")
-    try:
-        els = tuple(int(x) for x in elements.replace(" ", "").split(",") if x) or None
-    except ValueError:
-        raise InputError(None, "--elements", f"{elements!r} is no list of element numbers (e.g. 3,4,5)") from None
+    els = _element_list(elements)
     split = lambda t: [x for x in t.replace(" ", "").split(",") if x]  # noqa: E731
     formats = workflow.plot_formats(plot_format)
     targets = [out / "detectability.json"] + (workflow.plot_paths(out, ("detectability",), formats) if plots else [])

@@ -844,17 +844,13 @@ class RigConfig(Strict):
     def _check_support_nodes(self, n: int) -> None:
         """Support nodes (numbered n+1, n+2, ... after the shaft stations): linked by a bearing's
         ``n_link``, each with a point mass in x and y, numbered without gaps."""
-        nodes: set[int] = set()
-        for b in self.bearings:
-            for node in (b.station, b.n_link):
-                if node is not None and node > n:
-                    nodes.add(node)
+        nodes = self.support_nodes
         for i, pm in enumerate(self.point_masses):
             if pm.station > n and pm.station not in nodes:
                 raise ValueError(f"point_masses[{i}].station: {pm.station} is neither a station (1..{n}) nor a "
                                  "support node that a bearing links (n_link)")
         linked = {b.n_link for b in self.bearings if b.n_link is not None}
-        for node in sorted(nodes):
+        for node in nodes:
             if node not in linked:
                 raise ValueError(f"bearings: support node {node} (after the last station {n}) is not linked to "
                                  f"the rotor: give a bearing with n_link: {node}")
@@ -863,16 +859,21 @@ class RigConfig(Strict):
             if mx <= 0 or my <= 0:
                 raise ValueError(f"point_masses: support node {node} has no mass in x and y (a massless pedestal "
                                  "is a series spring: fold it into the bearing, or give the pedestal's mass)")
-        if nodes and sorted(nodes) != list(range(n + 1, n + 1 + len(nodes))):
+        if nodes and list(nodes) != list(range(n + 1, n + 1 + len(nodes))):
             raise ValueError(f"bearings: support nodes must be numbered {n + 1}, {n + 2}, ... without gaps "
-                             f"(got {sorted(nodes)})")
+                             f"(got {list(nodes)})")
+
+    @property
+    def support_nodes(self) -> tuple[int, ...]:
+        """Support (pedestal) nodes a bearing reaches after the shaft stations (rotor), ascending."""
+        n = len(self.stations)
+        ends = {b.station for b in self.bearings} | {b.n_link for b in self.bearings if b.n_link is not None}
+        return tuple(sorted(k for k in ends if k > n))
 
     @property
     def n_support_nodes(self) -> int:
-        """Support (pedestal) nodes after the shaft stations (rotor)."""
-        n = len(self.stations)
-        nodes = {b.station for b in self.bearings} | {b.n_link for b in self.bearings if b.n_link is not None}
-        return sum(1 for k in nodes if k is not None and k > n)
+        """How many support nodes (see :attr:`support_nodes`)."""
+        return len(self.support_nodes)
 
     def io_ports(self, purpose: str) -> Ports:
         """The actuator and sensor; a :class:`ConfigError` naming ``purpose`` when the rig has none."""

@@ -39,7 +39,7 @@ import numpy as np
 from rotorcheck.config import RigConfig
 from rotorcheck.location import _relation, depth_of_loss
 from rotorcheck.nominal import ChannelPair
-from rotorcheck.robust.joint import POWER_Z, BenignModel, joint_test, whitening
+from rotorcheck.robust.joint import POWER_Z, BenignModel, joint_test
 from rotorcheck.signatures import crack_signatures, io_frf, stacked, unstacked
 
 #: largest stiffness loss searched (fraction); beyond it an element counts as undetectable (None)
@@ -234,6 +234,7 @@ def detectability(
     multi = list(pairs) if P > 1 else None
     th = np.asarray(healthy_frf) if healthy_frf is not None else io_frf(config, f, speed_rpm, multi)
     th = unstacked(th, (f.size, P)) if P > 1 else th.reshape(f.size)
+
     def as_th(x: np.ndarray) -> np.ndarray:
         a = np.asarray(x, dtype=float)
         return unstacked(a, th.shape) if a.size == th.size else np.broadcast_to(a, th.shape)
@@ -242,16 +243,15 @@ def detectability(
     # the detector's candidates are every element the channels see (or ``candidates``); ``elements`` only
     # chooses which of them are reported (the threshold is that of the whole candidate set)
     els, S = crack_signatures(config, f, speed_rpm, th, candidates, pairs=multi)
-    del multi
     notes: list[str] = []
     wanted = set(els) if elements is None else set(elements)
     if elements is not None and not wanted <= set(els):
         unseen = sorted(wanted - set(els))
         notes.append(f"elements {unseen}: not seen by these channels (no bending moment there): undetectable")
-    nrm = np.linalg.norm(np.concatenate([S.real, S.imag], axis=1) * whitening(var), axis=1)
     zero = np.zeros(var.size, dtype=complex)
     noise_only = joint_test(zero, var, S, els, None, None, false_alarm)
-    lr = (z_upper(false_alarm) + POWER_Z) / nrm
+    # without a nuisance the test's standard error of a loss is 1 / ||s_e||_w (the whitened signature norm)
+    lr = (z_upper(false_alarm) + POWER_Z) * noise_only.severity_se
     bm = benign
     k = float(bm.kappa) if bm is not None else 0.0
     if bm is None:
@@ -294,7 +294,6 @@ def detectability(
     actuators = tuple(dict.fromkeys(p.key()[1] for p in pairs))
     return Detectability(config.rig_id, float(speed_rpm), float(false_alarm), sensors, actuators, noise_source,
                          bm is not None, rows, k, notes)
-
 
 
 DETECTABILITY_RULE_SETS = ("sensor sets ranked by the worst element's smallest breathing depth detected with 90 % "

@@ -273,12 +273,9 @@ def ross_hutchinson_coefficient(poisson: float, outer_diameter: float, inner_dia
     poisson : Poisson's ratio (ROSS: ``E / (2 G_s) - 1``).
     outer_diameter, inner_diameter : m (only their ratio matters).
     """
-    r = inner_diameter / outer_diameter
-    r2 = r * r
-    r12 = (1.0 + r2) ** 2
-    nu = poisson
-    denominator = r12 * (7.0 + 12.0 * nu + 4.0 * nu**2) + 4.0 * r2 * (5.0 + 6.0 * nu + 2.0 * nu**2)
-    return 6.0 * r12 * ((1.0 + nu) / denominator)
+    from rotorcheck.fe.elements import shear_coefficient
+
+    return float(shear_coefficient(poisson, outer_diameter, inner_diameter)) / (1.0 + poisson)
 
 
 Interpolant = Callable[[np.ndarray], np.ndarray]

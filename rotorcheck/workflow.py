@@ -1246,6 +1246,7 @@ def detect(
                      "not the noise (a second uncertainty makes the set non-circular)")
     joint = None
     beyond = None
+    sweep_det = None
     if use_joint and Th is not None:
         kappa = KAPPA_NOMINAL if baseline.benign_kappa is None else float(baseline.benign_kappa)
         model_rig = updated_rig(rig, baseline_updates(baseline))
@@ -1258,6 +1259,8 @@ def detect(
         if certified is not None:
             beyond = certified[0]
             notes.extend(certified[1])
+        if joint.elements:
+            sweep_det = sweep_detectability(model_rig, baseline, run, joint, kappa)
     damage_xy = None
     if identifiable and baseline.enclose == "measured" and run.n_pairs > 1:
         damage_xy = damage_per_direction(rig, run, np.asarray(baseline.healthy_frf),
@@ -1272,36 +1275,29 @@ def detect(
                          "functions plus an exact remainder bound), witness_re/witness_im the range attained inside "
                          "it; the model's receptances to and from the damage station taken as exact; "
                          "re_interval/im_interval: 95 % by Monte Carlo over the noise")
-    sweep_det = None
-    if joint is not None and joint.elements:
-        sweep_det = sweep_detectability(updated_rig(rig, baseline_updates(baseline)), baseline, run, joint)
     return DetectionOutcome(rig, baseline, run, model, det, ver, damage, dset, anchored, anchored_set, notes,
                             measured, noise_only, joint, beyond, damage_xy, detectability=sweep_det)
 
 
-def sweep_detectability(rig: RigConfig, baseline: Any, run: MeasuredRun, joint: Any) -> Any:
+def sweep_detectability(rig: RigConfig, baseline: Any, run: MeasuredRun, joint: Any, kappa: float) -> Any:
     """What this sweep could have revealed (:mod:`rotorcheck.detectability` with this sweep's and the
     baseline's variances): the element easiest to watch and the best candidate. The benign model is
     linearized at the healthy state (re-solved per parameter once: on the crack rig within 3 % of the
     re-solved model's figures, 15 % on element 6); learned benign directions are not included."""
     from rotorcheck.detectability import detectability, linearized
-    from rotorcheck.signatures import stacked
+    from rotorcheck.nominal import primary_pair
 
     f = run.frequency_hz
     est = frf_estimate(run)
     P = est.frf.shape[1]
     th = _per_pair(np.asarray(baseline.healthy_frf), f, P, run)
     vh = _per_pair(np.asarray(baseline.healthy_frf_var), f, P, run)
-    pairs = run.pairs if P > 1 else None
-    kappa = KAPPA_NOMINAL if baseline.benign_kappa is None else float(baseline.benign_kappa)
-    bm = benign_model(rig, f, baseline.speed_rpm, stacked(th), kappa, run.speed_rpm - baseline.speed_rpm,
-                      baseline.benign_correction, pairs)
+    bm = benign_model(rig, f, baseline.speed_rpm, th, kappa, run.speed_rpm - baseline.speed_rpm,
+                      baseline.benign_correction, run.pairs if P > 1 else None)
     if bm is not None:
         bm = linearized(bm)
     easiest = joint.elements[int(np.argmin(joint.detectable))]
     els = sorted({easiest, joint.elements[joint.best]})
-    from rotorcheck.nominal import primary_pair
-
     run_pairs = list(run.pairs) if run.pairs else [primary_pair(rig)]
     return detectability(rig, f, baseline.speed_rpm, est.var, vh, run_pairs, th, joint.false_alarm, bm, els,
                          noise_source="this sweep's and the baseline's variances", workers=1)
@@ -1887,6 +1883,49 @@ def crack_report(
 DETECTABILITY_POINTS = 262  # grid of a prediction from stated noise without analysis.n_points
 
 
+def _prediction_ports(config: RigConfig, sensors: Sequence[str] | None, actuators: Sequence[str] | None,
+                      source: str, candidates: Sequence[str] = ()) -> tuple[list[Any], list[Any], list[Any]]:
+    """``(sensors, actuators, candidates)`` as ports (``6x``, ``s2.y``; default: the rig's sensor and actuator),
+    every station checked against the rig; no actuator is an InputError."""
+    ports = config.ports
+    acts = [parse_port(a, "--actuators") for a in actuators] if actuators else (
+        [ports.actuator] if ports is not None else [])
+    sens = [parse_port(s, "--sensors") for s in sensors] if sensors else (
+        [ports.sensor] if ports is not None else [])
+    cand = [parse_port(c, "--candidate-sensors") for c in candidates]
+    if not acts:
+        raise InputError(source or None, "ports", "the rig has no ports: give --sensors and --actuators")
+    n = len(config.stations)
+    for option, ports_ in (("--sensors/--actuators", (*acts, *sens)), ("--candidate-sensors", cand)):
+        for p in ports_:
+            if p.station is None or not 1 <= p.station <= n:
+                raise InputError(None, option, f"station {p.station} out of range 1..{n}")
+    return sens, acts, cand
+
+
+def _stated_prediction(config: RigConfig, speed_rpm: float | None, noise_std_m: float | None, periods: int | None,
+                       source: str, hint: str = "no noise to predict from: give --baseline or --noise-std (m)"
+                       ) -> tuple[np.ndarray, float, float, str]:
+    """``(grid Hz, speed rpm, FRF variance per point and sweep m^2/N^2, its description)`` from stated noise
+    (``noise_std_m`` over ``periods``, defaults the rig's ``measurement``) on the rig's analysis grid
+    (``n_points`` or :data:`DETECTABILITY_POINTS`) at ``speed_rpm`` (default: its first speed)."""
+    from rotorcheck.detectability import stated_noise_variance
+
+    m = config.measurement
+    sigma = noise_std_m if noise_std_m is not None else (m.output_noise_std or None)
+    if sigma is None or sigma <= 0:
+        raise InputError(source or None, "measurement.output_noise_std", hint)
+    n_per = int(periods) if periods is not None else m.n_periods
+    if n_per < 1:
+        raise InputError(None, "--periods", "must be >= 1")
+    f = np.linspace(*config.analysis.band_hz, config.analysis.n_points or DETECTABILITY_POINTS)
+    v = stated_noise_variance(float(sigma), n_per, m.samples_per_period, m.force_amplitude)
+    speed = float(config.analysis.speeds_rpm[0]) if speed_rpm is None else float(speed_rpm)
+    noise = (f"stated noise: output sigma {sigma:.3g} m, {n_per} periods of {m.samples_per_period} samples at "
+             f"{m.force_amplitude:g} N (FRF variance {v:.3g} m^2/N^2 per point and sweep)")
+    return f, speed, v, noise
+
+
 def detectability_for_rig(
     config: RigConfig,
     speed_rpm: float | None = None,
@@ -1907,22 +1946,14 @@ def detectability_for_rig(
     the rig's ``measurement``), else the rig's own ``measurement.output_noise_std``; none of them: an
     :class:`~rotorcheck.errors.InputError`. Sensors and actuators: ports as ``6x``, ``s2.y`` (default: the
     rig's); every sensor with every actuator is one channel pair."""
-    from rotorcheck.detectability import detectability, stated_noise_variance
+    from rotorcheck.detectability import detectability
     from rotorcheck.nominal import ChannelPair
-    from rotorcheck.signatures import io_frf, stacked
+    from rotorcheck.signatures import io_frf
 
-    ports = config.ports
-    acts = [parse_port(a, "--actuators") for a in actuators] if actuators else (
-        [ports.actuator] if ports is not None else [])
-    sens = [parse_port(s, "--sensors") for s in sensors] if sensors else ([ports.sensor] if ports is not None else [])
-    if not acts or not sens:
+    sens, acts, _ = _prediction_ports(config, sensors, actuators, source)
+    if not sens:
         raise InputError(source or None, "ports", "the rig has no ports: give --sensors and --actuators")
     pairs = [ChannelPair(o, i, "") for o in sens for i in acts]
-    n = len(config.stations)
-    for p in (*acts, *sens):
-        if p.station is None or not 1 <= p.station <= n:
-            raise InputError(None, "--sensors/--actuators", f"station {p.station} out of range 1..{n}")
-    m = config.measurement
     if baseline is not None:
         if baseline.frequency_hz is None or baseline.healthy_frf_var is None or baseline.healthy_frf is None:
             raise InputError(source or None, "healthy_frf_var", "the baseline holds no healthy FRF and variance "
@@ -1945,22 +1976,11 @@ def detectability_for_rig(
         bm = benign_model(config, f, speed, th[:, 0], kappa)
         return detectability(config, f, speed, var_n.reshape(f.size, -1), var_b.reshape(f.size, -1), pairs,
                              th, false_alarm, bm, elements, None, noise, workers)
-    sigma = noise_std_m if noise_std_m is not None else (m.output_noise_std or None)
-    if sigma is None or sigma <= 0:
-        raise InputError(source or None, "measurement.output_noise_std", "no noise to predict from: give "
-                         "--baseline or --noise-std (m)")
-    n_per = int(periods) if periods is not None else m.n_periods
-    if n_per < 1:
-        raise InputError(None, "--periods", "must be >= 1")
-    f = np.linspace(*config.analysis.band_hz, config.analysis.n_points or DETECTABILITY_POINTS)
-    v = stated_noise_variance(float(sigma), n_per, m.samples_per_period, m.force_amplitude)
-    speed = float(config.analysis.speeds_rpm[0]) if speed_rpm is None else float(speed_rpm)
-    noise = (f"stated noise: output sigma {sigma:.3g} m, {n_per} periods of {m.samples_per_period} samples at "
-             f"{m.force_amplitude:g} N (FRF variance {v:.3g} m^2/N^2 per point and sweep)")
+    f, speed, v, noise = _stated_prediction(config, speed_rpm, noise_std_m, periods, source)
     var = np.full((f.size, len(pairs)), v)
     multi = pairs if len(pairs) > 1 else None
     th = io_frf(config, f, speed, multi)
-    bm = benign_model(config, f, speed, stacked(th), KAPPA_NOMINAL, 0.0, None, multi)
+    bm = benign_model(config, f, speed, th, KAPPA_NOMINAL, 0.0, None, multi)
     return detectability(config, f, speed, var, var, pairs, th, false_alarm, bm, elements, None, noise, workers)
 
 
@@ -1980,45 +2000,22 @@ def sensor_ranking_for_rig(
     breathing depth with the benign ranges (:func:`rotorcheck.detectability.rank_sensor_sets`; stated
     noise as :func:`detectability_for_rig`), with the current set (``sensors`` or the rig's) scored the
     same way. Returns the JSON section ``sensor_sets``."""
-    from rotorcheck.detectability import (
-        DETECTABILITY_RULE_SETS,
-        rank_sensor_sets,
-        score_sensor_set,
-        stated_noise_variance,
-    )
+    from rotorcheck.detectability import DETECTABILITY_RULE_SETS, rank_sensor_sets, score_sensor_set
     from rotorcheck.nominal import ChannelPair
 
     if max_sensors < 1:
         raise InputError(None, "--max-sensors", "must be >= 1")
-    cand = [parse_port(c, "--candidate-sensors") for c in candidates]
-    ports = config.ports
-    acts = [parse_port(a, "--actuators") for a in actuators] if actuators else (
-        [ports.actuator] if ports is not None else [])
-    current = [parse_port(s, "--sensors") for s in sensors] if sensors else (
-        [ports.sensor] if ports is not None else [])
-    if not acts:
-        raise InputError(source or None, "ports", "the rig has no actuator: give --actuators")
-    n = len(config.stations)
-    for p in (*cand, *acts, *current):
-        if p.station is None or not 1 <= p.station <= n:
-            raise InputError(None, "--candidate-sensors", f"station {p.station} out of range 1..{n}")
-    m = config.measurement
-    sigma = noise_std_m if noise_std_m is not None else (m.output_noise_std or None)
-    if sigma is None or sigma <= 0:
-        raise InputError(source or None, "measurement.output_noise_std", "ranking sensors needs stated noise: "
-                         "give --noise-std (m)")
-    v = stated_noise_variance(float(sigma), int(periods or m.n_periods), m.samples_per_period, m.force_amplitude)
-    f = np.linspace(*config.analysis.band_hz, config.analysis.n_points or DETECTABILITY_POINTS)
-    speed = float(config.analysis.speeds_rpm[0]) if speed_rpm is None else float(speed_rpm)
+    current, acts, cand = _prediction_ports(config, sensors, actuators, source, candidates)
+    f, speed, v, _ = _stated_prediction(config, speed_rpm, noise_std_m, periods, source,
+                                        "ranking sensors needs stated noise: give --noise-std (m)")
 
     def benign_for(pairs: list[ChannelPair], th: np.ndarray) -> Any:
-        from rotorcheck.signatures import stacked
-
-        return benign_model(config, f, speed, stacked(th), KAPPA_NOMINAL, 0.0, None, pairs if len(pairs) > 1 else None)
+        return benign_model(config, f, speed, th, KAPPA_NOMINAL, 0.0, None, pairs if len(pairs) > 1 else None)
 
     ranked, method, seen = rank_sensor_sets(config, f, speed, v, cand, acts, max_sensors, benign_for, false_alarm)
     now = score_sensor_set(config, f, speed, v, current, acts, benign_for, false_alarm, seen) if current else None
     best = ranked[0]
+
     def ratio(a: float | None, b: float | None) -> float | None:
         """How many times smaller the best set's figure is (inf: the current set cannot watch it at all)."""
         if b is None or b <= 0:

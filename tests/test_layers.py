@@ -19,9 +19,9 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("rotorcheck", "rotorcheck.errors", "rotorcheck.units"),
     ("rotorcheck.fileio", "rotorcheck.resources"),
     ("rotorcheck.config",),
-    ("rotorcheck.ross_import",),  # a ROSS rotor file as a rig document
     ("rotorcheck.variability",),  # benign parameter ranges over the config: above it, below fe/robust
     ("rotorcheck.fe", "rotorcheck.signal", "rotorcheck.robust"),  # numerics: FE, signal processing, robust
+    ("rotorcheck.ross_import",),  # a ROSS rotor file as a rig document (its shear coefficient from fe)
     ("rotorcheck.faults", "rotorcheck.sweep"),
     ("rotorcheck.sim",),  # simulators: above fe, faults and sweep
     ("rotorcheck.nominal",),

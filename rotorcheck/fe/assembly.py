@@ -62,9 +62,9 @@ def build_system(
 # rotor
 
 
-def _element_kappa(config: RigConfig, e: ShaftElement, material: Material) -> float | None:
-    """Shear coefficient of a config element: its own value or method, else the rig's (None: the
-    Hutchinson default, computed per mesh element by the element code)."""
+def _element_kappa(config: RigConfig, e: ShaftElement, material: Material) -> float:
+    """Shear coefficient of a config element: its own value or method, else the rig's (by the mean
+    diameters of the element, as ROSS)."""
     if e.shear_coefficient is not None:
         return e.shear_coefficient
     if e.shear_method is None and config.shear_coefficient is not None:
@@ -143,16 +143,9 @@ def rotor_mesh(
 
 def element_matrices(infos: tuple[BeamElementInfo, ...]) -> ShaftMatrices:
     """The (ne, 8, 8) matrices of mesh elements (one implementation: :func:`rotorcheck.fe.shaft.shaft_matrices`)."""
-    tapers = sorted({i.taper for i in infos})
-    if len(tapers) > 1:  # one call per formulation, merged back in element order
-        parts = {t: (np.array([k for k, i in enumerate(infos) if i.taper == t]),
-                     element_matrices(tuple(i for i in infos if i.taper == t))) for t in tapers}
-        fields = ("mass", "gyroscopic", "stiffness", "axial_force", "torque")
-        merged = {name: np.empty((len(infos), 8, 8)) for name in fields}
-        for idx, mats in parts.values():
-            for name in fields:
-                merged[name][idx] = getattr(mats, name)
-        return ShaftMatrices(**merged)
+    tapers = {i.taper for i in infos}  # one formulation per rig (RigConfig.tapered_element)
+    if len(tapers) > 1:
+        raise ValueError(f"elements of one call use one taper formulation, got {sorted(tapers)}")
     f = lambda name: np.array([getattr(i, name) for i in infos], dtype=float)  # noqa: E731
     kappa = np.array([
         i.kappa if i.kappa is not None else shear_coefficient(i.poisson, i.mean_outer_diameter, i.mean_inner_diameter)
@@ -166,7 +159,7 @@ def element_matrices(infos: tuple[BeamElementInfo, ...]) -> ShaftMatrices:
         gyroscopic=np.array([i.gyroscopic for i in infos]),
         axial_force=f("axial_force"),
         torque=f("torque"),
-        **({"taper": tapers[0]} if tapers and tapers[0] != "exact" else {}),
+        taper=tapers.pop() if tapers else "exact",
     )
 
 
