@@ -51,6 +51,8 @@ JsonOpt = Annotated[bool, typer.Option("--json", help="Print one JSON document o
 ForceOpt = Annotated[bool, typer.Option("--force", help="Overwrite existing outputs.")]
 DEFAULT_OUT = Path("rotorcheck-out")
 PlotFormatOpt = Annotated[str, typer.Option("--plot-format", help="png (default) | pdf | both.")]
+FrfUnitOpt = Annotated[str, typer.Option("--frf-unit", help="Receptance unit of the plots: m/N (default) | mm/N | "
+                                                             "um/N.")]
 
 
 def _emit_json(doc: dict[str, Any]) -> None:
@@ -114,10 +116,12 @@ def model(
     out: OutOpt = DEFAULT_OUT,
     as_json: JsonOpt = False,
     force: ForceOpt = False,
-    plots: Annotated[bool, typer.Option(help="Write Campbell and mode-shape plots.")] = True,
+    plots: Annotated[bool, typer.Option(help="Write Campbell, mode-shape and rotor plots.")] = True,
     plot_format: PlotFormatOpt = "png",
+    speed_unit: Annotated[str, typer.Option("--speed-unit", help="Speed axis of the Campbell diagram: rpm | Hz.")
+                          ] = "rpm",
 ) -> int:
-    """Natural frequencies, damping, whirl and critical speeds; Campbell and mode-shape plots."""
+    """Natural frequencies, damping, whirl and critical speeds; Campbell, mode-shape and rotor plots."""
     from rotorcheck.resources import default_rig_path
     from rotorcheck.workflow import model_report
 
@@ -126,7 +130,7 @@ def model(
 
     with _progress(f"solving the model of {rig_path}" + (" and plotting" if plots else "")):
         result = model_report(rig_path, speed_rpm=speed, out_dir=out if plots else None, force=force,
-                              formats=plot_formats(plot_format))
+                              formats=plot_formats(plot_format), speed_unit=speed_unit)
     summary = result["summary"]
     for at in summary.get("at_speeds", [summary]):
         table = Table(title=f"{summary['rig_id']} at {at['speed_rpm']:g} rpm", title_justify="left")
@@ -348,6 +352,7 @@ def validate(
         "--update", help="Fit the rig's variability parameters to the healthy FRF (model updating) and predict "
                          "benign change around the updated model.")] = False,
     plot_format: PlotFormatOpt = "png",
+    frf_unit: FrfUnitOpt = "m/N",
     fail_at: FailAtOpt = "",
     reuse_noise: Annotated[bool, typer.Option(
         "--reuse-noise", help="Validate with a noise bound fitted on another sweep (recorded in the baseline).")
@@ -362,6 +367,7 @@ def validate(
     from rotorcheck.fileio import check_writable
 
     formats = workflow.plot_formats(plot_format)
+    workflow.check_frf_unit(frf_unit)
     target = out / "baseline.h5"
     cfg, rig_path, firsts = workflow.load_rig_and_runs(sweeps[0], rig, target, run, every_run=True)
     others = [workflow.read_runs(p, cfg, [r.run_id for r in firsts]) for p in sweeps[1:]]
@@ -400,7 +406,8 @@ def validate(
             if line:
                 err.print(line)
         with _progress("writing plots"):
-            files = workflow.validation_plots(outcome, plot_dir, at, formats) if plots else []
+            files = (workflow.validation_plots(outcome, plot_dir, at, formats, out / "baseline.h5", frf_unit)
+                     if plots else [])
         res = outcome.result
         n_bad += outcome.n_not_enclosed
         g = res.gamma[np.isfinite(res.gamma)]
@@ -446,6 +453,7 @@ def detect(
     locate: Annotated[bool, typer.Option(
         "--locate", help="When the verdict is damage, locate it too (the 'location' section; see `locate`).")] = False,
     plot_format: PlotFormatOpt = "png",
+    frf_unit: FrfUnitOpt = "m/N",
     fail_at: FailAtOpt = "",
     as_json: JsonOpt = False,
     force: ForceOpt = False,
@@ -458,11 +466,12 @@ def detect(
     from rotorcheck.report.reports import REPORT_FILES, write_reports
 
     formats = workflow.plot_formats(plot_format)
+    workflow.check_frf_unit(frf_unit)
     base_path = baseline if baseline is not None else out / "baseline.h5"
     cfg, _, mruns = workflow.load_rig_and_runs(sweep, rig, base_path, run, every_run=True)
     if len(mruns) > 1:
         return _detect_runs(sweep, mruns, cfg, out, base_path, at, plots, confidence, rule, false_alarm, resample,
-                            formats, fail_at, as_json, force, locate)
+                            formats, fail_at, as_json, force, locate, frf_unit)
     check_writable([out / f for f in REPORT_FILES]
                    + (workflow.plot_paths(out, workflow.PLOT_STEMS_DETECT, formats) if plots else []), force)
     base = read_baseline(base_path)
@@ -472,8 +481,8 @@ def detect(
                               locate)
         report = outcome.report()
     with _progress("writing reports and plots"):
-        plot_files = workflow.detection_plots(outcome, out, at, formats) if plots else []
-        files = write_reports(report, out, plot_files)
+        plot_files = workflow.detection_plots(outcome, out, at, formats, base_path, frf_unit) if plots else []
+        files = write_reports(report, out, plot_files, base_path)
     _print_outcome(outcome, report)
     for p_ in [*map(str, files), *plot_files]:
         err.print(f"wrote {p_}")
@@ -526,7 +535,8 @@ def _print_outcome(outcome: Any, report: dict[str, Any], prefix: str = "") -> No
 
 def _detect_runs(sweep: Path, mruns: list[Any], cfg: Any, out: Path, base_path: Path, at: float | None,
                  plots: bool, confidence: float, rule: str | None, false_alarm: float, resample: bool,
-                 formats: tuple[str, ...], fail_at: str, as_json: bool, force: bool, locate: bool = False) -> int:
+                 formats: tuple[str, ...], fail_at: str, as_json: bool, force: bool, locate: bool = False,
+                 frf_unit: str = "m/N") -> int:
     """Every run of a file of several runs against the baseline's run at the same speed (within the rig's
     speed tolerance; the closest): reports in <out>/<run_id>/, one summary <out>/report.json; the file is
     damage when any run is, inconclusive when none is but one is inconclusive, else healthy."""
@@ -547,8 +557,9 @@ def _detect_runs(sweep: Path, mruns: list[Any], cfg: Any, out: Path, base_path: 
             outcome = _detect_one(base, cfg, mrun, sweep, base_path, confidence, rule, false_alarm, resample, fail_at,
                                   locate)
             report = outcome.report()
-            plot_files = workflow.detection_plots(outcome, out / rid, at, formats) if plots else []
-            write_reports(report, out / rid, plot_files)
+            plot_files = (workflow.detection_plots(outcome, out / rid, at, formats, base_path, frf_unit)
+                          if plots else [])
+            write_reports(report, out / rid, plot_files, base_path)
         _print_outcome(outcome, report, prefix=f"run {rid} ({mrun.speed_rpm:g} rpm): ")
         summary.append({"run_id": rid, "speed_rpm": mrun.speed_rpm, "baseline_run_id": base.run_id,
                         "verdict": report["verdict"], "verdict_reason": report["verdict_reason"],
@@ -600,7 +611,8 @@ def locate(
     els = _element_list(elements)
     cfg, _, mruns = workflow.load_rig_and_runs(sweep, rig, base_path, run)
     mrun = mruns[0]
-    targets = [out / "location.json"] + (workflow.plot_paths(out, ("location",), formats) if plots else [])
+    targets = [out / "location.json", out / "location.html"] + (workflow.plot_paths(out, ("location",), formats)
+                                                                 if plots else [])
     check_writable(targets, force)
     base = read_baseline(base_path)
     mrun = _resampled(base, mrun, sweep, resample)
@@ -616,6 +628,10 @@ def locate(
         from rotorcheck.report.plots import location_figure
 
         written += save_figure(location_figure(cfg, res, f"{sweep.name}: {res.summary()}"), out / "location", formats)
+    from rotorcheck.report.html import render_location_html
+
+    atomic_write_text(out / "location.html", render_location_html(doc, [str(p) for p in written[1:]], cfg.sha256()))
+    written.append(out / "location.html")
     err.print(("[bold red]" if res.best is not None else "[bold green]") + res.summary() + "[/]")
     if res.single_channel is not None:
         err.print("one channel alone: " + res.single_channel.summary())

@@ -159,9 +159,8 @@ class LocationResult:
         b = self.best
         if b is None:
             return "every candidate element is excluded: the change is no stiffness loss of one element" + ex
-        d0, d1 = b.depth_interval
-        depth = ("" if d0 is None else f", depth {100 * d0:.0f}-" + ("over 50" if d1 is None else f"{100 * d1:.0f}")
-                 + " % of diameter")
+        text = depth_text(*b.depth_interval)
+        depth = f", depth {text} of diameter" if text else ""
         mf = b.modulus_factor_interval
         return (f"crack most likely in element {b.element} ({b.z_start_m:.3f}-{b.z_end_m:.3f} m), stiffness loss "
                 f"{100 * b.loss_interval[0]:.1f}-{100 * b.loss_interval[1]:.1f} % (modulus factor "
@@ -176,6 +175,16 @@ class LocationResult:
                 "model_relative_error": CRACK_MODEL_ERROR, "rule": self.rule, "notes": list(self.notes),
                 "candidates": [c.to_dict() for c in self.candidates],
                 **({} if self.single_channel is None else {"single_channel": self.single_channel.to_dict()})}
+
+
+def depth_text(lo: float | None, hi: float | None) -> str:
+    """A crack-depth interval (fractions of the diameter) as text: "34-45 %", "at least 50 %" (beyond the
+    strip relation's range), "" when unknown."""
+    if lo is None:
+        return ""
+    if hi is None:
+        return f"at least {100 * lo:.0f} %"
+    return f"{100 * lo:.0f}-{100 * hi:.0f} %"
 
 
 def _ranges(xs: Sequence[int]) -> str:

@@ -53,15 +53,20 @@ def plot_paths(out_dir: str | Path, stems: tuple[str, ...] | list[str], formats:
 
 def model_report(
     rig_path: str | Path, speed_rpm: float | None = 0.0, out_dir: str | Path | None = None, force: bool = False,
-    formats: tuple[str, ...] = ("png",),
+    formats: tuple[str, ...] = ("png",), speed_unit: str = "rpm",
 ) -> dict[str, Any]:
-    """Modal summary of a rig at ``speed_rpm`` and, with ``out_dir``, Campbell and mode-shape plots.
+    """Modal summary of a rig at ``speed_rpm`` and, with ``out_dir``, Campbell, mode-shape and rotor plots
+    (``speed_unit`` ``rpm`` | ``Hz``: the Campbell diagram's speed axis; InputError naming ``--speed-unit``).
 
     ``speed_rpm=None``: every speed of the rig's ``analysis.speeds_rpm``; the summary's top-level
     keys are those of the first, ``at_speeds`` holds each speed's ``{speed_rpm, modes}``.
     Returns ``{"summary": <cli.md model keys>, "files": [written paths]}``.
     """
     config = load_config(rig_path)  # bad input fails here, before any work or output
+    from rotorcheck.report.campbell import SPEED_UNITS
+
+    if speed_unit not in SPEED_UNITS:
+        raise InputError(None, "--speed-unit", f"must be one of {', '.join(SPEED_UNITS)}, got {speed_unit!r}")
 
     from rotorcheck.fe.assembly import build_system
     from rotorcheck.fe.modal import model_summary
@@ -76,26 +81,36 @@ def model_report(
     summary.setdefault("campbell_max_rpm", config.analysis.campbell_max_rpm)
     files: list[str] = []
     if out_dir is not None:
-        files = _model_plots(config, build_system(config), speed_rpm, Path(out_dir), force, formats)
+        files = _model_plots(config, build_system(config), speed_rpm, Path(out_dir), force, formats, speed_unit)
     return {"summary": summary, "files": files}
 
 
 def _model_plots(config: RigConfig, system: Any, speed_rpm: float, out: Path, force: bool,
-                 formats: tuple[str, ...]) -> list[str]:
+                 formats: tuple[str, ...], speed_unit: str = "rpm") -> list[str]:
+    """Campbell diagram (1X and 2X criticals, operating speed ``speed_rpm``, speed axis in ``speed_unit``),
+    the table's mode shapes at ``speed_rpm`` and the rotor drawing (rotor rigs)."""
     import numpy as np
 
     from rotorcheck.fe.modal import campbell
     from rotorcheck.fileio import check_replaceable, record_outputs
-    from rotorcheck.report.campbell import campbell_figure, mode_shape_figure
+    from rotorcheck.report.campbell import campbell_figure, mode_shape_figure, order_criticals
     from rotorcheck.report.figures import save_figure
+    from rotorcheck.report.rotor_drawing import rotor_figure
 
-    stems = [out / "campbell", out / "mode_shapes"]
+    rotor = system.kind == "rotor"
+    stems = [out / "campbell", out / "mode_shapes"] + ([out / "rotor"] if rotor else [])
     # a repeated run replaces the plots it wrote itself (manifest in the folder), never another file
     check_replaceable([s.with_suffix("." + ext) for s in stems for ext in formats], force)
     speeds = np.linspace(0.0, config.analysis.campbell_max_rpm, 41)
     camp = campbell(system, speeds, config.analysis.n_modes)
-    files = save_figure(campbell_figure(camp), stems[0], formats)
-    files += save_figure(mode_shape_figure(system, speed_rpm, config.analysis.n_modes), stems[1], formats)
+    crit = order_criticals(system, camp, (1, 2)) if rotor else None
+    fig = campbell_figure(camp, (1, 2), rig_id=config.rig_id, operating_speed_rpm=speed_rpm if rotor else None,
+                          speed_unit=speed_unit, criticals=crit)
+    files = save_figure(fig, stems[0], formats)
+    files += save_figure(mode_shape_figure(system, speed_rpm, config.analysis.n_modes, config=config), stems[1],
+                         formats)
+    if rotor:
+        files += save_figure(rotor_figure(config), stems[2], formats)
     record_outputs(files)
     return [str(f) for f in files]
 
@@ -1747,60 +1762,147 @@ def _v_of(b: Any) -> float | np.ndarray:
 
 
 def _plot_index(f: np.ndarray, at_hz: float | None, score: np.ndarray) -> int:
+    """``at_hz`` (nearest grid point), else the point of the largest finite ``score``."""
     if at_hz is not None:
         return int(np.argmin(np.abs(f - at_hz)))
     finite = np.where(np.isfinite(score), score, -np.inf)
     return int(np.argmax(finite))
 
 
+def _telling_fault(ratio: np.ndarray, fault: np.ndarray) -> int:
+    """The fault point that shows the decision best in the complex plane: the one whose distance ratio is
+    nearest 2 (log scale): outside its set, but the set still visible beside it."""
+    r = np.where(fault & np.isfinite(ratio) & (ratio > 0), ratio, np.nan)
+    return int(np.nanargmin(np.abs(np.log(r / 2.0))))
+
+
+def check_frf_unit(frf_unit: str) -> str:
+    """``frf_unit`` when the plots know it (m/N, mm/N, um/N), else an InputError naming --frf-unit."""
+    from rotorcheck.report.plots import FRF_UNITS
+
+    if frf_unit not in FRF_UNITS:
+        raise InputError(None, "--frf-unit", f"must be one of {', '.join(FRF_UNITS)}, got {frf_unit!r}")
+    return frf_unit
+
+
+def figure_context(rig: RigConfig, run: MeasuredRun, baseline_path: str | Path | None = None,
+                   frf_unit: str = "m/N") -> Any:
+    """What a validation or detection figure shows: rig, speed (none for a lumped rig), the channel pair
+    drawn (the rig's actuator -> sensor), the sweep file and the baseline file."""
+    from rotorcheck.nominal import primary_pair
+    from rotorcheck.report.plots import FigureContext
+
+    check_frf_unit(frf_unit)
+    pair = run.pairs[0] if run.pairs else primary_pair(rig)
+    out, inp = pair.key()
+    channels = f"{out} <- {inp}" + (f" (1 of {run.n_pairs} channel pairs)" if run.n_pairs > 1 else "")
+    return FigureContext(rig_id=rig.rig_id, speed_rpm=run.speed_rpm if rig.kind == "rotor" else None,
+                         channels=channels, sweep=Path(run.path).name,
+                         baseline=str(baseline_path) if baseline_path is not None else "", frf_unit=frf_unit)
+
+
+def _frf_noise(run: MeasuredRun, confidence: float = 0.99) -> np.ndarray:
+    """The run's own noise bound as a receptance radius (f,), m/N: V(w) / |W(w)|."""
+    return _own_v(run, confidence) / np.abs(run.W)
+
+
+def port_static_stiffness(rig: RigConfig, speed_rpm: float) -> float:
+    """The nominal static stiffness at the damage port, N/m: 1 / |E11| at a very low frequency."""
+    from rotorcheck.nominal import nominal_model
+
+    model = nominal_model(rig, np.array([1e-3]), speed_rpm)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return float(1.0 / abs(model.E[0, 0, 0]))
+
+
 def validation_plots(outcome: ValidationOutcome, out_dir: str | Path, at_hz: float | None = None,
-                     formats: tuple[str, ...] = ("png",)) -> list[str]:
-    """Bode with the uncertainty band and the complex plane at one frequency (``formats``)."""
+                     formats: tuple[str, ...] = ("png",), baseline_path: str | Path | None = None,
+                     frf_unit: str = "m/N") -> list[str]:
+    """:func:`validation_figures` written to ``out_dir`` (``formats``); returns the written paths."""
     from rotorcheck.report.figures import save_figure
+
+    figs = validation_figures(outcome, at_hz, baseline_path, frf_unit)
+    return [str(p) for stem, fig in figs.items() for p in save_figure(fig, Path(out_dir) / stem, formats)]
+
+
+def validation_figures(outcome: ValidationOutcome, at_hz: float | None = None,
+                       baseline_path: str | Path | None = None, frf_unit: str = "m/N") -> dict[str, Any]:
+    """Bode with the uncertainty band and the complex plane at one frequency (``at_hz``, default the point
+    of the largest relative model error), by file stem (:data:`PLOT_STEMS_VALIDATE`)."""
     from rotorcheck.report.plots import bode_band_figure, complex_plane_figure
 
-    out = Path(out_dir)
     b, run, model = outcome.baseline, outcome.runs[0], outcome.model
+    ctx = figure_context(outcome.rig, run, baseline_path, frf_unit)
     centre, radius = uncertainty_disk(model, b.gamma, _v_of(b), run.W)
-    title = f"{outcome.rig.rig_id}: validation at {run.speed_rpm:g} rpm ({b.uncertainty}, enclose {b.enclose})"
-    files = save_figure(bode_band_figure(run.frequency_hz, model.frf, centre, radius, healthy_frf=run.frf,
-                                         title=title), out / "validation_bode", formats)
+    title = ctx.title(f"Validation ({b.uncertainty}, enclose {b.enclose})")
     i = _plot_index(run.frequency_hz, at_hz, np.abs(run.frf - model.frf) / np.abs(model.frf))
-    files += save_figure(complex_plane_figure(float(run.frequency_hz[i]), complex(model.frf[i]), complex(centre[i]),
-                                              float(radius[i]), healthy=complex(run.frf[i])),
-                         out / "validation_complex_plane", formats)
-    return [str(p) for p in files]
+    return {"validation_bode": bode_band_figure(run.frequency_hz, model.frf, centre, radius, healthy_frf=run.frf,
+                                                title=title, context=ctx),
+            "validation_complex_plane": complex_plane_figure(
+                float(run.frequency_hz[i]), complex(model.frf[i]), complex(centre[i]), float(radius[i]),
+                healthy=complex(run.frf[i]), context=ctx, healthy_noise=float(_frf_noise(run)[i]))}
 
 
 def detection_plots(outcome: DetectionOutcome, out_dir: str | Path, at_hz: float | None = None,
-                    formats: tuple[str, ...] = ("png",)) -> list[str]:
-    """Bode with band, healthy and new data and fault points; complex plane; damage dynamics."""
+                    formats: tuple[str, ...] = ("png",), baseline_path: str | Path | None = None,
+                    frf_unit: str = "m/N") -> list[str]:
+    """:func:`detection_figures` written to ``out_dir`` (``formats``); returns the written paths."""
     from rotorcheck.report.figures import save_figure
-    from rotorcheck.report.plots import bode_band_figure, complex_plane_figure, damage_dynamics_figure
 
-    out = Path(out_dir)
+    figs = detection_figures(outcome, at_hz, baseline_path, frf_unit)
+    return [str(p) for stem, fig in figs.items() for p in save_figure(fig, Path(out_dir) / stem, formats)]
+
+
+def detection_figures(outcome: DetectionOutcome, at_hz: float | None = None,
+                      baseline_path: str | Path | None = None, frf_unit: str = "m/N") -> dict[str, Any]:
+    """The detection figures by file stem (:data:`PLOT_STEMS_DETECT`): the decision (ratio per frequency
+    against its threshold, the joint test), Bode with band, healthy and new data and fault points, complex
+    plane at one frequency (``at_hz``, default the fault point nearest ratio 2), damage dynamics with its
+    bound and the port's stiffness as reference."""
+    from rotorcheck.report.plots import bode_band_figure, complex_plane_figure, damage_dynamics_figure, decision_figure
+
+    figs: dict[str, Any] = {}
     b, run, model = outcome.baseline, outcome.run, outcome.model
+    ctx = figure_context(outcome.rig, run, baseline_path, frf_unit)
     fault = np.asarray(outcome.detection.fault, dtype=bool)
+    rep = outcome.report()
     healthy = _healthy_frf(b)
     if outcome.measured is not None and healthy is not None:  # the measured set: T_h within the allowance
         centre, radius = healthy, outcome.measured.radius[:, 0]
+        set_label = "healthy data's set (noise of both sweeps)"
     else:
         centre, radius = uncertainty_disk(model, b.gamma, _v_of(b), run.W)
-    title = f"{outcome.rig.rig_id}: detection at {run.speed_rpm:g} rpm ({outcome.verdict.verdict})"
+        set_label = "uncertainty set (model + gamma_h + noise)"
+    j = outcome.joint
+    joint = None if j is None else {"statistic": j.statistic, "threshold": j.threshold, "p_value": j.p_value,
+                                    "false_alarm": j.false_alarm}
+    meaning = ("|T_new - T_healthy| / its noise allowance" if outcome.measured is not None
+               else "gamma_required / gamma_healthy")
+    figs["detection_decision"] = (decision_figure(run.frequency_hz, outcome.detection.gamma_required,
+                                        outcome.detection.gamma_healthy, fault, np.asarray(outcome.detection.status),
+                                        ctx, outcome.verdict.verdict, str(rep["verdict_rule"]), meaning, joint,
+                                        rep.get("fault_beyond_benign")))
     fig = bode_band_figure(run.frequency_hz, model.frf, centre, radius, healthy_frf=healthy, damaged_frf=run.frf,
-                           fault=fault, title=title)
-    files = save_figure(fig, out / "detection_bode", formats)
+                           fault=fault, title=ctx.title(f"Detection Bode ({outcome.verdict.verdict.upper()})"),
+                           context=ctx, band_label=set_label + ": range over the disk")
+    figs["detection_bode"] = fig
     with np.errstate(divide="ignore", invalid="ignore"):
-        score = np.where(fault, outcome.detection.gamma_required / np.maximum(b.gamma, 1e-300), -np.inf)
-    if not np.any(fault):
-        score = np.abs(run.frf - model.frf)
-    i = _plot_index(run.frequency_hz, at_hz, score)
+        ratio = outcome.detection.gamma_required / np.maximum(outcome.detection.gamma_healthy, 1e-300)
+    if at_hz is None and np.any(fault & np.isfinite(ratio)):
+        i = _telling_fault(ratio, fault)
+    else:
+        i = _plot_index(run.frequency_hz, at_hz, np.abs(run.frf - model.frf))
     h_i = None if healthy is None else complex(healthy[i])
     fig = complex_plane_figure(float(run.frequency_hz[i]), complex(model.frf[i]), complex(centre[i]),
-                               float(radius[i]), healthy=h_i, damaged=complex(run.frf[i]))
-    files += save_figure(fig, out / "detection_complex_plane", formats)
+                               float(radius[i]), healthy=h_i, damaged=complex(run.frf[i]), context=ctx,
+                               damaged_noise=float(_frf_noise(run)[i]), set_label=set_label)
+    figs["detection_complex_plane"] = fig
     ds = outcome.damage_set
-    title = f"{outcome.rig.rig_id}: damage dynamics at {_port_name(outcome.rig)}"
+    title = ctx.title(f"Damage dynamics D_u at the damage port {_port_name(outcome.rig)}")
+    k_port = port_static_stiffness(outcome.rig, run.speed_rpm)
+    ref = {"reference_n_per_m": 0.01 * k_port,
+           "reference_label": {1.0: f"1 % of the damage port's static stiffness k = {k_port:.3g} N/m",
+                               0.1: "0.1 % of k"}} if np.isfinite(k_port) else {}
     if outcome.anchored is not None and outcome.anchored_set is not None:  # lead with the anchored estimate
         a = outcome.anchored_set
         conf = f", {outcome.measured.confidence:.0%}" if outcome.measured is not None else ""
@@ -1808,16 +1910,18 @@ def detection_plots(outcome: DetectionOutcome, out_dir: str | Path, at_hz: float
                                      np.degrees(a.phase_min), np.degrees(a.phase_max), fault=fault, title=title,
                                      anchored=outcome.damage, label="D_u anchored at the healthy data",
                                      bound_label=f"its bound (noise of both sweeps + channel error{conf})",
-                                     anchored_label="D_u with the nominal E22 (eq. 3.11; carries the model error)")
+                                     anchored_label="D_u with the nominal E22 (eq. 3.11; carries the model error)",
+                                     context=ctx, **ref)  # type: ignore[arg-type]
     else:
         fig = damage_dynamics_figure(run.frequency_hz, outcome.damage, ds.min_abs, ds.max_abs,
-                                     np.degrees(ds.phase_min), np.degrees(ds.phase_max), fault=fault, title=title)
-    files += save_figure(fig, out / "damage_dynamics", formats)
-    return [str(p) for p in files]
+                                     np.degrees(ds.phase_min), np.degrees(ds.phase_max), fault=fault, title=title,
+                                     context=ctx, **ref)  # type: ignore[arg-type]
+    figs["damage_dynamics"] = fig
+    return figs
 
 
 PLOT_STEMS_VALIDATE = ("validation_bode", "validation_complex_plane")
-PLOT_STEMS_DETECT = ("detection_bode", "detection_complex_plane", "damage_dynamics")
+PLOT_STEMS_DETECT = ("detection_decision", "detection_bode", "detection_complex_plane", "damage_dynamics")
 
 
 # --------------------------------------------------------------------------------------------
@@ -1873,7 +1977,7 @@ def crack_report(
         from rotorcheck.report.crack_plots import crack_figures
         from rotorcheck.report.figures import save_figure
 
-        figs = crack_figures(system, crack, unb, station=st, speeds_rpm=speeds_rpm)
+        figs = crack_figures(system, crack, unb, station=st, speeds_rpm=speeds_rpm, rig_id=config.rig_id)
         for key, stem in zip(("stiffness", "orbit", "spectrum"), stems):
             files += [str(p) for p in save_figure(figs[key], stem, formats)]
     return {"rig_id": config.rig_id, "fault": fault, "station": st, "unbalance_g_m": unbalance_g_m,

@@ -81,7 +81,7 @@ def main(root: str | Path = "demo") -> int:
             return 2
     print("\nsummary")
     for name, verdict, out in summary:
-        print(f"  {name:26s} {verdict:12s} reports and plots in {out}")
+        print(f"  {name:26s} {verdict:12s} reports and plots in {out} (open {out / 'report.html'})")
     return 0
 
 

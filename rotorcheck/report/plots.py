@@ -1,32 +1,47 @@
 """Validation, detection and identification plots (matplotlib Figure API, no global state).
 
-The uncertainty band at each frequency is a disk in the complex plane (centre ``c``, radius ``rho``,
-receptance units m/N): magnitude from ``max(0, |c| - rho)`` to ``|c| + rho``; phase
-``arg(c) +/- asin(rho/|c|)``, or the full 360 degrees where the disk holds the origin (dissertation
-Fig. 43/47).
+The uncertainty set at each frequency is a disk in the complex plane (centre ``c``, radius ``rho``,
+receptance units m/N). The Bode band shows the range of magnitude (``max(0, |c| - rho)`` to ``|c| + rho``)
+and of phase (``arg(c) +/- asin(rho/|c|)``) over the disk; where the disk holds the origin the magnitude
+reaches 0 and the phase is any (hatched; dissertation Fig. 43/47). A point inside both ranges can still lie
+outside the disk: the decision figure (:func:`decision_figure`) shows the ratio that decided.
+
+Every figure names the rig, the speed (or that the rig does not rotate), the channel pair, the sweep and
+the baseline (:class:`FigureContext`), and keeps its legend outside the data.
 """
 
 from __future__ import annotations
 
+import textwrap
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 from matplotlib.figure import Figure
 
+from rotorcheck.report.rotor_drawing import draw_rotor
+
+#: receptance units a plot may use: factor from m/N
+FRF_UNITS: dict[str, float] = {"m/N": 1.0, "mm/N": 1e3, "um/N": 1e6}
+#: colours that stay apart for readers with the common colour-vision deficiencies
+COLOURS = {"model": "0.35", "band": "tab:blue", "healthy": "k", "new": "tab:orange", "fault": "tab:red",
+           "ok": "0.55", "reference": "tab:green"}
+
 
 def disk_band(centre: np.ndarray, radius: np.ndarray) -> dict[str, np.ndarray]:
-    """Magnitude and phase (deg) bands of disks; ``full_phase`` where a disk holds the origin."""
+    """Magnitude and phase (deg) bands of disks; ``full_phase`` where a disk holds the origin (or is not
+    finite): there the magnitude reaches 0 and the phase is any (half width 180 deg, never more)."""
     c = np.asarray(centre, dtype=complex)
     r = np.asarray(radius, dtype=float)
     mag = np.abs(c)
-    full = r >= mag
+    full = ~np.isfinite(r) | (r >= mag)
     with np.errstate(divide="ignore", invalid="ignore"):
         half = np.degrees(np.arcsin(np.clip(np.where(full, 1.0, r / mag), 0.0, 1.0)))
     ph = np.degrees(np.angle(c))
     half = np.where(full, 180.0, half)
     return {
         "phase_half_width": half,
-        "mag_lo": np.maximum(mag - r, 0.0),
+        "mag_lo": np.where(full, 0.0, np.maximum(mag - r, 0.0)),
         "mag_hi": mag + r,
         "phase_lo": np.where(full, -180.0, ph - half),
         "phase_hi": np.where(full, 180.0, ph + half),
@@ -34,9 +49,80 @@ def disk_band(centre: np.ndarray, radius: np.ndarray) -> dict[str, np.ndarray]:
     }
 
 
+@dataclass(frozen=True)
+class FigureContext:
+    """What a figure shows: the rig, speed, channel pair, sweep and baseline, and the receptance unit.
+
+    ``speed_rpm`` None: a rig that does not rotate (a lumped rig), said so instead of "0 rpm".
+    """
+
+    rig_id: str
+    speed_rpm: float | None = None
+    channels: str = ""  # e.g. "s6x <- f8x" (output <- input)
+    sweep: str = ""
+    baseline: str = ""
+    frf_unit: str = "m/N"
+
+    @property
+    def frf_scale(self) -> float:
+        """Factor from m/N to :attr:`frf_unit`."""
+        return FRF_UNITS[self.frf_unit]
+
+    def speed_text(self) -> str:
+        """"at 1000 rpm", "at standstill (0 rpm)", or "" for a rig that does not rotate."""
+        if self.speed_rpm is None:
+            return ""
+        return "at standstill (0 rpm)" if self.speed_rpm == 0 else f"at {self.speed_rpm:g} rpm"
+
+    def title(self, what: str, width: int = 100) -> str:
+        """``what`` with the rig, speed and channels; the sweep and baseline on a second line."""
+        head = " ".join(x for x in (f"{what}: {self.rig_id}", self.speed_text()) if x)
+        if self.channels:
+            head += f", {self.channels}"
+        tail = "; ".join(x for x in (f"sweep {self.sweep}" if self.sweep else "",
+                                      f"baseline {self.baseline}" if self.baseline else "") if x)
+        lines = textwrap.wrap(head, width) + (textwrap.wrap(tail, width) if tail else [])
+        return "\n".join(lines)
+
+
 def _wrap_near(phase_deg: np.ndarray, ref_deg: np.ndarray) -> np.ndarray:
     """Shift ``phase_deg`` by multiples of 360 to lie within 180 deg of ``ref_deg``."""
     return ref_deg + (phase_deg - ref_deg + 180.0) % 360.0 - 180.0
+
+
+def _legend_outside(ax: Any, **kw: Any) -> Any:
+    """A legend right of ``ax`` (outside the data), or None when nothing is labelled."""
+    handles, labels = ax.get_legend_handles_labels()
+    if not handles:
+        return None
+    return ax.legend(handles, labels, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0,
+                     fontsize=8, **kw)
+
+
+def _runs(f: np.ndarray, mask: np.ndarray) -> list[tuple[float, float]]:
+    """Contiguous runs of ``mask`` as frequency spans reaching half a grid step beyond their end points."""
+    out: list[tuple[float, float]] = []
+    idx = np.flatnonzero(mask)
+    if idx.size == 0:
+        return out
+    step = float(np.median(np.diff(f))) if f.size > 1 else 1.0
+    start = prev = int(idx[0])
+    for i in map(int, idx[1:]):
+        if i != prev + 1:
+            out.append((f[start] - 0.5 * step, f[prev] + 0.5 * step))
+            start = i
+        prev = i
+    out.append((f[start] - 0.5 * step, f[prev] + 0.5 * step))
+    return out
+
+
+def _log_limits(*arrays: Any) -> tuple[float, float]:
+    """Log-axis limits around the positive finite values of ``arrays`` (a decade-fraction margin)."""
+    vals = np.concatenate([np.abs(np.ravel(np.asarray(a, dtype=complex))) for a in arrays if a is not None])
+    vals = vals[np.isfinite(vals) & (vals > 0)]
+    if vals.size == 0:
+        return 1e-12, 1.0
+    return float(vals.min()) / 2.0, float(vals.max()) * 2.0
 
 
 def bode_band_figure(
@@ -48,39 +134,136 @@ def bode_band_figure(
     damaged_frf: np.ndarray | None = None,
     fault: np.ndarray | None = None,
     title: str = "",
+    context: FigureContext | None = None,
+    band_label: str = "uncertainty set (range over the disk)",
 ) -> Figure:
-    """Bode magnitude (m/N, log) and phase (deg) of model, band, healthy and damaged data."""
-    fig = Figure(figsize=(9, 7), layout="constrained")
+    """Bode magnitude (log, ``context.frf_unit``) and phase (deg) of the model, the uncertainty set, the
+    healthy and new data, and the fault points (open red circles over the data, which stays visible).
+
+    Phase: each quantity within 180 deg of the set's centre (the nominal model's unwrapped phase where there
+    is no set), so a band is never wider than 360 deg.
+    """
+    ctx = context or FigureContext(rig_id="")
+    s = ctx.frf_scale
+    f = np.asarray(freq_hz, dtype=float)
+    fig = Figure(figsize=(10, 7), layout="constrained")
     ax_m, ax_p = fig.subplots(2, 1, sharex=True)
     band = disk_band(centre, radius)
-    ref = np.unwrap(np.angle(model_frf))
-    ref_deg = np.degrees(ref)
-    floor = np.min(np.abs(model_frf)) * 1e-3
-    ax_m.fill_between(freq_hz, np.maximum(band["mag_lo"], floor), band["mag_hi"], color="tab:blue",
-                      alpha=0.25, lw=0, label="uncertainty band")
-    ax_m.semilogy(freq_hz, np.abs(model_frf), color="tab:blue", lw=1.2, label="nominal model")
-    ax_p.plot(freq_hz, ref_deg, color="tab:blue", lw=1.2)
+    full = band["full_phase"]
+    lo_lim, hi_lim = _log_limits(s * np.asarray(model_frf), None if healthy_frf is None else s * healthy_frf,
+                                 None if damaged_frf is None else s * damaged_frf,
+                                 s * band["mag_lo"][band["mag_lo"] > 0], s * band["mag_hi"])
+    ax_m.set_ylim(lo_lim, hi_lim)
+    lo = np.clip(s * band["mag_lo"], lo_lim, hi_lim)  # 0 (disk over the origin): down to the axis
+    hi = np.clip(s * band["mag_hi"], lo_lim, hi_lim)
+    ax_m.fill_between(f, lo, hi, color=COLOURS["band"], alpha=0.22, lw=0, label=band_label)
+    if np.any(full):
+        ax_m.fill_between(f, lo_lim, hi, where=full, facecolor="none", edgecolor=COLOURS["band"], hatch="///",
+                          lw=0, label=f"set holds 0: any phase, |.| down to 0 ({int(np.sum(full))} points)")
+    ax_m.semilogy(f, s * np.abs(model_frf), color=COLOURS["model"], lw=1.2, label="nominal model")
+    ref_deg = np.degrees(np.unwrap(np.angle(model_frf)))
     centre_deg = _wrap_near(np.degrees(np.angle(centre)), ref_deg)
-    half = band["phase_half_width"]
-    ax_p.fill_between(freq_hz, centre_deg - half, centre_deg + half, color="tab:blue", alpha=0.25, lw=0)
-    for data, colour, label in ((healthy_frf, "k", "healthy data"), (damaged_frf, "tab:red", "new data")):
+    half = np.minimum(band["phase_half_width"], 180.0)
+    ax_p.plot(f, _wrap_near(np.degrees(np.angle(model_frf)), centre_deg), color=COLOURS["model"], lw=1.2)
+    ax_p.fill_between(f, centre_deg - half, centre_deg + half, where=~full, color=COLOURS["band"], alpha=0.22,
+                      lw=0)
+    if np.any(full):
+        ax_p.fill_between(f, centre_deg - 180.0, centre_deg + 180.0, where=full, facecolor="none",
+                          edgecolor=COLOURS["band"], hatch="///", lw=0)
+    for data, key, label in ((healthy_frf, "healthy", "healthy data"), (damaged_frf, "new", "new data")):
         if data is None:
             continue
-        ax_m.semilogy(freq_hz, np.abs(data), ".", ms=3, color=colour, label=label)
-        ax_p.plot(freq_hz, _wrap_near(np.degrees(np.angle(data)), ref_deg), ".", ms=3, color=colour)
+        z = 3 if key == "healthy" else 2  # the healthy dots above the new ones
+        ax_m.semilogy(f, s * np.abs(data), ".", ms=3.5, color=COLOURS[key], label=label, zorder=z)
+        ax_p.plot(f, _wrap_near(np.degrees(np.angle(data)), centre_deg), ".", ms=3.5, color=COLOURS[key], zorder=z)
+    n_fault = 0
     if fault is not None and damaged_frf is not None and np.any(fault):
-        ax_m.semilogy(freq_hz[fault], np.abs(damaged_frf[fault]), "o", mfc="none", ms=7, color="tab:red",
-                      label=f"fault points ({int(np.sum(fault))})")
-        ax_p.plot(freq_hz[fault], _wrap_near(np.degrees(np.angle(damaged_frf[fault])), ref_deg[fault]), "o",
-                  mfc="none", ms=7, color="tab:red")
-    ax_m.set_ylabel("|receptance| (m/N)")
+        fault = np.asarray(fault, dtype=bool)
+        n_fault = int(np.sum(fault))
+        ax_m.semilogy(f[fault], s * np.abs(damaged_frf[fault]), "o", mfc="none", mew=1.3, ms=8,
+                      color=COLOURS["fault"], label=f"fault points ({n_fault})", zorder=4, gid="fault_points")
+        ax_p.plot(f[fault], _wrap_near(np.degrees(np.angle(damaged_frf[fault])), centre_deg[fault]), "o",
+                  mfc="none", mew=1.3, ms=8, color=COLOURS["fault"], zorder=4, gid="fault_points")
+    ax_m.set_ylabel(f"|receptance| ({ctx.frf_unit})")
     ax_p.set_ylabel("phase (deg)")
     ax_p.set_xlabel("frequency (Hz)")
-    ax_m.legend(loc="best", fontsize=8)
+    ax_p.set_ylim(float(np.min(centre_deg)) - 200.0, float(np.max(centre_deg)) + 200.0)
+    _legend_outside(ax_m)
     ax_m.grid(True, which="both", alpha=0.3)
     ax_p.grid(True, alpha=0.3)
-    if title:
-        ax_m.set_title(title)
+    note = ("Band: the range of magnitude and of phase over the uncertainty disk at each frequency. A point inside "
+            "both ranges can still lie outside the disk" + (": the decision figure shows the ratio that decided."
+                                                           if damaged_frf is not None else "."))
+    ax_p.text(0.0, -0.16, "\n".join(textwrap.wrap(note, 120)), transform=ax_p.transAxes, fontsize=7, va="top")
+    ax_m.set_title(title or ctx.title("Bode"), fontsize=9)
+    return fig
+
+
+def decision_figure(
+    freq_hz: np.ndarray,
+    gamma_required: np.ndarray,
+    gamma_healthy: np.ndarray,
+    fault: np.ndarray,
+    status: np.ndarray,
+    context: FigureContext,
+    verdict: str,
+    rule: str,
+    ratio_meaning: str = "gamma_required / gamma_healthy",
+    joint: dict[str, Any] | None = None,
+    beyond_benign: np.ndarray | None = None,
+) -> Figure:
+    """The decision actually made: per frequency the ratio ``gamma_required / gamma_healthy`` (log), the
+    threshold 1 and the fault points (ratio above 1, red); points not evaluated marked at the bottom. With
+    the joint test (``joint``: ``statistic``, ``threshold``, ``p_value``, ``false_alarm``), a second panel:
+    the sweep's statistic against its threshold, the rule that made the verdict.
+    """
+    f = np.asarray(freq_hz, dtype=float)
+    fault = np.asarray(fault, dtype=bool)
+    status = np.asarray(status).astype(str)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = np.asarray(gamma_required, dtype=float) / np.asarray(gamma_healthy, dtype=float)
+    evaluated = np.isfinite(ratio) & (ratio > 0)
+    if joint is not None:
+        fig = Figure(figsize=(10, 6.2), layout="constrained")
+        ax, bx = fig.subplots(2, 1, height_ratios=(3.0, 1.0))
+    else:
+        fig = Figure(figsize=(10, 4.8), layout="constrained")
+        ax, bx = fig.subplots(), None
+    lo, hi = _log_limits(ratio[evaluated], np.array([1.0]))
+    ax.set_ylim(lo, hi)
+    ok = evaluated & ~fault
+    ax.semilogy(f[ok], ratio[ok], ".", ms=4, color=COLOURS["ok"], label=f"explained ({int(np.sum(ok))})")
+    ax.semilogy(f[fault & evaluated], ratio[fault & evaluated], "o", ms=5, color=COLOURS["fault"],
+                label=f"fault points ({int(np.sum(fault))})", gid="fault_points")
+    ax.axhline(1.0, color="k", lw=1.0, ls="--", label="threshold 1 (fault above)")
+    if beyond_benign is not None and np.any(beyond_benign):
+        bb = np.asarray(beyond_benign, dtype=bool) & evaluated
+        ax.semilogy(f[bb], ratio[bb], "D", mfc="none", ms=8, color="tab:purple",
+                    label=f"beyond every benign change ({int(np.sum(np.asarray(beyond_benign, dtype=bool)))})")
+    other = ~evaluated | ~np.isin(status, ("ok", "fault"))
+    for s_ in np.unique(status[other]):
+        sel = other & (status == s_)
+        ax.plot(f[sel], np.full(int(np.sum(sel)), lo * 1.15), "x", color="tab:brown",
+                label=f"not decided: {s_} ({int(np.sum(sel))})")
+    ax.set_ylabel(f"ratio {ratio_meaning}")
+    ax.set_xlabel("frequency (Hz)")
+    ax.grid(True, which="both", alpha=0.3)
+    _legend_outside(ax)
+    head = context.title(f"Detection ({verdict.upper()})")
+    ax.set_title(head + "\n" + "\n".join(textwrap.wrap("Rule: " + rule, 120)), fontsize=8)
+    if bx is not None and joint is not None:
+        t, thr = float(joint["statistic"]), float(joint["threshold"])
+        bx.barh([0], [t / thr], color=COLOURS["fault"] if t > thr else COLOURS["ok"], height=0.5,
+                label=f"joint statistic T = {t:.4g} (p = {float(joint['p_value']):.3g})")
+        bx.axvline(1.0, color="k", ls="--", lw=1.0,
+                   label=f"threshold {thr:.4g} (false alarm {float(joint['false_alarm']):g} per sweep)")
+        bx.set_xscale("log")
+        bx.set_xlim(min(0.5, 0.5 * t / thr), max(2.0, 2.0 * t / thr))
+        bx.set_yticks([])
+        bx.set_ylabel("this sweep")
+        bx.set_xlabel("joint statistic / its threshold (the verdict: damage above 1)")
+        bx.grid(True, which="both", axis="x", alpha=0.3)
+        _legend_outside(bx)
     return fig
 
 
@@ -91,24 +274,42 @@ def complex_plane_figure(
     radius: float,
     healthy: complex | None = None,
     damaged: complex | None = None,
+    context: FigureContext | None = None,
+    damaged_noise: float | None = None,
+    healthy_noise: float | None = None,
+    set_label: str = "uncertainty set",
 ) -> Figure:
-    """The uncertainty disk at one frequency in the complex plane (dissertation Fig. 48)."""
-    fig = Figure(figsize=(5.5, 5.5), layout="constrained")
+    """The uncertainty disk at one frequency in the complex plane (dissertation Fig. 48), with the noise
+    disks of the data (their own noise bound, m/N) and the distance of the new data from the set."""
+    ctx = context or FigureContext(rig_id="")
+    s = ctx.frf_scale
+    fig = Figure(figsize=(8.0, 5.6), layout="constrained")
     ax = fig.subplots()
     t = np.linspace(0, 2 * np.pi, 361)
-    ax.fill(centre.real + radius * np.cos(t), centre.imag + radius * np.sin(t), color="tab:blue", alpha=0.2,
-            label="uncertainty set")
-    ax.plot(model.real, model.imag, "s", color="tab:blue", label="nominal model")
-    if healthy is not None:
-        ax.plot(healthy.real, healthy.imag, "o", color="k", label="healthy data")
-    if damaged is not None:
-        ax.plot(damaged.real, damaged.imag, "o", color="tab:red", label="new data")
-    ax.plot(0, 0, "+", color="grey")
+    c = complex(centre) * s
+    if np.isfinite(radius):
+        ax.fill(c.real + s * radius * np.cos(t), c.imag + s * radius * np.sin(t), color=COLOURS["band"], alpha=0.2,
+                label=f"{set_label} (radius {s * radius:.3g} {ctx.frf_unit})")
+    ax.plot(s * model.real, s * model.imag, "s", color=COLOURS["model"], label="nominal model")
+    for z, noise, key, label in ((healthy, healthy_noise, "healthy", "healthy data"),
+                                 (damaged, damaged_noise, "new", "new data")):
+        if z is None:
+            continue
+        ax.plot(s * z.real, s * z.imag, "o", color=COLOURS[key], label=label, zorder=3)
+        if noise is not None and np.isfinite(noise):
+            ax.plot(s * z.real + s * noise * np.cos(t), s * z.imag + s * noise * np.sin(t), ":", color=COLOURS[key],
+                    lw=1.0, label=f"{label}: its noise bound ({s * noise:.3g} {ctx.frf_unit})")
+    ax.plot(0, 0, "+", color="grey", ms=10, label="origin")
     ax.set_aspect("equal", adjustable="datalim")
-    ax.set_xlabel("Re (m/N)")
-    ax.set_ylabel("Im (m/N)")
-    ax.set_title(f"{freq_hz:.2f} Hz")
-    ax.legend(loc="best", fontsize=8)
+    ax.set_xlabel(f"Re ({ctx.frf_unit})")
+    ax.set_ylabel(f"Im ({ctx.frf_unit})")
+    extra = ""
+    if damaged is not None and np.isfinite(radius) and radius > 0:
+        d = abs(complex(damaged) - complex(centre)) / radius
+        extra = f"; new data at {d:.3g} radii from the centre ({'outside: a fault point' if d > 1 else 'inside'})"
+    ax.set_title(ctx.title(f"Complex plane at {freq_hz:.2f} Hz") + "\n" + "\n".join(textwrap.wrap(extra[2:], 90))
+                 if extra else ctx.title(f"Complex plane at {freq_hz:.2f} Hz"), fontsize=8)
+    _legend_outside(ax)
     ax.grid(True, alpha=0.3)
     return fig
 
@@ -126,67 +327,77 @@ def damage_dynamics_figure(
     label: str = "identified D_u (eq. 3.11)",
     bound_label: str = "exact bound",
     anchored_label: str = "D_u anchored at the healthy data",
+    context: FigureContext | None = None,
+    reference_n_per_m: float | None = None,
+    reference_label: dict[float, str] | None = None,
 ) -> Figure:
     """Identified damage dynamics D_u (N/m) with its bound: magnitude and phase.
 
-    ``damage`` is drawn solid with its bound; ``anchored``: an optional second estimate (dashed).
+    ``damage`` is drawn solid where it is significant (its bound excludes 0) and faint where not; where the
+    bound is unbounded the frequencies are hatched over the whole axis (D_u not identifiable there). A
+    reference level (``reference_n_per_m``, e.g. 1 % of the damage port's static stiffness) gives the scale.
+    ``anchored``: an optional second estimate (dashed).
     """
-    fig = Figure(figsize=(9, 6.5), layout="constrained")
+    ctx = context or FigureContext(rig_id="")
+    reference_label = reference_label or {1.0: "reference", 0.1: "reference x 0.1"}
+    f = np.asarray(freq_hz, dtype=float)
+    fig = Figure(figsize=(10, 7), layout="constrained")
     ax_m, ax_p = fig.subplots(2, 1, sharex=True)
-    hi = np.where(np.isfinite(bound_max_abs), bound_max_abs, np.nan)
-    floor = np.nanmax(np.abs(damage)) * 1e-4 if np.any(np.isfinite(damage)) else 1.0
-    ax_m.fill_between(freq_hz, np.maximum(bound_min_abs, floor), hi, color="tab:orange", alpha=0.3, lw=0,
-                      label=bound_label)
-    ax_m.semilogy(freq_hz, np.abs(damage), color="tab:red", lw=1.2, label=label)
+    lo_b = np.asarray(bound_min_abs, dtype=float)
+    hi_b = np.asarray(bound_max_abs, dtype=float)
+    unbounded = ~np.isfinite(hi_b)
+    significant = np.isfinite(lo_b) & (lo_b > 0)
+    ref = [reference_n_per_m, 0.1 * reference_n_per_m] if reference_n_per_m else []
+    lo_lim, hi_lim = _log_limits(damage, None if anchored is None else anchored, lo_b[significant],
+                                 hi_b[~unbounded], np.asarray(ref, dtype=float))
+    ax_m.set_ylim(lo_lim, hi_lim)
+    band_lo = np.clip(np.where(significant, lo_b, lo_lim), lo_lim, hi_lim)  # 0 in the bound: down to the axis
+    band_hi = np.clip(np.where(unbounded, hi_lim, hi_b), lo_lim, hi_lim)
+    ax_m.fill_between(f, band_lo, band_hi, where=~unbounded, color="tab:orange", alpha=0.3, lw=0, label=bound_label)
+    if np.any(unbounded):
+        for a in (ax_m, ax_p):
+            for k, (x0, x1) in enumerate(_runs(f, unbounded)):
+                a.axvspan(x0, x1, facecolor="none", edgecolor="0.7", hatch="//", lw=0,
+                          label=f"bound unbounded: D_u not identifiable ({int(np.sum(unbounded))} points)"
+                          if a is ax_m and k == 0 else None)
+    mag = np.abs(damage)
+    ax_m.semilogy(f, np.where(significant, mag, np.nan), color="tab:red", lw=1.4,
+                  label=label + " (bound excludes 0)" if np.any(significant) else None)
+    ax_m.semilogy(f, np.where(significant, np.nan, mag), color="tab:red", lw=0.8, alpha=0.35,
+                  label=label + ": not significant (0 in the bound)")
     if anchored is not None:
-        ax_m.semilogy(freq_hz, np.abs(anchored), "--", color="tab:purple", lw=1.0, label=anchored_label)
+        ax_m.semilogy(f, np.abs(anchored), "--", color="tab:purple", lw=1.0, label=anchored_label)
     if fault is not None and np.any(fault):
-        ax_m.semilogy(freq_hz[fault], np.abs(damage[fault]), "o", mfc="none", ms=6, color="k",
-                      label="fault points")
+        fault = np.asarray(fault, dtype=bool)
+        ax_m.semilogy(f[fault], mag[fault], "o", mfc="none", ms=6, color="k",
+                      label=f"fault points ({int(np.sum(fault))})", gid="fault_points")
+    if reference_n_per_m:
+        for frac, ls in ((1.0, "-."), (0.1, ":")):
+            ax_m.axhline(frac * reference_n_per_m, color=COLOURS["reference"], ls=ls, lw=1.0,
+                         label=f"{reference_label[frac]}: {frac * reference_n_per_m:.3g} N/m")
+    if not np.any(significant):
+        ax_m.text(0.5, 0.93, "NOT SIGNIFICANT: the bound holds D_u = 0 at every frequency", transform=ax_m.transAxes,
+                  ha="center", va="top", fontsize=9, color="0.2", gid="not_significant",
+                  bbox={"facecolor": "white", "edgecolor": "0.5", "alpha": 0.9})
     ph = np.degrees(np.angle(damage))
-    ax_p.plot(freq_hz, ph, color="tab:red", lw=1.2)
+    ax_p.plot(f, np.where(significant, ph, np.nan), color="tab:red", lw=1.2)
+    ax_p.plot(f, np.where(significant, np.nan, ph), color="tab:red", lw=0.8, alpha=0.35)
     if anchored is not None:
-        ax_p.plot(freq_hz, np.degrees(np.angle(anchored)), "--", color="tab:purple", lw=1.0)
+        ax_p.plot(f, np.degrees(np.angle(anchored)), "--", color="tab:purple", lw=1.0)
     if phase_lo_deg is not None and phase_hi_deg is not None:
-        ax_p.fill_between(freq_hz, phase_lo_deg, phase_hi_deg, color="tab:orange", alpha=0.3, lw=0)
+        plo, phi = np.asarray(phase_lo_deg, dtype=float), np.asarray(phase_hi_deg, dtype=float)
+        ok = np.isfinite(plo) & np.isfinite(phi) & ((phi - plo) < 360.0)
+        ax_p.fill_between(f, plo, phi, where=ok, color="tab:orange", alpha=0.3, lw=0)
     ax_m.set_ylabel("|D_u| (N/m)")
-    ax_p.set_ylabel("phase (deg)")
+    ax_p.set_ylabel("phase of D_u (deg)")
     ax_p.set_xlabel("frequency (Hz)")
     ax_p.set_ylim(-200, 200)
-    ax_m.legend(loc="best", fontsize=8)
+    ax_p.set_yticks([-180, -90, 0, 90, 180])
+    _legend_outside(ax_m)
     ax_m.grid(True, which="both", alpha=0.3)
     ax_p.grid(True, alpha=0.3)
-    if title:
-        ax_m.set_title(title)
+    ax_m.set_title(title or ctx.title("Damage dynamics D_u"), fontsize=9)
     return fig
-
-
-def shaft_drawing(ax: Any, config: Any, colour_of: Any = None, actuators: Any = (), sensors: Any = ()) -> None:
-    """The rotor along its axis (m) on ``ax``: shaft elements (numbered, filled by ``colour_of(element)``),
-    discs, bearings on the shaft, actuator (v) and sensor (o) ports."""
-    from matplotlib.patches import Rectangle
-
-    z = np.asarray(config.stations, dtype=float)
-    for el in config.shaft:
-        col = colour_of(el.start) if colour_of is not None else "white"
-        r0, r1 = 0.5 * el.outer_diameter, 0.5 * el.outer_right
-        x0, x1 = z[el.start - 1], z[el.end - 1]
-        ax.fill([x0, x1, x1, x0], [-r0, -r1, r1, r0], facecolor=col, edgecolor="k", lw=0.6)
-        ax.text(0.5 * (x0 + x1), 1.6 * max(r0, r1), str(el.start), ha="center", va="bottom", fontsize=7)
-    dmax = max(el.outer_diameter for el in config.shaft)
-    for d in config.discs:
-        ax.add_patch(Rectangle((z[d.station - 1] - 0.004, -1.5 * dmax), 0.008, 3.0 * dmax, facecolor="0.4"))
-    for b in config.bearings:
-        if b.station <= z.size:  # support nodes (pedestals) are not on the shaft
-            ax.plot(z[b.station - 1], -1.3 * dmax, "^", color="k", ms=9)
-    for ports, mark, name in ((actuators, "v", "actuator"), (sensors, "o", "sensor")):
-        for port in ports:
-            if getattr(port, "station", None) is not None:
-                ax.plot(z[port.station - 1], 1.3 * dmax, mark, color="tab:green", ms=8,
-                        label=f"{name} s{port.station}{port.direction}")
-    ax.plot([], [], "^", color="k", label="bearing")
-    ax.set_ylim(-2.2 * dmax, 2.2 * dmax)
-    ax.set_yticks([])
 
 
 def detectability_figure(config: Any, det: Any) -> Figure:
@@ -212,8 +423,8 @@ def detectability_figure(config: Any, det: Any) -> Figure:
         d = depth.get(element)
         return "0.6" if d is None else cmap(min(float(d) / 0.5, 1.0))
 
-    shaft_drawing(ax, config, colour_of, [parse_port(a) for a in det.actuators], [parse_port(s) for s in det.sensors])
-    ax.legend(loc="upper right", fontsize=7)
+    draw_rotor(ax, config, element_colour=colour_of, actuators=[parse_port(a) for a in det.actuators],
+               sensors=[parse_port(s) for s in det.sensors], damage_port=getattr(config, "damage", None))
     ax.set_title("\n".join(textwrap.wrap(
         f"{det.rig_id} at {det.speed_rpm:g} rpm: smallest breathing crack found with 90 % power at "
         f"{det.false_alarm:g} false alarms; {det.noise_source}", 110)), fontsize=8)
@@ -225,9 +436,16 @@ def detectability_figure(config: Any, det: Any) -> Figure:
         bx.plot(mids, vals, style, label=label)
     bx.set_yscale("log")
     bx.set_ylabel("breathing crack depth (% of diameter)")
-    bx.set_xlabel("axial position (m); grey: not seen by these channels, or no detectable depth up to 50 %")
+    bx.set_xlabel("axial position (m)\ngrey elements: not seen by these channels, or no detectable depth up to 50 %")
     bx.grid(True, which="both", alpha=0.3)
-    bx.legend(fontsize=7)
+    _legend_outside(bx)
+    from matplotlib.cm import ScalarMappable
+    from matplotlib.colors import Normalize
+
+    bar = fig.colorbar(ScalarMappable(Normalize(0.0, 50.0), cmap), ax=ax, location="bottom", shrink=0.5,
+                       aspect=40, pad=0.02)
+    bar.set_label("element shading: breathing depth detectable with the benign ranges (% of diameter)", fontsize=7)
+    bar.ax.tick_params(labelsize=7)
     z = np.asarray(config.stations, dtype=float)
     bx.set_xlim(z[0] - 0.01, z[-1] + 0.01)
     return fig
@@ -239,7 +457,9 @@ def location_figure(config: Any, location: Any, title: str = "") -> Figure:
     the certified stiffness-loss interval of every candidate not excluded (and its estimate), with the
     depth interval (% of the diameter) of the three best ranked."""
 
-    fig = Figure(figsize=(8.0, 5.0), layout="constrained")
+    from rotorcheck.location import depth_text
+
+    fig = Figure(figsize=(9.5, 5.5), layout="constrained")
     ax, bx = fig.subplots(2, 1, sharex=True, height_ratios=(1.0, 1.4))
     z = np.asarray(config.stations, dtype=float)
     status = {c.element: c for c in location.candidates}
@@ -251,12 +471,14 @@ def location_figure(config: Any, location: Any, title: str = "") -> Figure:
         return "tab:red" if element == best else colour.get(c.status if c is not None else "", "white")
 
     ports = getattr(config, "ports", None)
-    shaft_drawing(ax, config, colour_of, [p for p in (getattr(ports, "actuator", None),) if p is not None],
-                  [p for p in (getattr(ports, "sensor", None),) if p is not None])
+    draw_rotor(ax, config, element_colour=colour_of,
+               actuators=[p for p in (getattr(ports, "actuator", None),) if p is not None],
+               sensors=[p for p in (getattr(ports, "sensor", None),) if p is not None],
+               candidates=([c.element for c in location.candidates]  # outlined only when not every element
+                           if len(location.candidates) < len(config.shaft) else None))
     import textwrap
 
-    ax.set_title("\n".join(textwrap.wrap(title or location.summary(), 110)), fontsize=8)
-    ax.legend(loc="upper right", fontsize=7)
+    ax.set_title("\n".join(textwrap.wrap(title or location.summary(), 100)), fontsize=8, loc="left")
     for c in location.candidates:
         if c.status != "consistent":
             continue
@@ -266,10 +488,9 @@ def location_figure(config: Any, location: Any, title: str = "") -> Figure:
         bx.plot([mid, mid], [lo, hi], color=col, lw=5, alpha=0.6, solid_capstyle="butt")
         if c.loss_estimate is not None:
             bx.plot(mid, 100 * c.loss_estimate, "k_", ms=12)
-        d0, d1 = c.depth_interval
-        if c.rank is not None and c.rank <= 3 and d0 is not None:
-            depth = f"{100 * d0:.0f}-" + ("50+" if d1 is None else f"{100 * d1:.0f}")
-            bx.annotate(f"#{c.rank}\ndepth {depth} %", (mid, hi), textcoords="offset points", xytext=(0, 4),
+        depth = depth_text(*c.depth_interval)
+        if c.rank is not None and c.rank <= 3 and depth:
+            bx.annotate(f"#{c.rank}\ndepth {depth}", (mid, hi), textcoords="offset points", xytext=(0, 4),
                         ha="center", fontsize=7)
     bx.set_ylabel("element stiffness loss (%)\ncertified interval, fit (-)")
     bx.set_xlabel("axial position (m); grey: excluded, blue: consistent, red: most likely")

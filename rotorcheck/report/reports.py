@@ -1,6 +1,7 @@
-"""Detection reports: ``report.json`` (contract keys of cli.md), ``report.md``, ``fault_points.csv``.
+"""Detection reports: ``report.json`` (contract keys of cli.md), ``report.md``, ``fault_points.csv`` and the
+self-contained ``report.html`` (:mod:`rotorcheck.report.html`).
 
-All three are rendered in memory first and written atomically only when every one rendered, so a
+All four are rendered in memory first and written atomically only when every one rendered, so a
 failure never leaves a partial report.
 """
 
@@ -17,7 +18,7 @@ import numpy as np
 
 from rotorcheck.fileio import atomic_write_text
 
-REPORT_FILES = ("report.json", "report.md", "fault_points.csv")
+REPORT_FILES = ("report.json", "report.md", "fault_points.csv", "report.html")
 
 
 def _jsonable(obj: Any) -> Any:
@@ -96,6 +97,7 @@ def render_markdown(report: dict[str, Any], plots: list[str]) -> str:
         "",
         f"**{report['verdict']}**: {report['verdict_reason']}.",
         "",
+        *headline_damage(report),
         f"Rule: {report['verdict_rule']}.",
         "",
         *_joint_section(report),
@@ -116,8 +118,35 @@ def render_markdown(report: dict[str, Any], plots: list[str]) -> str:
     for n in report.get("notes", []):
         lines.append(f"- note: {n}")
     if plots:
-        lines += ["", "## Plots", ""] + [f"- `{p}`" for p in plots]
+        lines += ["", "## Plots", ""]
+        for p in plots:
+            name = Path(p).name
+            lines += ([f"![{Path(p).stem}]({name})", ""] if name.endswith((".png", ".svg")) else [f"- `{name}`"])
     return "\n".join(lines) + "\n"
+
+
+def headline_damage(report: dict[str, Any]) -> list[str]:
+    """The headline damage figure: the anchored D_u (the estimate free of the nominal model's error) over
+    the fault points (or the band) with its bound; the nominal-E22 one only where no anchored one exists."""
+    fault = np.asarray(report["fault"], dtype=bool)
+    sel = fault if np.any(fault) else np.ones_like(fault)
+    where = f"median over the {int(np.sum(sel))} fault points" if np.any(fault) else "median over the band"
+    if "damage_dynamics_anchored_re" in report:
+        re = np.asarray(report["damage_dynamics_anchored_re"], dtype=float)[sel]
+        lo = np.asarray(report["damage_anchored_bound_min_abs"], dtype=float)[sel]
+        hi = np.asarray(report["damage_anchored_bound_max_abs"], dtype=float)[sel]
+        kind = "anchored at the healthy data"
+    else:
+        re = np.asarray(report["damage_dynamics_re"], dtype=float)[sel]
+        lo = np.asarray(report["damage_bound_min_abs"], dtype=float)[sel]
+        hi = np.asarray(report["damage_bound_max_abs"], dtype=float)[sel]
+        kind = "nominal E22 (eq. 3.11; carries the model error)"
+    if re.size == 0 or not np.any(np.isfinite(re)):
+        return []
+    significant = int(np.count_nonzero(lo > 0))
+    return [f"Damage dynamics at {report['damage_port']} ({kind}), {where}: Re D_u = {np.nanmedian(re):.4g} N/m "
+            f"(positive: a stiffness loss); |D_u| within [{np.nanmedian(lo):.4g}, {np.nanmedian(hi):.4g}] N/m "
+            f"(medians of the bound); the bound excludes 0 at {significant} of {re.size} points.", ""]
 
 
 def _step(report: dict[str, Any]) -> float:
@@ -180,7 +209,9 @@ def _what_changed(report: dict[str, Any], f: np.ndarray, fault: np.ndarray, d: n
                      f"sweeps' noise{f' at {conf:.0%} family-wise confidence' if conf else ''}{extra}), {where}: "
                      f"median Re D_u = {np.median(a[sel].real):.4g} N/m (positive: a stiffness loss).")
         lines.append("")
-        idx = np.flatnonzero(sel)[:8]
+        idx = np.flatnonzero(sel)
+        lines.append(f"All {idx.size} {'fault points' if np.any(fault) else 'points'} (also in fault_points.csv):")
+        lines.append("")
         lines.append("| f (Hz) | D_u anchored (N/m) | min abs | max abs | D_u nominal E22 (N/m) |")
         lines.append("|---:|---:|---:|---:|---:|")
         for i in idx:
@@ -191,7 +222,8 @@ def _what_changed(report: dict[str, Any], f: np.ndarray, fault: np.ndarray, d: n
                      "nominal model's own error of E22; read the anchored one.")
         lines.append("")
     elif np.any(fault):
-        idx = np.flatnonzero(fault)[:5]
+        idx = np.flatnonzero(fault)
+        lines += [f"All {idx.size} fault points (also in fault_points.csv):", ""]
         lines.append("| f (Hz) | gamma healthy | gamma required | D_u (N/m) | min abs D_u | max abs D_u |")
         lines.append("|---:|---:|---:|---:|---:|---:|")
         for i in idx:
@@ -202,13 +234,18 @@ def _what_changed(report: dict[str, Any], f: np.ndarray, fault: np.ndarray, d: n
     return lines
 
 
-def write_reports(report: dict[str, Any], out_dir: str | Path, plots: list[str]) -> list[Path]:
-    """Render all three files, then write each atomically. Returns the paths."""
+def write_reports(report: dict[str, Any], out_dir: str | Path, plots: list[str],
+                  baseline_path: str | Path | None = None) -> list[Path]:
+    """Render all four files (report.json, report.md, fault_points.csv, report.html with the figures
+    embedded), then write each atomically. Returns the paths."""
+    from rotorcheck.report.html import render_detection_html
+
     out = Path(out_dir)
     texts = {
         "report.json": render_json(report),
         "report.md": render_markdown(report, plots),
         "fault_points.csv": render_csv(report),
+        "report.html": render_detection_html(report, plots, baseline_path),
     }
     paths = []
     for name, text in texts.items():

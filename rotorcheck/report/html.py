@@ -1,0 +1,258 @@
+"""Self-contained HTML reports: ``report.html`` beside a detection's report.json, ``location.html``
+beside a location's location.json.
+
+One file that opens offline in any browser: the verdict and the rule that made it, the numbers, every
+figure embedded (PNG as base64 data URIs), the tables in full, the inputs with their sha256 and the
+software versions. No script, no external style sheet, font or image.
+"""
+
+from __future__ import annotations
+
+import base64
+import hashlib
+import html
+import platform
+from collections.abc import Iterable, Sequence
+from datetime import datetime, timezone
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+VERDICT_COLOUR = {"damage": "#b00020", "healthy": "#1b7a2f", "inconclusive": "#a66a00", "located": "#b00020",
+                  "nothing to locate": "#1b7a2f"}
+
+_STYLE = """
+body{font-family:system-ui,-apple-system,"Segoe UI",Roboto,Helvetica,Arial,sans-serif;margin:2em auto;
+max-width:1100px;color:#222;line-height:1.4;padding:0 1em}
+h1{font-size:1.6em;margin-bottom:.2em} h2{border-bottom:1px solid #ccc;padding-bottom:.2em;margin-top:1.6em}
+.verdict{display:inline-block;color:#fff;padding:.25em .8em;border-radius:4px;font-weight:700;letter-spacing:.05em}
+table{border-collapse:collapse;margin:.6em 0;font-size:.9em} th,td{border:1px solid #ccc;padding:.25em .6em}
+th{background:#f2f2f2;text-align:left} td.num{text-align:right;font-variant-numeric:tabular-nums}
+figure{margin:1em 0} figure img{max-width:100%;border:1px solid #ddd} figcaption{font-size:.9em;color:#555}
+.rule{background:#f7f7f7;border-left:4px solid #888;padding:.4em .8em} code{font-size:.9em}
+.scroll{max-height:32em;overflow:auto;border:1px solid #eee}
+"""
+
+#: what each figure shows, by file stem (the caption under it)
+CAPTIONS = {
+    "detection_decision": "The decision: per frequency the ratio that decides a fault point (above 1: the new data "
+                          "cannot be explained), and with the joint test its statistic against the threshold.",
+    "detection_bode": "Bode magnitude and phase: the nominal model, the healthy data, the range over the "
+                      "uncertainty set, the new data and its fault points (red circles).",
+    "detection_complex_plane": "The complex plane at one frequency: the uncertainty set (disk), the data and its "
+                               "noise bound; its distance from the set in radii is in the title.",
+    "damage_dynamics": "Damage dynamics D_u at the damage port with its bound; faint where the bound holds 0 (not "
+                       "significant), hatched where the bound is unbounded.",
+    "location": "The shaft: every candidate element by its status, and the certified stiffness-loss intervals.",
+}
+
+
+def _e(x: Any) -> str:
+    return html.escape(str(x))
+
+
+def _num(x: Any, fmt: str = ".4g") -> str:
+    try:
+        v = float(x)
+    except (TypeError, ValueError):
+        return _e(x)
+    return format(v, fmt) if np.isfinite(v) else _e(x if isinstance(x, str) else ("inf" if v > 0 else "nan"))
+
+
+def file_sha256(path: str | Path) -> str | None:
+    """sha256 of a file's bytes, or None when it cannot be read."""
+    try:
+        h = hashlib.sha256()
+        with open(path, "rb") as fh:
+            for chunk in iter(lambda: fh.read(1 << 20), b""):
+                h.update(chunk)
+        return h.hexdigest()
+    except OSError:
+        return None
+
+
+def table(header: Sequence[str], rows: Iterable[Sequence[Any]], numeric: Sequence[bool] | None = None) -> str:
+    """An HTML table; ``rows`` already formatted (escaped here)."""
+    num = list(numeric) if numeric is not None else [False] * len(header)
+    head = "".join(f"<th>{_e(h)}</th>" for h in header)
+    body = "".join("<tr>" + "".join(f"<td class=\"num\">{_e(c)}</td>" if n else f"<td>{_e(c)}</td>"
+                                    for c, n in zip(r, num)) + "</tr>" for r in rows)
+    return f"<table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>"
+
+
+def figures_html(plots: Sequence[str | Path]) -> str:
+    """Every PNG of ``plots`` embedded as a figure with its caption; other formats listed by name."""
+    parts = []
+    for p in plots:
+        path = Path(p)
+        if path.suffix.lower() == ".png" and path.is_file():
+            data = base64.b64encode(path.read_bytes()).decode("ascii")
+            cap = CAPTIONS.get(path.stem, "")
+            parts.append(f"<figure id=\"fig-{_e(path.stem)}\"><img alt=\"{_e(path.stem)}\" "
+                         f"src=\"data:image/png;base64,{data}\"><figcaption><b>{_e(path.name)}</b>"
+                         f"{': ' + _e(cap) if cap else ''}</figcaption></figure>")
+    others = [Path(p).name for p in plots if Path(p).suffix.lower() != ".png"]
+    if others:
+        parts.append("<p>Also written: " + ", ".join(f"<code>{_e(n)}</code>" for n in others) + ".</p>")
+    if not parts:
+        parts.append("<p>No figures (run without <code>--no-plots</code> and with PNG in <code>--plot-format</code> "
+                     "to embed them).</p>")
+    return "\n".join(parts)
+
+
+def provenance(inputs: Sequence[tuple[str, str | None, str | None]]) -> str:
+    """The inputs (what, path, sha256) and the software that made the report."""
+    from rotorcheck import __version__
+
+    rows = [(what, path or "", sha or "") for what, path, sha in inputs]
+    import scipy
+
+    soft = [("rotorcheck", __version__), ("python", platform.python_version()), ("numpy", np.__version__),
+            ("scipy", scipy.__version__), ("platform", platform.platform())]
+    when = datetime.now(timezone.utc).strftime("%Y-%m-%d %H:%M:%S UTC")
+    return ("<h2>Inputs and software</h2>" + table(("input", "file", "sha256"), rows)
+            + table(("software", "version"), soft) + f"<p>Written {_e(when)}.</p>")
+
+
+def page(title: str, body: str) -> str:
+    """A complete HTML5 document, no external resources."""
+    return ("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
+            "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">"
+            f"<title>{_e(title)}</title><style>{_STYLE}</style></head><body>\n{body}\n</body></html>\n")
+
+
+def _verdict_badge(verdict: str) -> str:
+    colour = VERDICT_COLOUR.get(verdict, "#555")
+    return f"<span class=\"verdict\" id=\"verdict\" style=\"background:{colour}\">{_e(verdict.upper())}</span>"
+
+
+def _key_numbers(report: dict[str, Any]) -> list[tuple[str, str]]:
+    rows = [("fault points", f"{report['n_fault_points']} of {report['n_points']}"),
+            ("band", f"{_num(report['band_hz'][0], 'g')}-{_num(report['band_hz'][1], 'g')} Hz"),
+            ("speed", f"{_num(report['speed_rpm'], 'g')} rpm"),
+            ("noise bound (baseline)", f"{_num(report['noise_bound_m'] * 1e6)} um ({report['noise_method']})"),
+            ("baseline", f"uncertainty {report['uncertainty']}, enclose {report['enclose']}")]
+    if "p_value" in report:
+        rows.append(("sweep p-value (per-point test)", f"{_num(report['p_value'], '.3g')} at "
+                                                        f"{report['confidence']:.0%} family-wise confidence"))
+    if "joint_statistic" in report:
+        p = _num(report["joint_p_value"], ".3g")
+        rows.append(("joint statistic T", f"{_num(report['joint_statistic'])} against threshold "
+                                          f"{_num(report['joint_threshold'])} (p = {p}, "
+                                          f"false alarm {report['false_alarm']:g} per sweep)"))
+    if report.get("best_element") is not None:
+        lo, hi = report["stiffness_loss_interval"]
+        loss = 100 * report["stiffness_loss"]
+        rows.append(("best candidate element", f"element {report['best_element']}: stiffness loss "
+                                               f"{loss:.3g} % [{100 * lo:.3g}, {100 * hi:.3g}] (95 %, linearized)"))
+    if report.get("channel_pairs"):
+        rows.append(("channel pairs (output<-input)", ", ".join(report["channel_pairs"])))
+    return rows
+
+
+def _fault_rows(report: dict[str, Any]) -> tuple[list[str], list[list[str]]]:
+    f = np.asarray(report["frequency_hz"], dtype=float)
+    fault = np.asarray(report["fault"], dtype=bool)
+    gh = np.asarray(report["gamma_healthy"], dtype=float)
+    gr = np.asarray(report["gamma_required"], dtype=float)
+    anchored = "damage_dynamics_anchored_re" in report
+    if anchored:
+        dre, dim = report["damage_dynamics_anchored_re"], report["damage_dynamics_anchored_im"]
+        lo, hi = report["damage_anchored_bound_min_abs"], report["damage_anchored_bound_max_abs"]
+    else:
+        dre, dim = report["damage_dynamics_re"], report["damage_dynamics_im"]
+        lo, hi = report["damage_bound_min_abs"], report["damage_bound_max_abs"]
+    header = ["f (Hz)", "gamma healthy", "gamma required", "ratio",
+              f"D_u{' anchored' if anchored else ''} (N/m)", "min |D_u| (N/m)", "max |D_u| (N/m)"]
+    rows = []
+    for i in np.flatnonzero(fault):
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ratio = gr[i] / gh[i]
+        rows.append([_num(f[i], ".2f"), _num(gh[i], ".4e"), _num(gr[i], ".4e"), _num(ratio, ".4g"),
+                     f"{_num(dre[i])}{float(dim[i]):+.3g}j", _num(lo[i]), _num(hi[i])])
+    return header, rows
+
+
+def render_detection_html(report: dict[str, Any], plots: Sequence[str | Path],
+                          baseline_path: str | Path | None = None) -> str:
+    """report.html of a detection: verdict and rule, the numbers, the figures embedded, every fault point,
+    the benign parameters, the location (detect --locate), the inputs with hashes, the software."""
+    from rotorcheck.report.reports import headline_damage
+
+    verdict = str(report["verdict"])
+    parts = [f"<h1>rotorcheck detection: {_verdict_badge(verdict)}</h1>",
+             f"<p>Sweep <code>{_e(report['sweep'])}</code> (run <code>{_e(report['run_id'])}</code>) on rig "
+             f"<code>{_e(report['rig_id'])}</code> at {_num(report['speed_rpm'], 'g')} rpm; damage port "
+             f"{_e(report['damage_port'])}.</p>",
+             f"<p id=\"reason\"><b>{_e(verdict)}</b>: {_e(report['verdict_reason'])}.</p>",
+             f"<p class=\"rule\" id=\"rule\"><b>Rule.</b> {_e(report['verdict_rule'])}</p>"]
+    parts += [f"<p>{_e(line)}</p>" for line in headline_damage(report) if line]
+    parts.append("<h2>The numbers</h2>" + table(("quantity", "value"), _key_numbers(report)))
+    if report.get("benign_parameters"):
+        rows = [[b["name"], f"{b['estimate']:+.4g}", f"[{b['interval'][0]:+.4g}, {b['interval'][1]:+.4g}]", b["unit"],
+                 "yes" if b.get("at_range_edge") else "no"] for b in report["benign_parameters"]]
+        parts.append("<h2>Benign change fitted (inside the rig's variability ranges)</h2>"
+                     + table(("parameter", "estimate", "95 % interval", "unit", "at range edge"), rows,
+                             (False, True, False, False, False)))
+    parts.append("<h2>Figures</h2>" + figures_html(plots))
+    header, rows = _fault_rows(report)
+    parts.append(f"<h2>Fault points: all {len(rows)}</h2>"
+                 + (f"<div class=\"scroll\">{table(header, rows, [True] * len(header))}</div>" if rows
+                    else "<p>None.</p>"))
+    status = np.asarray(report["status"]).astype(str)
+    other = [(s, int(np.count_nonzero(status == s))) for s in np.unique(status) if s not in ("ok", "fault")]
+    if other:
+        parts.append("<p>Points not decided: " + ", ".join(f"{n} with status <code>{_e(s)}</code>" for s, n in other)
+                     + ".</p>")
+    loc = report.get("location")
+    if loc:
+        parts.append("<h2>Location</h2>" + location_table(loc))
+    if report.get("notes"):
+        parts.append("<h2>Notes</h2><ul>" + "".join(f"<li>{_e(n)}</li>" for n in report["notes"]) + "</ul>")
+    inputs = [("sweep", str(report["sweep"]), report.get("sweep_sha256")),
+              ("rig", str(report["rig_id"]), report.get("rig_sha256"))]
+    if baseline_path is not None:
+        inputs.append(("baseline", str(baseline_path), file_sha256(baseline_path)))
+    parts.append(provenance(inputs))
+    return page(f"rotorcheck: {verdict} - {Path(str(report['sweep'])).name}", "\n".join(parts))
+
+
+def location_table(loc: dict[str, Any]) -> str:
+    """Every candidate element: status, rank, certified loss and depth intervals, what excluded it."""
+    def interval(x: Any, scale: float = 100.0) -> str:
+        if not x:
+            return ""
+        lo, hi = x
+        a = "" if lo is None else format(scale * float(lo), ".3g")
+        b = "50+" if hi is None else format(scale * float(hi), ".3g")
+        return f"[{a}, {b}]"
+
+    rows = []
+    for c in loc.get("candidates", []):
+        exc = c.get("excluding_frequencies_hz") or []
+        rows.append([c["element"], c["status"], "" if c.get("rank") is None else c["rank"],
+                     interval(c.get("loss_interval")), interval(c.get("depth_interval")),
+                     ", ".join(f"{x:.1f}" for x in exc[:12]) + (f" (+{len(exc) - 12} more)" if len(exc) > 12 else "")])
+    best = loc.get("best_element")
+    head = f"<p>Best element: <b>{_e(best)}</b>.</p>" if best is not None else "<p>No element located.</p>"
+    return head + table(("element", "status", "rank", "stiffness loss (%)", "crack depth (% of diameter)",
+                         "excluded by (Hz)"), rows, (True, False, True, False, False, False))
+
+
+def render_location_html(doc: dict[str, Any], plots: Sequence[str | Path], rig_sha256: str | None = None) -> str:
+    """location.html of a locate run: the summary, the figure, every candidate, inputs, software."""
+    best = doc.get("best_element")
+    parts = [f"<h1>rotorcheck location: {_verdict_badge('located' if best is not None else 'nothing to locate')}</h1>",
+             f"<p>Sweep <code>{_e(doc['sweep'])}</code> on rig <code>{_e(doc['rig_id'])}</code> at "
+             f"{_num(doc['speed_rpm'], 'g')} rpm.</p>",
+             f"<p id=\"reason\">{_e(doc.get('summary', ''))}</p>"]
+    if doc.get("rule"):
+        parts.append(f"<p class=\"rule\" id=\"rule\"><b>Rule.</b> {_e(doc['rule'])}</p>")
+    parts.append("<h2>Figure</h2>" + figures_html(plots))
+    parts.append("<h2>Candidates: all</h2>" + location_table(doc))
+    parts.append(provenance([("sweep", str(doc["sweep"]), doc.get("sweep_sha256")),
+                             ("rig", str(doc["rig_id"]), rig_sha256),
+                             ("baseline", str(doc.get("baseline", "")), file_sha256(doc["baseline"])
+                              if doc.get("baseline") else None)]))
+    return page(f"rotorcheck location - {Path(str(doc['sweep'])).name}", "\n".join(parts))
