@@ -6,7 +6,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: venv demo test lint samples golden bench clean
+.PHONY: venv demo test lint samples golden bench clean fleet-demo
 
 $(STAMP): pyproject.toml
 	$(PY) -m venv $(VENV)
@@ -60,6 +60,17 @@ wheel-check: $(STAMP)
 	rc=0; "$$R" detect "$$S/crack_rig/breathing_crack_1000rpm.h5" --no-plots || rc=$$?; \
 	if [ $$rc -ne 1 ]; then echo "wheel-check: detect exited $$rc, expected 1 (damage)"; exit 1; fi; \
 	echo "wheel-check: ok"
+
+# issue 15: a simulated fleet (20 machines x 10 sweeps: two growing cracks, one benign bearing drift) in a
+# temporary folder, then `rotorcheck fleet` on it (local processes), printing the alert list
+fleet-demo: $(STAMP)
+	@set -e; tmp=$$(mktemp -d); trap 'rm -rf "$$tmp"' EXIT; \
+	export MPLBACKEND=Agg OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1; \
+	$(BIN)/python -m tools.fleet_sim "$$tmp/fleet" --machines 20 --sweeps 10 --seed 0; \
+	rc=0; $(BIN)/python -m rotorcheck fleet "$$tmp/fleet" --limit 3000 || rc=$$?; \
+	if [ $$rc -gt 1 ]; then echo "fleet-demo: rotorcheck fleet exited $$rc"; exit $$rc; fi; \
+	echo "--- alert list ($$tmp/fleet/results/alerts.txt; exit $$rc: 1 = a machine in alarm)"; \
+	cat "$$tmp/fleet/results/alerts.txt"
 
 clean:
 	rm -rf $(VENV) rotorcheck-out .pytest_cache

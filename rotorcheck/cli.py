@@ -872,6 +872,16 @@ def import_ross_cmd(
     return EXIT_OK
 
 
+def _register_fleet() -> None:
+    """`rotorcheck fleet` (issue 15): many machines over time (rotorcheck.fleet)."""
+    from rotorcheck.fleet import command as fleet_command
+
+    fleet_command.register(app)
+
+
+_register_fleet()
+
+
 # --------------------------------------------------------------------------------------------
 # entry point
 

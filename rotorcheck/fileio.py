@@ -132,7 +132,8 @@ def atomic_write_bytes(path: str | os.PathLike[str], data: bytes, *, overwrite: 
 MANIFEST_NAME = ".rotorcheck-manifest.json"
 
 
-def _file_sha256(path: Path) -> str:
+def file_sha256(path: str | os.PathLike[str]) -> str:
+    """SHA-256 hex digest of a file's bytes (read in 1 MiB chunks)."""
     h = hashlib.sha256()
     with open(path, "rb") as fh:
         for chunk in iter(lambda: fh.read(1 << 20), b""):
@@ -161,7 +162,7 @@ def check_replaceable(paths: Iterable[str | Path], force: bool) -> None:
         if not p.exists():
             continue
         known = _manifest(p.parent).get(p.name)
-        if known is None or not p.is_file() or _file_sha256(p) != known:
+        if known is None or not p.is_file() or file_sha256(p) != known:
             blocked.append(str(p))
     if blocked:
         raise OutputExistsError(
@@ -177,7 +178,7 @@ def record_outputs(paths: Iterable[str | Path]) -> None:
         by_folder.setdefault(p.parent, []).append(p)
     for folder, files in by_folder.items():
         entries = _manifest(folder)
-        entries.update({f.name: _file_sha256(f) for f in files})
+        entries.update({f.name: file_sha256(f) for f in files})
         doc = {"schema": "rotorcheck.outputs", "note": "files rotorcheck wrote here; it replaces them on a "
                "later run only while unchanged", "files": dict(sorted(entries.items()))}
         atomic_write_text(folder / MANIFEST_NAME, json.dumps(doc, indent=1) + "\n")

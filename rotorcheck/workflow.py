@@ -1819,10 +1819,9 @@ def validation_plots(outcome: ValidationOutcome, out_dir: str | Path, at_hz: flo
                      formats: tuple[str, ...] = ("png",), baseline_path: str | Path | None = None,
                      frf_unit: str = "m/N") -> list[str]:
     """:func:`validation_figures` written to ``out_dir`` (``formats``); returns the written paths."""
-    from rotorcheck.report.figures import save_figure
+    from rotorcheck.report.figures import save_figures
 
-    figs = validation_figures(outcome, at_hz, baseline_path, frf_unit)
-    return [str(p) for stem, fig in figs.items() for p in save_figure(fig, Path(out_dir) / stem, formats)]
+    return save_figures(validation_figures(outcome, at_hz, baseline_path, frf_unit), out_dir, formats)
 
 
 def validation_figures(outcome: ValidationOutcome, at_hz: float | None = None,
@@ -1847,10 +1846,9 @@ def detection_plots(outcome: DetectionOutcome, out_dir: str | Path, at_hz: float
                     formats: tuple[str, ...] = ("png",), baseline_path: str | Path | None = None,
                     frf_unit: str = "m/N") -> list[str]:
     """:func:`detection_figures` written to ``out_dir`` (``formats``); returns the written paths."""
-    from rotorcheck.report.figures import save_figure
+    from rotorcheck.report.figures import save_figures
 
-    figs = detection_figures(outcome, at_hz, baseline_path, frf_unit)
-    return [str(p) for stem, fig in figs.items() for p in save_figure(fig, Path(out_dir) / stem, formats)]
+    return save_figures(detection_figures(outcome, at_hz, baseline_path, frf_unit), out_dir, formats)
 
 
 def detection_figures(outcome: DetectionOutcome, at_hz: float | None = None,

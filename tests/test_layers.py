@@ -31,6 +31,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("rotorcheck.detectability",),  # what a rig, its sensors and noise can detect, per element
     ("rotorcheck.baseline", "rotorcheck.report"),
     ("rotorcheck.workflow",),
+    ("rotorcheck.fleet",),  # many machines over time: tasks over the workflow, summary, trends (issue 15)
     ("rotorcheck.cli",),
     ("rotorcheck.__main__",),
 )

@@ -26,3 +26,8 @@ def save_figure(
             fig.savefig(fh, format=fmt, dpi=dpi)
         written.append(target)
     return written
+
+
+def save_figures(figures: dict[str, Figure], out_dir: str | Path, formats: tuple[str, ...] = ("png",)) -> list[str]:
+    """Every figure of ``figures`` (by file stem) into ``out_dir`` in ``formats``; the written paths."""
+    return [str(p) for stem, fig in figures.items() for p in save_figure(fig, Path(out_dir) / stem, formats)]

@@ -9,7 +9,6 @@ software versions. No script, no external style sheet, font or image.
 from __future__ import annotations
 
 import base64
-import hashlib
 import html
 import platform
 from collections.abc import Iterable, Sequence
@@ -60,14 +59,12 @@ def _num(x: Any, fmt: str = ".4g") -> str:
     return format(v, fmt) if np.isfinite(v) else _e(x if isinstance(x, str) else ("inf" if v > 0 else "nan"))
 
 
-def file_sha256(path: str | Path) -> str | None:
+def sha256_or_none(path: str | Path) -> str | None:
     """sha256 of a file's bytes, or None when it cannot be read."""
+    from rotorcheck.fileio import file_sha256
+
     try:
-        h = hashlib.sha256()
-        with open(path, "rb") as fh:
-            for chunk in iter(lambda: fh.read(1 << 20), b""):
-                h.update(chunk)
-        return h.hexdigest()
+        return file_sha256(path)
     except OSError:
         return None
 
@@ -213,7 +210,7 @@ def render_detection_html(report: dict[str, Any], plots: Sequence[str | Path],
     inputs = [("sweep", str(report["sweep"]), report.get("sweep_sha256")),
               ("rig", str(report["rig_id"]), report.get("rig_sha256"))]
     if baseline_path is not None:
-        inputs.append(("baseline", str(baseline_path), file_sha256(baseline_path)))
+        inputs.append(("baseline", str(baseline_path), sha256_or_none(baseline_path)))
     parts.append(provenance(inputs))
     return page(f"rotorcheck: {verdict} - {Path(str(report['sweep'])).name}", "\n".join(parts))
 
@@ -253,6 +250,6 @@ def render_location_html(doc: dict[str, Any], plots: Sequence[str | Path], rig_s
     parts.append("<h2>Candidates: all</h2>" + location_table(doc))
     parts.append(provenance([("sweep", str(doc["sweep"]), doc.get("sweep_sha256")),
                              ("rig", str(doc["rig_id"]), rig_sha256),
-                             ("baseline", str(doc.get("baseline", "")), file_sha256(doc["baseline"])
+                             ("baseline", str(doc.get("baseline", "")), sha256_or_none(doc["baseline"])
                               if doc.get("baseline") else None)]))
     return page(f"rotorcheck location - {Path(str(doc['sweep'])).name}", "\n".join(parts))

@@ -22,7 +22,6 @@ xarray read as complex. The reader ignores the labels.
 
 from __future__ import annotations
 
-import hashlib
 import os
 from typing import Any
 
@@ -482,10 +481,8 @@ def _write_run_v2(g: h5py.Group, run: Run) -> None:
 
 def sweep_sha256(path: str | os.PathLike[str]) -> str:
     """SHA-256 hex digest of the file bytes."""
-    h = hashlib.sha256()
-    with open(path, "rb") as fh:
-        for chunk in iter(lambda: fh.read(1 << 20), b""):
-            h.update(chunk)
-    return h.hexdigest()
+    from rotorcheck.fileio import file_sha256
+
+    return file_sha256(path)
 
 __all__ = ["DATASET_UNITS", "read_sweep", "sweep_sha256", "write_sweep"]

@@ -93,7 +93,7 @@ def test_locate_writes_its_own_html(tmp_path: Path) -> None:
     out = tmp_path / "loc"
     assert main(["fit-noise", str(CR / "healthy_0rpm.h5"), "--out", str(out)]) == 0
     assert main(["validate", str(CR / "healthy_0rpm.h5"), "--out", str(out)]) == 0
-    assert main(["locate", str(CR / "open_crack_0rpm.h5"), "--out", str(out)]) == EXIT_DAMAGE
+    assert main(["locate", str(CR / "open_crack_0rpm.h5"), "--out", str(out), "--elements", "3,4,5"]) == EXIT_DAMAGE
     doc = json.loads((out / "location.json").read_text())
     text = (out / "location.html").read_text()
     srcs = re.findall(r'(?:src|href)="([^"]*)"', text)
