@@ -47,6 +47,10 @@ def test_cracks_alarmed_others_not(full_run: tuple[Path, Any], small_fleet: tupl
         last = [r for r in rows if r["machine"] == m][-1]
         want = truth[m]["sweeps"][-1]["du_low_true_n_per_m"]
         assert float(last["du_low_re_n_per_m"]) == pytest.approx(want, rel=0.15)
+    # the trend brackets the true growth of the figure (its noise-free rate from the simulated crack)
+    for m in cracked:
+        lo, hi = res.trends[m].to_dict()["slope_interval_n_per_m_per_day"]
+        assert lo <= truth[m]["growth_true_n_per_m_per_day"] <= hi, (m, lo, hi)
     h5 = read_hdf5(out / "summary.h5")
     assert h5["machine"] == [r["machine"] for r in rows]
     assert h5["du_low_re_n_per_m"] == [float(r["du_low_re_n_per_m"]) for r in rows]
