@@ -30,7 +30,7 @@ table{border-collapse:collapse;margin:.6em 0;font-size:.9em} th,td{border:1px so
 th{background:#f2f2f2;text-align:left} td.num{text-align:right;font-variant-numeric:tabular-nums}
 figure{margin:1em 0} figure img{max-width:100%;border:1px solid #ddd} figcaption{font-size:.9em;color:#555}
 .rule{background:#f7f7f7;border-left:4px solid #888;padding:.4em .8em} code{font-size:.9em}
-.scroll{max-height:32em;overflow:auto;border:1px solid #eee}
+td.hash{font-family:ui-monospace,monospace;font-size:.85em;word-break:break-all}
 """
 
 #: what each figure shows, by file stem (the caption under it)
@@ -69,12 +69,13 @@ def sha256_or_none(path: str | Path) -> str | None:
         return None
 
 
-def table(header: Sequence[str], rows: Iterable[Sequence[Any]], numeric: Sequence[bool] | None = None) -> str:
-    """An HTML table; ``rows`` already formatted (escaped here)."""
-    num = list(numeric) if numeric is not None else [False] * len(header)
+def table(header: Sequence[str], rows: Iterable[Sequence[Any]], numeric: Sequence[bool | str] | None = None) -> str:
+    """An HTML table; ``rows`` already formatted (escaped here). ``numeric`` per column: True (right-aligned
+    numbers), a class name (``"hash"``: a long digest that may break anywhere) or False."""
+    cls = [("num" if n is True else (n or "")) for n in (numeric if numeric is not None else [False] * len(header))]
     head = "".join(f"<th>{_e(h)}</th>" for h in header)
-    body = "".join("<tr>" + "".join(f"<td class=\"num\">{_e(c)}</td>" if n else f"<td>{_e(c)}</td>"
-                                    for c, n in zip(r, num)) + "</tr>" for r in rows)
+    body = "".join("<tr>" + "".join(f"<td class=\"{k}\">{_e(c)}</td>" if k else f"<td>{_e(c)}</td>"
+                                    for c, k in zip(r, cls)) + "</tr>" for r in rows)
     return f"<table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>"
 
 
@@ -108,7 +109,7 @@ def provenance(inputs: Sequence[tuple[str, str | None, str | None]]) -> str:
     soft = [("rotorcheck", __version__), ("python", platform.python_version()), ("numpy", np.__version__),
             ("scipy", scipy.__version__), ("platform", platform.platform())]
     when = datetime.now(timezone.utc).strftime("%Y-%m-%d %H:%M:%S UTC")
-    return ("<h2>Inputs and software</h2>" + table(("input", "file", "sha256"), rows)
+    return ("<h2>Inputs and software</h2>" + table(("input", "file", "sha256"), rows, (False, False, "hash"))
             + table(("software", "version"), soft) + f"<p>Written {_e(when)}.</p>")
 
 
@@ -124,6 +125,20 @@ def _verdict_badge(verdict: str) -> str:
     return f"<span class=\"verdict\" id=\"verdict\" style=\"background:{colour}\">{_e(verdict.upper())}</span>"
 
 
+def _interval(x: Sequence[Any]) -> str:
+    """"[lo, hi]" with signs, or a sentence where the interval is not defined (a parameter at its range edge)."""
+    lo, hi = (float(v) for v in x)
+    if not (np.isfinite(lo) and np.isfinite(hi)):
+        return "not defined (at the range edge)"
+    return f"[{lo:+.4g}, {hi:+.4g}]"
+
+
+def _p(p: Any) -> str:
+    """A p-value; 0 (below the float resolution of its computation) as "< 1e-15"."""
+    v = float(p)
+    return "< 1e-15" if v < 1e-15 else format(v, ".3g")
+
+
 def _key_numbers(report: dict[str, Any]) -> list[tuple[str, str]]:
     rows = [("fault points", f"{report['n_fault_points']} of {report['n_points']}"),
             ("band", f"{_num(report['band_hz'][0], 'g')}-{_num(report['band_hz'][1], 'g')} Hz"),
@@ -131,10 +146,10 @@ def _key_numbers(report: dict[str, Any]) -> list[tuple[str, str]]:
             ("noise bound (baseline)", f"{_num(report['noise_bound_m'] * 1e6)} um ({report['noise_method']})"),
             ("baseline", f"uncertainty {report['uncertainty']}, enclose {report['enclose']}")]
     if "p_value" in report:
-        rows.append(("sweep p-value (per-point test)", f"{_num(report['p_value'], '.3g')} at "
+        rows.append(("sweep p-value (per-point test)", f"{_p(report['p_value'])} at "
                                                         f"{report['confidence']:.0%} family-wise confidence"))
     if "joint_statistic" in report:
-        p = _num(report["joint_p_value"], ".3g")
+        p = _p(report["joint_p_value"])
         rows.append(("joint statistic T", f"{_num(report['joint_statistic'])} against threshold "
                                           f"{_num(report['joint_threshold'])} (p = {p}, "
                                           f"false alarm {report['false_alarm']:g} per sweep)"))
@@ -187,7 +202,7 @@ def render_detection_html(report: dict[str, Any], plots: Sequence[str | Path],
     parts += [f"<p>{_e(line)}</p>" for line in headline_damage(report) if line]
     parts.append("<h2>The numbers</h2>" + table(("quantity", "value"), _key_numbers(report)))
     if report.get("benign_parameters"):
-        rows = [[b["name"], f"{b['estimate']:+.4g}", f"[{b['interval'][0]:+.4g}, {b['interval'][1]:+.4g}]", b["unit"],
+        rows = [[b["name"], f"{b['estimate']:+.4g}", _interval(b["interval"]), b["unit"],
                  "yes" if b.get("at_range_edge") else "no"] for b in report["benign_parameters"]]
         parts.append("<h2>Benign change fitted (inside the rig's variability ranges)</h2>"
                      + table(("parameter", "estimate", "95 % interval", "unit", "at range edge"), rows,
@@ -195,8 +210,7 @@ def render_detection_html(report: dict[str, Any], plots: Sequence[str | Path],
     parts.append("<h2>Figures</h2>" + figures_html(plots))
     header, rows = _fault_rows(report)
     parts.append(f"<h2>Fault points: all {len(rows)}</h2>"
-                 + (f"<div class=\"scroll\">{table(header, rows, [True] * len(header))}</div>" if rows
-                    else "<p>None.</p>"))
+                 + (table(header, rows, [True] * len(header)) if rows else "<p>None.</p>"))
     status = np.asarray(report["status"]).astype(str)
     other = [(s, int(np.count_nonzero(status == s))) for s in np.unique(status) if s not in ("ok", "fault")]
     if other:

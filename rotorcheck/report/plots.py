@@ -283,14 +283,22 @@ def complex_plane_figure(
     disks of the data (their own noise bound, m/N) and the distance of the new data from the set."""
     ctx = context or FigureContext(rig_id="")
     s = ctx.frf_scale
-    fig = Figure(figsize=(8.0, 5.6), layout="constrained")
+    fig = Figure(figsize=(10.0, 5.6), layout="constrained")
     ax = fig.subplots()
     t = np.linspace(0, 2 * np.pi, 361)
     c = complex(centre) * s
     if np.isfinite(radius):
         ax.fill(c.real + s * radius * np.cos(t), c.imag + s * radius * np.sin(t), color=COLOURS["band"], alpha=0.2,
                 label=f"{set_label} (radius {s * radius:.3g} {ctx.frf_unit})")
-    ax.plot(s * model.real, s * model.imag, "s", color=COLOURS["model"], label="nominal model")
+    # frame the set and the data (the decision is read there); the model and the origin only when near
+    c0 = complex(centre)
+    near = [complex(z) for z in (healthy, damaged) if z is not None]
+    r_fin = float(radius) if np.isfinite(radius) else 0.0
+    half = max([1.3 * abs(z - c0) for z in near] + [1.6 * r_fin, 1e-300])
+    model_far = abs(complex(model) - c0) > 2.5 * half
+    if not model_far:
+        half = max(half, 1.3 * abs(complex(model) - c0))
+        ax.plot(s * model.real, s * model.imag, "s", color=COLOURS["model"], label="nominal model")
     for z, noise, key, label in ((healthy, healthy_noise, "healthy", "healthy data"),
                                  (damaged, damaged_noise, "new", "new data")):
         if z is None:
@@ -299,8 +307,18 @@ def complex_plane_figure(
         if noise is not None and np.isfinite(noise):
             ax.plot(s * z.real + s * noise * np.cos(t), s * z.imag + s * noise * np.sin(t), ":", color=COLOURS[key],
                     lw=1.0, label=f"{label}: its noise bound ({s * noise:.3g} {ctx.frf_unit})")
-    ax.plot(0, 0, "+", color="grey", ms=10, label="origin")
+    if abs(c0) <= half:
+        ax.plot(0, 0, "+", color="grey", ms=10, label="origin")
+    ax.set_xlim(s * (c0.real - half), s * (c0.real + half))
+    ax.set_ylim(s * (c0.imag - half), s * (c0.imag + half))
     ax.set_aspect("equal", adjustable="datalim")
+    if model_far:
+        d = complex(model) - c0
+        u = d / abs(d)
+        ax.annotate(f"nominal model: {abs(d) / half:.3g} frame\nhalf-widths away", xycoords="axes fraction",
+                    xy=(0.5 + 0.49 * u.real, 0.5 + 0.49 * u.imag), xytext=(0.5 + 0.36 * u.real, 0.5 + 0.36 * u.imag),
+                    textcoords="axes fraction", fontsize=7, color=COLOURS["model"],
+                    ha="center", arrowprops={"arrowstyle": "->", "color": COLOURS["model"]}, gid="model_off_frame")
     ax.set_xlabel(f"Re ({ctx.frf_unit})")
     ax.set_ylabel(f"Im ({ctx.frf_unit})")
     extra = ""

@@ -224,6 +224,21 @@ def test_complex_plane_draws_the_set_and_the_data_noise(breathing: tuple) -> Non
     c = complex(out.baseline.healthy_frf[i, 0])  # type: ignore[attr-defined]
     r = np.abs(disk[:, 0] + 1j * disk[:, 1] - c)
     np.testing.assert_allclose(r, out.measured.radius[i, 0], rtol=1e-9)  # type: ignore[attr-defined]
+    # by default (the fault point nearest ratio 2) framed on the set and the data: the whole disk and both data
+    # points inside the axes' limits, the disk at least a tenth of the frame (not a speck beside the origin)
+    fig = workflow.detection_figures(out)["detection_complex_plane"]  # type: ignore[arg-type]
+    ax = fig.axes[0]
+    _drawn(fig)
+    f_at = float(ax.get_title().split("Complex plane at ", 1)[1].split(" Hz", 1)[0])
+    i = int(np.argmin(np.abs(out.run.frequency_hz - f_at)))  # type: ignore[attr-defined]
+    assert out.detection.fault[i]  # type: ignore[attr-defined]
+    disk = ax.patches[0].get_path().vertices
+    (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
+    assert x0 <= disk[:, 0].min() and disk[:, 0].max() <= x1 and y0 <= disk[:, 1].min() and disk[:, 1].max() <= y1
+    for lab in ("healthy data", "new data"):
+        pt = next(ln for ln in ax.get_lines() if ln.get_label() == lab)
+        assert x0 <= float(np.asarray(pt.get_xdata())[0]) <= x1 and y0 <= float(np.asarray(pt.get_ydata())[0]) <= y1
+    assert 2 * out.measured.radius[i, 0] > 0.1 * (x1 - x0)  # type: ignore[attr-defined]
 
 
 def test_frf_unit_scales_the_plots(breathing: tuple) -> None:
