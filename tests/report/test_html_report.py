@@ -21,7 +21,7 @@ from rotorcheck.resources import samples_dir
 CR = samples_dir() / "crack_rig"
 CHROMIUM_FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
                   "--disable-background-networking", "--disable-component-update", "--disable-sync",
-                  "--hide-scrollbars"]
+                  "--hide-scrollbars", "--disable-dev-shm-usage"]
 
 
 def chromium() -> str | None:
