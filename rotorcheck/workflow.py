@@ -1798,7 +1798,8 @@ def figure_context(rig: RigConfig, run: MeasuredRun, baseline_path: str | Path |
     channels = f"{out} <- {inp}" + (f" (1 of {run.n_pairs} channel pairs)" if run.n_pairs > 1 else "")
     return FigureContext(rig_id=rig.rig_id, speed_rpm=run.speed_rpm if rig.kind == "rotor" else None,
                          channels=channels, sweep=Path(run.path).name,
-                         baseline=str(baseline_path) if baseline_path is not None else "", frf_unit=frf_unit)
+                         baseline=str(baseline_path) if baseline_path is not None else "", frf_unit=frf_unit,
+                         n_pairs=run.n_pairs)
 
 
 def _frf_noise(run: MeasuredRun, confidence: float = 0.99) -> np.ndarray:
@@ -1874,12 +1875,20 @@ def detection_figures(outcome: DetectionOutcome, at_hz: float | None = None,
     j = outcome.joint
     joint = None if j is None else {"statistic": j.statistic, "threshold": j.threshold, "p_value": j.p_value,
                                     "false_alarm": j.false_alarm}
-    meaning = ("|T_new - T_healthy| / its noise allowance" if outcome.measured is not None
-               else "gamma_required / gamma_healthy")
-    figs["detection_decision"] = (decision_figure(run.frequency_hz, outcome.detection.gamma_required,
-                                        outcome.detection.gamma_healthy, fault, np.asarray(outcome.detection.status),
-                                        ctx, outcome.verdict.verdict, str(rep["verdict_rule"]), meaning, joint,
-                                        rep.get("fault_beyond_benign")))
+    if outcome.measured is not None:  # the statistic that decided: the largest over the pairs (and the
+        # damage-direction test) of |T_new - T_h| / allowance; measured.statistic holds its square
+        required = np.sqrt(np.asarray(outcome.measured.statistic, dtype=float))
+        healthy_level = np.ones_like(required)
+        meaning = ("|T_new - T_healthy| / its noise allowance" if run.n_pairs == 1 else
+                   f"largest over the {run.n_pairs} channel pairs\nand the damage direction of "
+                   "|T_new - T_h| / allowance")
+    else:
+        required, healthy_level = outcome.detection.gamma_required, outcome.detection.gamma_healthy
+        meaning = "gamma_required / gamma_healthy"
+    figs["detection_decision"] = decision_figure(run.frequency_hz, required, healthy_level, fault,
+                                                 np.asarray(outcome.detection.status), ctx, outcome.verdict.verdict,
+                                                 str(rep["verdict_rule"]), meaning, joint,
+                                                 rep.get("fault_beyond_benign"))
     fig = bode_band_figure(run.frequency_hz, model.frf, centre, radius, healthy_frf=healthy, damaged_frf=run.frf,
                            fault=fault, title=ctx.title(f"Detection Bode ({outcome.verdict.verdict.upper()})"),
                            context=ctx, band_label=set_label + ": range over the disk")

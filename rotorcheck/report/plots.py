@@ -62,6 +62,7 @@ class FigureContext:
     sweep: str = ""
     baseline: str = ""
     frf_unit: str = "m/N"
+    n_pairs: int = 1  # channel pairs of the sweep (the figures draw the first; fault points are any pair's)
 
     @property
     def frf_scale(self) -> float:
@@ -180,8 +181,9 @@ def bode_band_figure(
     if fault is not None and damaged_frf is not None and np.any(fault):
         fault = np.asarray(fault, dtype=bool)
         n_fault = int(np.sum(fault))
+        which = f"; in any of the {ctx.n_pairs} pairs" if ctx.n_pairs > 1 else ""
         ax_m.semilogy(f[fault], s * np.abs(damaged_frf[fault]), "o", mfc="none", mew=1.3, ms=8,
-                      color=COLOURS["fault"], label=f"fault points ({n_fault})", zorder=4, gid="fault_points")
+                      color=COLOURS["fault"], label=f"fault points ({n_fault}{which})", zorder=4, gid="fault_points")
         ax_p.plot(f[fault], _wrap_near(np.degrees(np.angle(damaged_frf[fault])), centre_deg[fault]), "o",
                   mfc="none", mew=1.3, ms=8, color=COLOURS["fault"], zorder=4, gid="fault_points")
     ax_m.set_ylabel(f"|receptance| ({ctx.frf_unit})")

@@ -40,6 +40,13 @@ def breathing() -> tuple[object, object]:
 
 
 @pytest.fixture(scope="module")
+def xy_open_crack() -> tuple[object, object]:
+    """The open crack at standstill with x and y probes (8 channel pairs), measured baseline."""
+    xy = samples_dir() / "crack_rig_xy"
+    return _outcome(configs_dir() / "crack_rig.yaml", xy / "healthy_0rpm.h5", xy / "open_crack_0rpm.h5", "measured")
+
+
+@pytest.fixture(scope="module")
 def three_mass() -> tuple[object, object]:
     """Three-mass trial 1 (a lumped rig that does not rotate) with the set enclosing every system."""
     return _outcome(configs_dir() / "three_mass_trial1.yaml", TM / "healthy.h5", TM / "damaged.h5", "system")
@@ -132,6 +139,37 @@ def test_decision_ratio_is_the_distance_from_the_set(breathing: tuple) -> None:
     assert bar.get_width() == pytest.approx(rep["joint_statistic"] / rep["joint_threshold"], rel=1e-12)
     assert any(np.allclose(ln.get_xdata(), 1.0) for ln in fig.axes[1].get_lines())
     assert "Rule" in ax.get_title() and "joint GLR" in ax.get_title()
+
+
+def test_decision_with_several_pairs_plots_the_statistic_that_decided(xy_open_crack: tuple) -> None:
+    """8 channel pairs: a point is a fault when any pair (or the damage-direction test) exceeds its allowance; the
+    plotted ratio is that largest one, so red points are exactly those above 1, grey ones at or below; the largest
+    pair ratio computed here from the distances and radii is never above the plotted one."""
+    _, out = xy_open_crack
+    rep = out.report()  # type: ignore[attr-defined]
+    assert len(rep["channel_pairs"]) == 8 and rep["n_fault_points"] > 0
+    figs = workflow.detection_figures(out)  # type: ignore[arg-type]
+    ax = figs["detection_decision"].axes[0]
+    f = out.run.frequency_hz  # type: ignore[attr-defined]
+    m = out.measured  # type: ignore[attr-defined]
+    pair_ratio = np.max(m.distance / m.radius, axis=1)
+    n_red = 0
+    for ln in ax.get_lines():
+        key = ln.get_gid() or str(ln.get_label())
+        if key != "fault_points" and not key.startswith("explained"):
+            continue
+        x, y = np.asarray(ln.get_xdata()), np.asarray(ln.get_ydata())
+        idx = np.searchsorted(f, x)
+        assert np.all(pair_ratio[idx] <= y * (1 + 1e-9))
+        if key == "fault_points":
+            assert np.all(y > 1.0)
+            n_red = len(x)
+        else:
+            assert np.all(y <= 1.0)
+    assert n_red == rep["n_fault_points"]
+    bode = figs["detection_bode"].axes[0]
+    assert any("in any of the 8 pairs" in str(ln.get_label()) for ln in bode.get_lines())
+    assert "(1 of 8 channel pairs)" in bode.get_title()
 
 
 def _vertical_extents(coll: PolyCollection) -> list[float]:
