@@ -1896,7 +1896,8 @@ def detection_figures(outcome: DetectionOutcome, at_hz: float | None = None,
     with np.errstate(divide="ignore", invalid="ignore"):
         ratio = outcome.detection.gamma_required / np.maximum(outcome.detection.gamma_healthy, 1e-300)
     if at_hz is None and np.any(fault & np.isfinite(ratio)):
-        i = _telling_fault(ratio, fault)
+        own = fault & (ratio > 1.0)  # faults the drawn pair itself shows (with several pairs, not every one)
+        i = _telling_fault(ratio, own if np.any(own) else fault)
     else:
         i = _plot_index(run.frequency_hz, at_hz, np.abs(run.frf - model.frf))
     h_i = None if healthy is None else complex(healthy[i])
