@@ -785,6 +785,25 @@ class DetectionOutcome:
     def exit_code(self) -> int:
         return {"healthy": 0, "damage": 1, "inconclusive": 3}[self.verdict.verdict]
 
+    @property
+    def verdict_rule(self) -> str:
+        """The rule that made the verdict: the joint test's, the measured per-point one, or the certified one."""
+        from rotorcheck.robust.joint import JOINT_RULE
+        from rotorcheck.robust.measured import MEASURED_RULE
+
+        if self.joint is not None:
+            return JOINT_RULE
+        return MEASURED_RULE if self.measured is not None else VERDICT_RULE
+
+    @property
+    def fault_beyond_benign(self) -> np.ndarray | None:
+        """(f,) points unexplained after the joint test's fitted benign change in any channel pair (None: no
+        joint test)."""
+        if self.joint is None:
+            return None
+        f = self.run.frequency_hz
+        return np.asarray(np.asarray(self.joint.remaining, dtype=bool).reshape(-1, f.size).any(axis=0))
+
     def report(self) -> dict[str, Any]:
         """The report.json document (cli.md keys plus context): :meth:`typed_report` as a dict."""
         return self.typed_report().to_dict()
@@ -792,7 +811,6 @@ class DetectionOutcome:
     def typed_report(self) -> Any:
         """The report as a :class:`rotorcheck.report.schema.DetectionReport`."""
         from rotorcheck.report.schema import DetectionReport
-        from rotorcheck.robust.measured import MEASURED_RULE
 
         f = self.run.frequency_hz
         fault = np.asarray(self.detection.fault, dtype=bool)
@@ -800,7 +818,7 @@ class DetectionOutcome:
         m = self.measured
         rep = DetectionReport(
             verdict=self.verdict.verdict, verdict_reason=self.verdict.reason,
-            verdict_rule=MEASURED_RULE if m is not None else VERDICT_RULE,
+            verdict_rule=self.verdict_rule,
             n_points=int(f.size), n_fault_points=int(np.count_nonzero(fault)),
             fault_frequencies_hz=[float(x) for x in f[fault]], rig_id=self.rig.rig_id,
             rig_sha256=self.rig.sha256(), sweep=str(self.run.path), sweep_sha256=self.run.sha256,
@@ -837,9 +855,6 @@ class DetectionOutcome:
                 rep.damage_anchored_noise_max_abs = self.anchored_noise_only.max_abs
         j = self.joint
         if j is not None:
-            from rotorcheck.robust.joint import JOINT_RULE
-
-            rep.verdict_rule = JOINT_RULE
             rep.joint_statistic, rep.joint_threshold, rep.joint_p_value = j.statistic, j.threshold, j.p_value
             rep.false_alarm, rep.candidate_elements = j.false_alarm, list(j.elements)
             rep.element_statistic = [float(x) for x in j.t_element]
@@ -850,7 +865,8 @@ class DetectionOutcome:
             rep.detectable_stiffness_loss = [float(x) for x in j.detectable]
             rep.benign_parameters = benign_table(j, self.rig)
             rep.benign_model_error, rep.learned_benign_directions = j.kappa, j.learned
-            rem = np.asarray(np.asarray(j.remaining, dtype=bool).reshape(-1, f.size).any(axis=0))  # any channel pair
+            rem = self.fault_beyond_benign
+            assert rem is not None
             rep.fault_beyond_benign = rem
             rep.fault_beyond_benign_frequencies_hz = [float(x) for x in f[rem]]
         if self.location is not None:
@@ -1275,7 +1291,7 @@ def detect(
             beyond = certified[0]
             notes.extend(certified[1])
         if joint.elements:
-            sweep_det = sweep_detectability(model_rig, baseline, run, joint, kappa)
+            sweep_det = sweep_detectability(model_rig, baseline, run, joint)
     damage_xy = None
     if identifiable and baseline.enclose == "measured" and run.n_pairs > 1:
         damage_xy = damage_per_direction(rig, run, np.asarray(baseline.healthy_frf),
@@ -1294,11 +1310,11 @@ def detect(
                             measured, noise_only, joint, beyond, damage_xy, detectability=sweep_det)
 
 
-def sweep_detectability(rig: RigConfig, baseline: Any, run: MeasuredRun, joint: Any, kappa: float) -> Any:
+def sweep_detectability(rig: RigConfig, baseline: Any, run: MeasuredRun, joint: Any) -> Any:
     """What this sweep could have revealed (:mod:`rotorcheck.detectability` with this sweep's and the
-    baseline's variances): the element easiest to watch and the best candidate. The benign model is
-    linearized at the healthy state (re-solved per parameter once: on the crack rig within 3 % of the
-    re-solved model's figures, 15 % on element 6); learned benign directions are not included."""
+    baseline's variances): the element easiest to watch and the best candidate. The benign model the joint
+    test allowed is linearized at the healthy state (on the crack rig within 3 % of the re-solved model's
+    figures, 15 % on element 6); learned benign directions are not included."""
     from rotorcheck.detectability import detectability, linearized
     from rotorcheck.nominal import primary_pair
 
@@ -1307,10 +1323,7 @@ def sweep_detectability(rig: RigConfig, baseline: Any, run: MeasuredRun, joint: 
     P = est.frf.shape[1]
     th = _per_pair(np.asarray(baseline.healthy_frf), f, P, run)
     vh = _per_pair(np.asarray(baseline.healthy_frf_var), f, P, run)
-    bm = benign_model(rig, f, baseline.speed_rpm, th, kappa, run.speed_rpm - baseline.speed_rpm,
-                      baseline.benign_correction, run.pairs if P > 1 else None)
-    if bm is not None:
-        bm = linearized(bm)
+    bm = None if joint.benign is None else linearized(joint.benign)
     easiest = joint.elements[int(np.argmin(joint.detectable))]
     els = sorted({easiest, joint.elements[joint.best]})
     run_pairs = list(run.pairs) if run.pairs else [primary_pair(rig)]
@@ -1864,7 +1877,6 @@ def detection_figures(outcome: DetectionOutcome, at_hz: float | None = None,
     b, run, model = outcome.baseline, outcome.run, outcome.model
     ctx = figure_context(outcome.rig, run, baseline_path, frf_unit)
     fault = np.asarray(outcome.detection.fault, dtype=bool)
-    rep = outcome.report()
     healthy = _healthy_frf(b)
     if outcome.measured is not None and healthy is not None:  # the measured set: T_h within the allowance
         centre, radius = healthy, outcome.measured.radius[:, 0]
@@ -1887,8 +1899,7 @@ def detection_figures(outcome: DetectionOutcome, at_hz: float | None = None,
         meaning = "gamma_required / gamma_healthy"
     figs["detection_decision"] = decision_figure(run.frequency_hz, required, healthy_level, fault,
                                                  np.asarray(outcome.detection.status), ctx, outcome.verdict.verdict,
-                                                 str(rep["verdict_rule"]), meaning, joint,
-                                                 rep.get("fault_beyond_benign"))
+                                                 outcome.verdict_rule, meaning, joint, outcome.fault_beyond_benign)
     fig = bode_band_figure(run.frequency_hz, model.frf, centre, radius, healthy_frf=healthy, damaged_frf=run.frf,
                            fault=fault, title=ctx.title(f"Detection Bode ({outcome.verdict.verdict.upper()})"),
                            context=ctx, band_label=set_label + ": range over the disk")

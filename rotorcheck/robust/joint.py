@@ -98,6 +98,7 @@ class JointResult:
     point_threshold: float  # per-point threshold: Sidak over the points at the false-alarm rate
     model_error: np.ndarray  # (n,) m/N: the model-error allowance kappa m_k carried in H0 (sd per point)
     notes: list[str] = field(default_factory=list)
+    benign: BenignModel | None = None  # the benign change the test allowed (None: none)
 
     @property
     def remaining(self) -> np.ndarray:
@@ -334,5 +335,5 @@ def joint_test(residual: np.ndarray, var_total: np.ndarray, signatures: np.ndarr
         learned=q, kappa=kappa, n_points=r.size, unexplained=r - model_ri(theta),
         point_statistic=res0[: r.size] ** 2 + res0[r.size:] ** 2,
         point_threshold=float(-2.0 * np.log(-np.expm1(np.log1p(-false_alarm) / max(r.size, 1)))),
-        model_error=allowance, notes=notes,
+        model_error=allowance, notes=notes, benign=benign,
     )
