@@ -363,7 +363,7 @@ def validate(
     """Step 3: bound the model error per frequency (gamma) so the uncertain model encloses the healthy data
     (a file of several runs, one per speed: every run, one validated set each)."""
     from rotorcheck import workflow
-    from rotorcheck.baseline import read_baseline, write_baseline
+    from rotorcheck.baseline import write_baseline
     from rotorcheck.fileio import check_writable
 
     formats = workflow.plot_formats(plot_format)
@@ -373,14 +373,11 @@ def validate(
     others = [workflow.read_runs(p, cfg, [r.run_id for r in firsts]) for p in sweeps[1:]]
     run_ids = [r.run_id for r in firsts]
     noise = workflow.prior_noise(target, cfg, force, firsts[0].sha256, reuse_noise)
-    prior = read_baseline(target) if noise is not None else None
-    prior_run = prior.run_id if prior is not None else None
-    reused_from = ""
-    if prior is not None and noise is not None:
+    prior_run = noise.details["run_id"] if noise is not None else None
+    reused_from = noise.details.get("fitted_on_sweep", "") if noise is not None else ""
+    if noise is not None:
         err.print(f"noise bound V = {noise.value_m * 1e6:.4g} um from {target} ({noise.method}, run {prior_run})")
-        fitted_on = [s_ for s_ in prior.sweep_sha256 if s_]
-        if fitted_on and firsts[0].sha256 not in fitted_on and noise.method != "manual":
-            reused_from = fitted_on[0]
+        if reused_from:
             err.print(f"[yellow]the noise bound was fitted on another sweep (sha256 {reused_from[:12]}); used as "
                       "asked (--reuse-noise), recorded in the baseline[/]")
     several = len(run_ids) > 1  # a file of several runs (speeds): one validated set per run

@@ -449,8 +449,9 @@ def prior_noise(baseline_path: str | Path, rig: RigConfig, force: bool, sweep_sh
     A stage-'noise' baseline (``fit-noise``) gives its bound. A validated one is refused unless ``force``
     (it would be overwritten); with ``force`` a manual bound (``fit-noise --method manual``) survives, a
     fitted one is fitted anew. A bound fitted on another sweep than ``sweep_sha256`` is refused unless
-    ``reuse`` (the caller records it); a noise fit made for another rig description is refused
-    (InputError naming the field).
+    ``reuse`` (then ``details["fitted_on_sweep"]`` names that sweep, for the caller to record); a noise fit
+    made for another rig description is refused (InputError naming the field). ``details["run_id"]``: the
+    run the bound was fitted on.
     """
     from rotorcheck.baseline import read_baseline
     from rotorcheck.robust.noise import NoiseBound
@@ -473,8 +474,12 @@ def prior_noise(baseline_path: str | Path, rig: RigConfig, force: bool, sweep_sh
                          f"{fitted_on[0][:12]}, this one {sweep_sha256[:12]}): run fit-noise on this sweep, or "
                          "pass --reuse-noise to validate with it (recorded in the baseline)")
     per = prior.noise_bound_per_point_m
-    return NoiseBound(prior.noise_bound_m, prior.noise_method, prior.noise_confidence,
-                      {} if per is None else {"per_point_m": per})
+    details: dict[str, Any] = {"run_id": prior.run_id}
+    if per is not None:
+        details["per_point_m"] = per
+    if prior.noise_method != "manual" and sweep_sha256 and fitted_on and sweep_sha256 not in fitted_on:
+        details["fitted_on_sweep"] = fitted_on[0]  # reused as asked (reuse): the caller records it
+    return NoiseBound(prior.noise_bound_m, prior.noise_method, prior.noise_confidence, details)
 
 
 def noise_report(noise_bound: Any, sweep: str | Path, baseline_path: str | Path) -> Any:
