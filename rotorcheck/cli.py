@@ -710,11 +710,12 @@ def simulate(
     grid = np.linspace(f_min, f_max, points)
     with _progress(f"simulating {points} points at {speed:g} rpm" + (f" with {fault}" if fault else "")):
         if actuator or sensor:
+            from rotorcheck.nominal import parse_port
             from rotorcheck.sim.rig_sim import simulate_rig_patterns
 
-            acts = ([workflow.parse_port(a, "--actuator") for a in actuator] if actuator
+            acts = ([parse_port(a, "--actuator") for a in actuator] if actuator
                     else [cfg.io_ports("simulate").actuator])
-            sens = [workflow.parse_port(x, "--sensor") for x in sensor] if sensor else [cfg.io_ports("simulate").sensor]
+            sens = [parse_port(x, "--sensor") for x in sensor] if sensor else [cfg.io_ports("simulate").sensor]
             sw = simulate_rig_patterns(cfg, grid, acts, sens, speed_rpm=speed, fault=fault, seed=seed,
                                        n_harmonics=harmonics, settings=st, created_utc=_utc_now(),
                                        shaft_angle_rad=angle)

@@ -184,6 +184,17 @@ def port_label(port: Port) -> str:
     return str(port.mass) if port.mass is not None else f"s{port.station}.{port.direction}"
 
 
+def parse_port(text: str, option: str = "--port") -> Port:
+    """A rotor port from text: ``8x``, ``s8.x`` (:func:`port_label`'s form) or ``8:y`` (station, direction);
+    an InputError naming ``option`` otherwise."""
+    import re
+
+    m = re.fullmatch(r"\s*s?(\d+)\s*[.:]?\s*([xyXY])\s*", text)
+    if m is None:
+        raise InputError(None, option, f"{text!r} is no station and direction (e.g. 8x, s6.y)")
+    return Port(station=int(m.group(1)), direction=m.group(2).lower())  # type: ignore[arg-type]
+
+
 def channel_port(config: RigConfig, node: int, direction: str) -> Port:
     """The model port of a sweep channel (``node``: rotor station, or 1-based mass index of a lumped rig)."""
     if config.kind == "rotor":

@@ -69,19 +69,21 @@ def model_report(
         raise InputError(None, "--speed-unit", f"must be one of {', '.join(SPEED_UNITS)}, got {speed_unit!r}")
 
     from rotorcheck.fe.assembly import build_system
-    from rotorcheck.fe.modal import model_summary
+    from rotorcheck.fe.modal import mode_table, model_summary, modes
 
     speeds = [float(speed_rpm)] if speed_rpm is not None else [float(x) for x in config.analysis.speeds_rpm]
     speed_rpm = speeds[0]
-    summary = model_summary(config, speed_rpm)
+    system = build_system(config)
+    summary = model_summary(config, speed_rpm, system)
     summary["speed_rpm"] = speed_rpm
     summary["at_speeds"] = [{"speed_rpm": speed_rpm, "modes": summary["modes"]}] + [
-        {"speed_rpm": sp, "modes": model_summary(config, sp)["modes"]} for sp in speeds[1:]]
+        {"speed_rpm": sp, "modes": mode_table(modes(system, sp, n_modes=config.analysis.n_modes))}
+        for sp in speeds[1:]]
     summary.setdefault("rig_id", config.rig_id)
     summary.setdefault("campbell_max_rpm", config.analysis.campbell_max_rpm)
     files: list[str] = []
     if out_dir is not None:
-        files = _model_plots(config, build_system(config), speed_rpm, Path(out_dir), force, formats, speed_unit)
+        files = _model_plots(config, system, speed_rpm, Path(out_dir), force, formats, speed_unit)
     return {"summary": summary, "files": files}
 
 
@@ -1142,18 +1144,6 @@ def damage_per_direction(rig: RigConfig, run: MeasuredRun, healthy_frf: np.ndarr
     return DirectionalDamage(est, (lo_re, hi_re), (lo_im, hi_im), draws, bound)
 
 
-def parse_port(text: str, option: str = "--port") -> Any:
-    """A rotor port from text: ``8x``, ``s8.x`` or ``8:y`` (station, direction)."""
-    import re
-
-    from rotorcheck.config import Port
-
-    m = re.fullmatch(r"\s*s?(\d+)\s*[.:]?\s*([xyXY])\s*", text)
-    if m is None:
-        raise InputError(None, option, f"{text!r} is no station and direction (e.g. 8x, s6.y)")
-    return Port(station=int(m.group(1)), direction=m.group(2).lower())  # type: ignore[arg-type]
-
-
 def pair_keys(run: MeasuredRun) -> list[list[str]]:
     """The run's channel pairs as [output, input] port labels (the rig's actuator -> sensor first)."""
     return [list(p.key()) for p in run.pairs]
@@ -1894,15 +1884,16 @@ def detection_figures(outcome: DetectionOutcome, at_hz: float | None = None,
                                     "false_alarm": j.false_alarm}
     if outcome.measured is not None:  # the statistic that decided: the largest over the pairs (and the
         # damage-direction test) of |T_new - T_h| / allowance; measured.statistic holds its square
-        required = np.sqrt(np.asarray(outcome.measured.statistic, dtype=float))
-        healthy_level = np.ones_like(required)
+        decided = np.sqrt(np.asarray(outcome.measured.statistic, dtype=float))
         meaning = ("|T_new - T_healthy| / its noise allowance" if run.n_pairs == 1 else
                    f"largest over the {run.n_pairs} channel pairs\nand the damage direction of "
                    "|T_new - T_h| / allowance")
     else:
-        required, healthy_level = outcome.detection.gamma_required, outcome.detection.gamma_healthy
+        with np.errstate(divide="ignore", invalid="ignore"):
+            decided = (np.asarray(outcome.detection.gamma_required, dtype=float)
+                       / np.asarray(outcome.detection.gamma_healthy, dtype=float))
         meaning = "gamma_required / gamma_healthy"
-    figs["detection_decision"] = decision_figure(run.frequency_hz, required, healthy_level, fault,
+    figs["detection_decision"] = decision_figure(run.frequency_hz, decided, fault,
                                                  np.asarray(outcome.detection.status), ctx, outcome.verdict.verdict,
                                                  outcome.verdict_rule, meaning, joint, outcome.fault_beyond_benign)
     fig = bode_band_figure(run.frequency_hz, model.frf, centre, radius, healthy_frf=healthy, damaged_frf=run.frf,
@@ -2015,6 +2006,8 @@ def _prediction_ports(config: RigConfig, sensors: Sequence[str] | None, actuator
                       source: str, candidates: Sequence[str] = ()) -> tuple[list[Any], list[Any], list[Any]]:
     """``(sensors, actuators, candidates)`` as ports (``6x``, ``s2.y``; default: the rig's sensor and actuator),
     every station checked against the rig; no actuator is an InputError."""
+    from rotorcheck.nominal import parse_port
+
     ports = config.ports
     acts = [parse_port(a, "--actuators") for a in actuators] if actuators else (
         [ports.actuator] if ports is not None else [])

@@ -476,6 +476,21 @@ def static_stiffness_warnings(system: MechanicalSystem, speeds_rpm: list[float])
     return out
 
 
+def mode_table(md: Any) -> list[dict[str, Any]]:
+    """The modes of a :func:`modes` result as the ``model`` table's rows (``frequency_hz`` damped,
+    ``natural_frequency_hz``, ``damping_ratio``, ``whirl``, ``whirl_ratio``)."""
+    return [
+        {
+            "frequency_hz": float(md.frequency_hz[i]),
+            "natural_frequency_hz": float(md.natural_frequency_hz[i]),
+            "damping_ratio": float(md.damping_ratio[i]),
+            "whirl": md.whirl[i],
+            "whirl_ratio": None if not np.isfinite(md.whirl_ratio[i]) else float(md.whirl_ratio[i]),
+        }
+        for i in range(len(md))
+    ]
+
+
 def model_summary(
     config: RigConfig, speed_rpm: float = 0.0, system: MechanicalSystem | None = None
 ) -> dict[str, Any]:
@@ -490,16 +505,7 @@ def model_summary(
     n = config.analysis.n_modes
     md = modes(sys_, speed_rpm, n_modes=n)
     rest = natural_frequencies_at_rest(sys_, n)
-    entries = [
-        {
-            "frequency_hz": float(md.frequency_hz[i]),
-            "natural_frequency_hz": float(md.natural_frequency_hz[i]),
-            "damping_ratio": float(md.damping_ratio[i]),
-            "whirl": md.whirl[i],
-            "whirl_ratio": None if not np.isfinite(md.whirl_ratio[i]) else float(md.whirl_ratio[i]),
-        }
-        for i in range(len(md))
-    ]
+    entries = mode_table(md)
     out: dict[str, Any] = {
         "rig_id": config.rig_id,
         "speed_rpm": float(speed_rpm),

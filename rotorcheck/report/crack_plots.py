@@ -22,6 +22,7 @@ from rotorcheck.config import Crack, UnbalanceMass
 from rotorcheck.faults.analysis import unbalance_harmonics, unbalance_orbit
 from rotorcheck.faults.crack import rotating_reduction
 from rotorcheck.fe.system import MechanicalSystem
+from rotorcheck.report.figures import legend_outside
 
 __all__ = ["crack_figures", "orbit_figure", "spectrum_figure", "stiffness_change_figure"]
 
@@ -143,7 +144,7 @@ def spectrum_figure(panels: Sequence[Mapping[str, Any]], title: str = "") -> Fig
             ax.set_ylabel("amplitude (um)\nlinear scale", fontsize=9)
         ax.set_title(str(p.get("title", "")), fontsize=9, loc="left")
         ax.grid(True, which="major", alpha=0.3)
-        ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0, frameon=False)
+        legend_outside(ax, fontsize=7, frameon=False)
     axes[-1].set_xlabel("order of the running speed (nX)")
     if any(p.get("scale", "log") == "log" for p in panels):
         title = (title + "\n" if title else "") + (f"log scale: amplitudes below 1e-{LOG_DECADES:g} of a panel's "

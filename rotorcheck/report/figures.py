@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from pathlib import Path
+from typing import Any
 
 from matplotlib.figure import Figure
 
@@ -31,3 +33,14 @@ def save_figure(
 def save_figures(figures: dict[str, Figure], out_dir: str | Path, formats: tuple[str, ...] = ("png",)) -> list[str]:
     """Every figure of ``figures`` (by file stem) into ``out_dir`` in ``formats``; the written paths."""
     return [str(p) for stem, fig in figures.items() for p in save_figure(fig, Path(out_dir) / stem, formats)]
+
+
+def legend_outside(ax: Any, handles: Iterable[Any] | None = None, labels: Iterable[str] | None = None,
+                   fontsize: float = 8, **kw: Any) -> Any:
+    """A legend right of ``ax``, outside its data (``handles``/``labels``: default the axes' labelled
+    artists); None when there is nothing to show."""
+    h, lab = (list(handles), list(labels or [])) if handles is not None else ax.get_legend_handles_labels()
+    if not h:
+        return None
+    return ax.legend(h, lab, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0, fontsize=fontsize,
+                     **kw)

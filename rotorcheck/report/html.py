@@ -18,6 +18,8 @@ from typing import Any
 
 import numpy as np
 
+from rotorcheck.report.reports import damage_columns, headline_damage
+
 VERDICT_COLOUR = {"damage": "#b00020", "healthy": "#1b7a2f", "inconclusive": "#a66a00", "located": "#b00020",
                   "nothing to locate": "#1b7a2f"}
 
@@ -168,13 +170,8 @@ def _fault_rows(report: dict[str, Any]) -> tuple[list[str], list[list[str]]]:
     fault = np.asarray(report["fault"], dtype=bool)
     gh = np.asarray(report["gamma_healthy"], dtype=float)
     gr = np.asarray(report["gamma_required"], dtype=float)
-    anchored = "damage_dynamics_anchored_re" in report
-    if anchored:
-        dre, dim = report["damage_dynamics_anchored_re"], report["damage_dynamics_anchored_im"]
-        lo, hi = report["damage_anchored_bound_min_abs"], report["damage_anchored_bound_max_abs"]
-    else:
-        dre, dim = report["damage_dynamics_re"], report["damage_dynamics_im"]
-        lo, hi = report["damage_bound_min_abs"], report["damage_bound_max_abs"]
+    dre, dim, lo, hi, kind = damage_columns(report)
+    anchored = kind.startswith("anchored")
     header = ["f (Hz)", "gamma healthy", "gamma required", "ratio",
               f"D_u{' anchored' if anchored else ''} (N/m)", "min |D_u| (N/m)", "max |D_u| (N/m)"]
     rows = []
@@ -190,8 +187,6 @@ def render_detection_html(report: dict[str, Any], plots: Sequence[str | Path],
                           baseline_path: str | Path | None = None) -> str:
     """report.html of a detection: verdict and rule, the numbers, the figures embedded, every fault point,
     the benign parameters, the location (detect --locate), the inputs with hashes, the software."""
-    from rotorcheck.report.reports import headline_damage
-
     verdict = str(report["verdict"])
     parts = [f"<h1>rotorcheck detection: {_verdict_badge(verdict)}</h1>",
              f"<p>Sweep <code>{_e(report['sweep'])}</code> (run <code>{_e(report['run_id'])}</code>) on rig "

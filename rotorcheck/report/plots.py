@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 from matplotlib.figure import Figure
 
+from rotorcheck.report.figures import legend_outside
 from rotorcheck.report.rotor_drawing import draw_rotor
 
 #: receptance units a plot may use: factor from m/N
@@ -89,15 +90,6 @@ class FigureContext:
 def _wrap_near(phase_deg: np.ndarray, ref_deg: np.ndarray) -> np.ndarray:
     """Shift ``phase_deg`` by multiples of 360 to lie within 180 deg of ``ref_deg``."""
     return ref_deg + (phase_deg - ref_deg + 180.0) % 360.0 - 180.0
-
-
-def _legend_outside(ax: Any, **kw: Any) -> Any:
-    """A legend right of ``ax`` (outside the data), or None when nothing is labelled."""
-    handles, labels = ax.get_legend_handles_labels()
-    if not handles:
-        return None
-    return ax.legend(handles, labels, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0,
-                     fontsize=8, **kw)
 
 
 def _runs(f: np.ndarray, mask: np.ndarray) -> list[tuple[float, float]]:
@@ -190,7 +182,7 @@ def bode_band_figure(
     ax_p.set_ylabel("phase (deg)")
     ax_p.set_xlabel("frequency (Hz)")
     ax_p.set_ylim(float(np.min(centre_deg)) - 200.0, float(np.max(centre_deg)) + 200.0)
-    _legend_outside(ax_m)
+    legend_outside(ax_m)
     ax_m.grid(True, which="both", alpha=0.3)
     ax_p.grid(True, alpha=0.3)
     note = ("Band: the range of magnitude and of phase over the uncertainty disk at each frequency. A point inside "
@@ -203,8 +195,7 @@ def bode_band_figure(
 
 def decision_figure(
     freq_hz: np.ndarray,
-    gamma_required: np.ndarray,
-    gamma_healthy: np.ndarray,
+    ratio: np.ndarray,
     fault: np.ndarray,
     status: np.ndarray,
     context: FigureContext,
@@ -214,16 +205,16 @@ def decision_figure(
     joint: dict[str, Any] | None = None,
     beyond_benign: np.ndarray | None = None,
 ) -> Figure:
-    """The decision actually made: per frequency the ratio ``gamma_required / gamma_healthy`` (log), the
-    threshold 1 and the fault points (ratio above 1, red); points not evaluated marked at the bottom. With
+    """The decision actually made: per frequency the ``ratio`` that decides a point (e.g. ``gamma_required /
+    gamma_healthy``; log axis), the threshold 1 and the fault points (ratio above 1, red); points not
+    evaluated marked at the bottom. With
     the joint test (``joint``: ``statistic``, ``threshold``, ``p_value``, ``false_alarm``), a second panel:
     the sweep's statistic against its threshold, the rule that made the verdict.
     """
     f = np.asarray(freq_hz, dtype=float)
     fault = np.asarray(fault, dtype=bool)
     status = np.asarray(status).astype(str)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        ratio = np.asarray(gamma_required, dtype=float) / np.asarray(gamma_healthy, dtype=float)
+    ratio = np.asarray(ratio, dtype=float)
     evaluated = np.isfinite(ratio) & (ratio > 0)
     if joint is not None:
         fig = Figure(figsize=(10, 6.2), layout="constrained")
@@ -250,7 +241,7 @@ def decision_figure(
     ax.set_ylabel(f"ratio {ratio_meaning}")
     ax.set_xlabel("frequency (Hz)")
     ax.grid(True, which="both", alpha=0.3)
-    _legend_outside(ax)
+    legend_outside(ax)
     head = context.title(f"Detection ({verdict.upper()})")
     ax.set_title(head + "\n" + "\n".join(textwrap.wrap("Rule: " + rule, 120)), fontsize=8)
     if bx is not None and joint is not None:
@@ -265,7 +256,7 @@ def decision_figure(
         bx.set_ylabel("this sweep")
         bx.set_xlabel("joint statistic / its threshold (the verdict: damage above 1)")
         bx.grid(True, which="both", axis="x", alpha=0.3)
-        _legend_outside(bx)
+        legend_outside(bx)
     return fig
 
 
@@ -329,7 +320,7 @@ def complex_plane_figure(
         extra = f"; new data at {d:.3g} radii from the centre ({'outside: a fault point' if d > 1 else 'inside'})"
     ax.set_title(ctx.title(f"Complex plane at {freq_hz:.2f} Hz") + "\n" + "\n".join(textwrap.wrap(extra[2:], 90))
                  if extra else ctx.title(f"Complex plane at {freq_hz:.2f} Hz"), fontsize=8)
-    _legend_outside(ax)
+    legend_outside(ax)
     ax.grid(True, alpha=0.3)
     return fig
 
@@ -413,7 +404,7 @@ def damage_dynamics_figure(
     ax_p.set_xlabel("frequency (Hz)")
     ax_p.set_ylim(-200, 200)
     ax_p.set_yticks([-180, -90, 0, 90, 180])
-    _legend_outside(ax_m)
+    legend_outside(ax_m)
     ax_m.grid(True, which="both", alpha=0.3)
     ax_p.grid(True, alpha=0.3)
     ax_m.set_title(title or ctx.title("Damage dynamics D_u"), fontsize=9)
@@ -428,11 +419,7 @@ def detectability_figure(config: Any, det: Any) -> Figure:
 
     from matplotlib import colormaps
 
-    from rotorcheck.config import Port
-
-    def parse_port(label: str) -> Port:  # "s6.x"
-        station, direction = label[1:].split(".")
-        return Port(station=int(station), direction=direction)  # type: ignore[arg-type]
+    from rotorcheck.nominal import parse_port
 
     fig = Figure(figsize=(8.0, 5.0), layout="constrained")
     ax, bx = fig.subplots(2, 1, sharex=True, height_ratios=(1.0, 1.4))
@@ -458,7 +445,7 @@ def detectability_figure(config: Any, det: Any) -> Figure:
     bx.set_ylabel("breathing crack depth (% of diameter)")
     bx.set_xlabel("axial position (m)\ngrey elements: not seen by these channels, or no detectable depth up to 50 %")
     bx.grid(True, which="both", alpha=0.3)
-    _legend_outside(bx)
+    legend_outside(bx)
     from matplotlib.cm import ScalarMappable
     from matplotlib.colors import Normalize
 

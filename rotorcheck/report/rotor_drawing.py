@@ -23,6 +23,7 @@ from matplotlib.path import Path
 from matplotlib.text import Text
 
 from rotorcheck.config import Crack, DamagePort, Port, RigConfig
+from rotorcheck.report.figures import legend_outside
 
 __all__ = ["COLOURS", "draw_rotor", "rig_cracks", "rig_elements", "rotor_figure"]
 
@@ -214,8 +215,7 @@ def draw_rotor(
         top_ax.set_xlabel("shaft element", fontsize=fontsize)
     declutter(ax.figure, names + bearing_names)
     if legend:
-        ax.legend(list(handles.values()), list(handles.keys()), loc="upper left", bbox_to_anchor=(1.01, 1.0),
-                  borderaxespad=0.0, fontsize=fontsize, frameon=False)
+        legend_outside(ax, handles.values(), handles.keys(), fontsize=fontsize, frameon=False)
 
 
 def _draw_bearings(ax: Any, config: RigConfig, z: np.ndarray, U: float, fontsize: float,
