@@ -220,13 +220,15 @@ def load_rig_and_run(sweep_path: str | Path, rig_path: str | Path | None = None,
     return config, runs[0]
 
 
-def read_runs(path: str | Path, config: RigConfig, run_ids: list[str] | None = None) -> list[MeasuredRun]:
-    """Every run of a sweep file (or those of ``run_ids``), read once, checked against ``config``."""
+def read_runs(path: str | Path, config: RigConfig, run_ids: list[str] | None = None,
+              sha256: str | None = None) -> list[MeasuredRun]:
+    """Every run of a sweep file (or those of ``run_ids``), read once, checked against ``config``;
+    ``sha256``: the file's digest when the caller has it already (else it is computed)."""
     from rotorcheck.sweep.hdf5io import read_sweep, sweep_sha256
 
     p = Path(path)
     sweep = read_sweep(p)
-    sha = sweep_sha256(p)
+    sha = sha256 if sha256 is not None else sweep_sha256(p)
     return [measured_run(sweep, config, rid, p, sha) for rid in (run_ids if run_ids is not None else sweep.runs)]
 
 

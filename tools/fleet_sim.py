@@ -157,9 +157,10 @@ def make_fleet(out: Path, machines: int = 20, sweeps: int = 10, seed: int = 0, p
             write_sweep(_sweep(truth, grid, loss, benign, mseed + k, created), mdir / "sweeps" / f"{stamp}.h5",
                         force=True)
             clean = _frf(_sweep(truth, grid, loss, benign, 0, created, noise=False))
-            crack_only = _frf(_sweep(truth, grid, loss, {}, 0, created, noise=False))
+            # no crack: the crack-only response is the healthy one (du_true 0), not simulated again
+            du_crack = du_true(_frf(_sweep(truth, grid, loss, {}, 0, created, noise=False))) if loss > 0 else 0.0
             entries.append({"file": f"{name}/sweeps/{stamp}.h5", "time": created, "loss": loss, "benign": benign,
-                            "du_low_true_n_per_m": du_true(clean), "du_low_crack_only_n_per_m": du_true(crack_only)})
+                            "du_low_true_n_per_m": du_true(clean), "du_low_crack_only_n_per_m": du_crack})
         m: dict[str, Any] = {"kind": kind, "sweeps": entries}
         if final_loss:
             cracked = [k for k, e in enumerate(entries) if e["loss"] > 0]

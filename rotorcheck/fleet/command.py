@@ -12,7 +12,7 @@ from typing import Annotated, Any
 
 import typer
 
-EXIT_OK, EXIT_ALARM, EXIT_INPUT = 0, 1, 2
+EXIT_OK, EXIT_ALARM = 0, 1
 
 
 def _err() -> Any:

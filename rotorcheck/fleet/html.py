@@ -182,15 +182,17 @@ def render_index(out: Path, rows_by_machine: dict[str, list[dict[str, Any]]], tr
 def write_index(out: Path, rows_by_machine: dict[str, list[dict[str, Any]]], trends: dict[str, Trend],
                 alert_entries: list[dict[str, Any]], meta: dict[str, Any]) -> list[Path]:
     """The trend PNGs (``trends/<machine>.png``) and ``index.html`` (embedding them), atomically."""
-    from rotorcheck.report.figures import save_figure
+    from rotorcheck.fileio import atomic_write_bytes
 
     pngs: dict[str, bytes] = {}
     written: list[Path] = []
     for m, rows in sorted(rows_by_machine.items()):
         if not rows:
             continue
-        fig = trend_figure(m, rows, trends[m])
-        written += save_figure(fig, out / "trends" / m, ("png",), dpi=100)
-        pngs[m] = (out / "trends" / f"{m}.png").read_bytes()
+        pngs[m] = png_bytes(trend_figure(m, rows, trends[m]))  # rendered once: written and embedded
+        path = out / "trends" / f"{m}.png"
+        path.parent.mkdir(parents=True, exist_ok=True)
+        atomic_write_bytes(path, pngs[m])
+        written.append(path)
     atomic_write_text(out / "index.html", render_index(out, rows_by_machine, trends, alert_entries, pngs, meta))
     return [*written, out / "index.html"]

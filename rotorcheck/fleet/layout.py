@@ -66,10 +66,6 @@ class Fleet:
     source: Path
     machines: list[Machine]
 
-    @property
-    def n_sweeps(self) -> int:
-        return sum(len(m.sweeps) for m in self.machines)
-
 
 def iso_utc(stamp: dt.datetime) -> str:
     """``stamp`` as ``YYYY-MM-DDTHH:MM:SSZ`` (naive stamps are taken as UTC)."""

@@ -256,10 +256,10 @@ def _locate_tasks(rows: dict[str, list[tuple[SweepTask, dict[str, Any]]]], mode:
     return out
 
 
-def _fingerprint(tasks: list[SweepTask], rows: dict[str, list[tuple[SweepTask, dict[str, Any]]]],
-                 opts: FleetOptions) -> str:
+def _fingerprint(tasks: list[SweepTask], merged: dict[str, list[dict[str, Any]]], opts: FleetOptions) -> str:
+    """What the outputs depend on: the tasks, the results located, the options."""
     doc = {"tasks": [[t.machine, t.time, t.sweep_sha256, t.baseline_sha256] for t in tasks],
-           "located": sorted(t.key for items in rows.values() for t, r in items if r.get("location_summary")),
+           "located": sorted(r["result"] for items in merged.values() for r in items if r.get("location_summary")),
            "settings": asdict(opts.settings), "locate": opts.locate, "confirm": opts.confirm, "limit": opts.limit,
            "trend_confidence": opts.trend_confidence}
     return hashlib.sha256(json.dumps(doc, sort_keys=True).encode()).hexdigest()
@@ -321,7 +321,7 @@ def run_fleet(source: str | Path, opts: FleetOptions | None = None, log: Callabl
                 row = {**row, "location_best_element": loc["best_element"], "location_summary": loc["summary"]}
             merged[name].append({**row, "result": f"{t.machine}/{t.key}"})
     clean_temporaries(out)
-    fp = _fingerprint(tasks, rows, opts)
+    fp = _fingerprint(tasks, merged, opts)
     state_path = out / STATE_FILE
     try:
         state = json.loads(state_path.read_text(encoding="utf-8"))

@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import csv
 import io
-import json
 import math
 from pathlib import Path
 from typing import Any
@@ -169,8 +168,7 @@ def alerts(rows_by_machine: dict[str, list[dict[str, Any]]], trends: dict[str, A
         if limit is not None and fit is not None:
             from rotorcheck.fleet.trend import days
 
-            t_last = days(last["time"])
-            if fit.value(t_last) - fit.quantile * fit.value_se(t_last) >= limit:
+            if fit.beyond(limit, days(last["time"])):
                 rules.append(("alarm", "limit-exceeded", last["time"]))
         if 0 < streak < confirm:
             rules.append(("watch", "damage-unconfirmed", last["time"]))
@@ -225,8 +223,3 @@ def write_trends(trends: dict[str, Any], out: Path) -> Path:
 
     atomic_write_text(out / "trends.json", render_json({m: t.to_dict() for m, t in sorted(trends.items())}))
     return out / "trends.json"
-
-
-def rows_json(rows: list[dict[str, Any]]) -> str:
-    """The rows as JSON (deterministic key order)."""
-    return json.dumps(rows, sort_keys=True)

@@ -215,11 +215,8 @@ def summary_row(task: SweepTask, report: dict[str, Any], mask: Any) -> dict[str,
                               for b in report.get("benign_parameters") or []],
         "joint_best_element": report.get("best_element"), "stiffness_loss": _num(report.get("stiffness_loss")),
         "stiffness_loss_lo": _num(interval[0]), "stiffness_loss_hi": _num(interval[1]),
-        "location_best_element": None, "location_summary": "",
+        "location_best_element": None, "location_summary": "",  # filled from the locate stage's result
     }
-    loc = report.get("location")
-    if loc is not None:
-        row["location_best_element"], row["location_summary"] = loc.get("best_element"), loc.get("summary", "")
     return row
 
 
@@ -231,27 +228,28 @@ def error_row(task: SweepTask, message: str) -> dict[str, Any]:
             "benign_parameters": []}
 
 
-def _one_run(task: SweepTask, runs: list[Any]) -> Any:
-    """The sweep's one run (a fleet sweep is one run: one speed per sweep, one row per sweep)."""
+def _inputs(task: SweepTask) -> tuple[Any, Any, Any]:
+    """``(rig, baseline, run)`` of a task: the rig, the sweep's one run (a fleet sweep is one run: one speed
+    per sweep, one row per sweep; its sha256 is the plan's) and the baseline's run at its speed, checked."""
+    from rotorcheck import workflow
+    from rotorcheck.baseline import read_baselines
     from rotorcheck.errors import InputError
 
+    cfg = workflow.load_rig(task.rig)
+    runs = workflow.read_runs(task.sweep, cfg, sha256=task.sweep_sha256)
     if len(runs) != 1:
         raise InputError(task.sweep, "/runs", f"{len(runs)} runs: a fleet sweep holds one run (one file per run)")
-    return runs[0]
+    base = workflow.baseline_for_speed(read_baselines(task.baseline), cfg, runs[0], task.baseline)
+    return cfg, base, workflow.check_baseline(base, cfg, runs[0], task.baseline)
 
 
 def _detect(task: SweepTask) -> tuple[dict[str, Any], dict[str, Any] | None]:
-    """(row, report) of the sweep against its machine's baseline: the library's detect (and locate)."""
+    """(row, report) of the sweep against its machine's baseline: the library's detect."""
     from rotorcheck import workflow
-    from rotorcheck.baseline import read_baselines
     from rotorcheck.fe.blas import one_blas_thread
 
     with one_blas_thread():
-        cfg = workflow.load_rig(task.rig)
-        mrun = _one_run(task, workflow.read_runs(task.sweep, cfg))
-        bases = read_baselines(task.baseline)
-        base = workflow.baseline_for_speed(bases, cfg, mrun, task.baseline)
-        mrun = workflow.check_baseline(base, cfg, mrun, task.baseline)
+        cfg, base, mrun = _inputs(task)
         s = task.settings
         outcome = workflow.detect(cfg, base, mrun, confidence=s.confidence, false_alarm=s.false_alarm)
         report = outcome.report()
@@ -298,7 +296,6 @@ def run_locate(task: SweepTask) -> dict[str, Any]:
     if done.exists() and not task.force:
         return {"location": read_location(task.result_dir), "executed": False}
     from rotorcheck import workflow
-    from rotorcheck.baseline import read_baselines
     from rotorcheck.fe.blas import one_blas_thread
     from rotorcheck.report.reports import render_json
 
@@ -306,10 +303,7 @@ def run_locate(task: SweepTask) -> dict[str, Any]:
     try:
         _maybe_die(task, tmp)
         with one_blas_thread():
-            cfg = workflow.load_rig(task.rig)
-            mrun = _one_run(task, workflow.read_runs(task.sweep, cfg))
-            base = workflow.baseline_for_speed(read_baselines(task.baseline), cfg, mrun, task.baseline)
-            mrun = workflow.check_baseline(base, cfg, mrun, task.baseline)
+            cfg, base, mrun = _inputs(task)
             res = workflow.locate_damage(cfg, base, mrun, task.settings.false_alarm)
         doc = {"sweep": task.sweep, "sweep_sha256": task.sweep_sha256, "baseline": task.baseline,
                "rig_id": cfg.rig_id, "speed_rpm": mrun.speed_rpm, **res.to_dict()}

@@ -58,6 +58,10 @@ class LineFit:
         x = t - self.t_ref
         return float(math.sqrt(max(self.cov[0, 0] + 2.0 * x * self.cov[0, 1] + x * x * self.cov[1, 1], 0.0)))
 
+    def beyond(self, limit: float, t: float) -> bool:
+        """The fitted line at ``t`` (days) exceeds ``limit`` (N/m) by more than its confidence half-width."""
+        return self.value(t) - self.quantile * self.value_se(t) >= limit
+
     def crossing(self, limit: float) -> tuple[float | None, tuple[float | None, float | None]]:
         """``(t*, (lo, hi))``: when the line reaches ``limit`` (days, same origin as the data; None when
         the slope is 0) and the times whose confidence band contains ``limit``: ``(lo, hi)`` bounded when
@@ -194,7 +198,7 @@ def machine_trend(machine: str, rows: list[dict[str, Any]], limit_n_per_m: float
         return Trend(machine, fit, window, origin, None, None, (None, None), trend_words)
     t_hat, (c_lo, c_hi) = fit.crossing(limit_n_per_m)
     last = float(t[-1])
-    if fit.value(last) - fit.quantile * fit.value_se(last) >= limit_n_per_m:
+    if fit.beyond(limit_n_per_m, last):
         status = f"{trend_words}; beyond the limit {limit_n_per_m:.4g} N/m already"
     elif not growing:
         status = f"{trend_words}; no crossing of {limit_n_per_m:.4g} N/m predicted"
