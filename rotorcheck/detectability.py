@@ -108,12 +108,6 @@ class Detectability:
             "rule": RULE, "elements": [e.to_dict() for e in self.elements], "notes": list(self.notes),
         }
 
-    def worst(self, key: str = "breathing_depth_min") -> tuple[int, float | None]:
-        """``(element, value)`` of the element hardest to watch (largest value; None counts as worst)."""
-        vals = [(e.element, getattr(e, key)) for e in self.elements]
-        none = [v for v in vals if v[1] is None]
-        return none[0] if none else max(vals, key=lambda v: float(v[1] or 0.0))
-
     def summary(self) -> str:
         """Plain lines for the terminal."""
         def pct(x: float | None) -> str:
@@ -220,6 +214,7 @@ def detectability(
     noise_source: str = "",
     workers: int | None = None,
     candidates: Sequence[int] | None = None,
+    model_frf: np.ndarray | None = None,
 ) -> Detectability:
     """The detectability table (module docstring). ``var_new``, ``var_base``: (f, P) or (f,) variances of
     one FRF point of the new sweep and of the baseline (m^2/N^2), P = len(pairs); ``healthy_frf`` (f, P):
@@ -227,12 +222,15 @@ def detectability(
     test's benign model at these points, stacked like the signatures (None: noise only; see
     :func:`rotorcheck.workflow.benign_model`); ``workers``: processes for the benign-case searches
     (default: up to 2); ``elements``: the elements reported (default: all); ``candidates``: the joint test's
-    candidate elements (default: every element the channels see, as ``detect`` has)."""
+    candidate elements (default: every element the channels see, as ``detect`` has); ``model_frf``: the
+    model's own receptance (:func:`rotorcheck.signatures.io_frf`) when the caller has it."""
 
     f = np.asarray(freq_hz, dtype=float)
     P = len(pairs)
     multi = list(pairs) if P > 1 else None
-    th = np.asarray(healthy_frf) if healthy_frf is not None else io_frf(config, f, speed_rpm, multi)
+    if model_frf is None and healthy_frf is None:
+        model_frf = io_frf(config, f, speed_rpm, multi)
+    th = np.asarray(healthy_frf) if healthy_frf is not None else np.asarray(model_frf)
     th = unstacked(th, (f.size, P)) if P > 1 else th.reshape(f.size)
 
     def as_th(x: np.ndarray) -> np.ndarray:
@@ -242,7 +240,7 @@ def detectability(
     var = stacked(as_th(var_new) + as_th(var_base))
     # the detector's candidates are every element the channels see (or ``candidates``); ``elements`` only
     # chooses which of them are reported (the threshold is that of the whole candidate set)
-    els, S = crack_signatures(config, f, speed_rpm, th, candidates, pairs=multi)
+    els, S = crack_signatures(config, f, speed_rpm, th, candidates, pairs=multi, model_frf=model_frf)
     notes: list[str] = []
     wanted = set(els) if elements is None else set(elements)
     if elements is not None and not wanted <= set(els):
@@ -355,7 +353,7 @@ def visible_elements(config: RigConfig, freq_hz: np.ndarray, speed_rpm: float, s
     prs = [ChannelPair(o, i, "") for o in sensors for i in actuators]
     multi = prs if len(prs) > 1 else None
     th = io_frf(config, freq_hz, speed_rpm, multi)
-    return crack_signatures(config, freq_hz, speed_rpm, th, pairs=multi)[0]
+    return crack_signatures(config, freq_hz, speed_rpm, th, pairs=multi, model_frf=th)[0]
 
 
 def score_sensor_set(config: RigConfig, freq_hz: np.ndarray, speed_rpm: float, variance: float,
@@ -368,7 +366,7 @@ def score_sensor_set(config: RigConfig, freq_hz: np.ndarray, speed_rpm: float, v
     th = io_frf(config, freq_hz, speed_rpm, multi)
     bm = benign_for(prs, th)
     det = detectability(config, freq_hz, speed_rpm, np.full(th.shape, variance), np.full(th.shape, variance), prs,
-                        th, false_alarm, None if bm is None else linearized(bm), elements, workers=1)
+                        th, false_alarm, None if bm is None else linearized(bm), elements, workers=1, model_frf=th)
     return _score(det, elements)
 
 

@@ -80,13 +80,15 @@ def candidate_elements(config: RigConfig) -> tuple[int, ...]:
 
 def crack_signatures(config: RigConfig, freq_hz: np.ndarray, speed_rpm: float, healthy_frf: np.ndarray,
                      elements: Sequence[int] | None = None, loss: float = SIGNATURE_LOSS,
-                     pairs: Sequence[ChannelPair] | None = None) -> tuple[tuple[int, ...], np.ndarray]:
+                     pairs: Sequence[ChannelPair] | None = None, model_frf: np.ndarray | None = None
+                     ) -> tuple[tuple[int, ...], np.ndarray]:
     """``(elements, S)``: S (n_e, f) complex, the FRF change per unit stiffness loss (m/N per 1) of
     each element, re-solved at ``loss`` and anchored at ``healthy_frf``; with ``pairs`` (``healthy_frf``
-    (f, P)) each row is stacked over the pairs (P f,), pair after pair."""
+    (f, P)) each row is stacked over the pairs (P f,), pair after pair. ``model_frf``: the model's
+    :func:`io_frf` at these arguments when the caller has it (else solved here)."""
     f = np.asarray(freq_hz, dtype=float)
     els = tuple(elements) if elements is not None else candidate_elements(config)
-    g0 = io_frf(config, f, speed_rpm, pairs)
+    g0 = model_frf if model_frf is not None else io_frf(config, f, speed_rpm, pairs)
     th = unstacked(healthy_frf, g0.shape)
     S = np.array([stacked(th * (relative(io_frf(with_element_loss(config, e, loss), f, speed_rpm, pairs), g0) - 1.0)
                           / loss)

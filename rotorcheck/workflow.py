@@ -2104,7 +2104,8 @@ def detectability_for_rig(
     multi = pairs if len(pairs) > 1 else None
     th = io_frf(config, f, speed, multi)
     bm = benign_model(config, f, speed, th, KAPPA_NOMINAL, 0.0, None, multi)
-    return detectability(config, f, speed, var, var, pairs, th, false_alarm, bm, elements, None, noise, workers)
+    return detectability(config, f, speed, var, var, pairs, th, false_alarm, bm, elements, None, noise, workers,
+                         model_frf=th)
 
 
 def sensor_ranking_for_rig(

@@ -107,9 +107,6 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from rotorcheck.fe.elements import (
-    _S,
-    X_PLANE,
-    Y_PLANE,
     _gyro_from_rotary,
     _plane_rotary_mass,
     _plane_stiffness,
@@ -313,12 +310,9 @@ def _torque_matrix(L: Array, torque: Array) -> Array:
     """Torque matrix T int (psi d(theta)' - theta d(psi)') dz, Euler-Bernoulli N_b, (ne, 8, 8)."""
     _, nb, _, dnb = _shape_functions(L, np.zeros_like(L))
     a = _integral(torque[:, None] * L[:, None] * _WXI, nb, dnb)  # a_ij = T int N_i N_j' dz
-    at = np.swapaxes(a, 1, 2)
-    t = np.zeros((L.size, 8, 8))
-    # psi = N_b q_x, theta = -N_b S q_y: rows d(theta) get -S (int N_b'^T N_b) q_x, rows d(psi) (int N_b'^T N_b) S q_y
-    t[:, Y_PLANE[:, None], X_PLANE[None, :]] = -_S[:, None] * at
-    t[:, X_PLANE[:, None], Y_PLANE[None, :]] = at * _S[None, :]
-    return t
+    # psi = N_b q_x, theta = -N_b S q_y: rows d(theta) get -S (int N_b'^T N_b) q_x, rows d(psi) (int N_b'^T N_b) S q_y:
+    # the placement of the gyroscopic matrix from its plane matrix
+    return _gyro_from_rotary(np.swapaxes(a, 1, 2))
 
 
 def shaft_matrices(
@@ -430,8 +424,7 @@ def shaft_matrices(
     kga = np.where(sh, kap * G, 0.0)[:, None] * area
     kp = _integral(E[:, None] * inertia * dz, dnb, dnb) + _integral(kga * dz, gamma, gamma)
     if taper == "exact":
-        # uniform elements keep the polynomial integral (the same exact stiffness, the closed form to
-        # round-off, and bit for bit the numbers of "greenhill" and of earlier versions)
+        # tapered elements: the exact stiffness (uniform ones get the closed forms below)
         t = np.flatnonzero((dol != dor) | (dil != dir_))
         if t.size:
             kp[t] = _exact_stiffness(L[t], E[t], G[t], kap[t], sh[t], dol[t], dil[t], dor[t], dir_[t])
