@@ -1983,9 +1983,10 @@ def crack_report(
     unb = [UnbalanceMass(station=config.discs[0].station, amount=unbalance_g_m * 1e-3, phase=-np.pi / 2)]
     dofs = [system.dof(st, "x"), system.dof(st, "y")]
     harmonics = {}
+    solved: dict[tuple[float, str], tuple[np.ndarray, np.ndarray]] = {}  # for the figures too
     for speed in speeds_rpm:
         for name, c in (("healthy", None), ("cracked", crack)):
-            orders, X = unbalance_harmonics(system, c, speed, unb, dofs)
+            orders, X = solved[speed, name] = unbalance_harmonics(system, c, speed, unb, dofs)
             harmonics[f"{name}_{speed:g}rpm"] = {"order": orders.tolist(), "x_m": np.abs(X[:, 0]).tolist(),
                                                  "y_m": np.abs(X[:, 1]).tolist()}
     crit = critical_speed_summary(system, crack, speeds_rpm[0], config.analysis.campbell_max_rpm)
@@ -1994,7 +1995,8 @@ def crack_report(
         from rotorcheck.report.crack_plots import crack_figures
         from rotorcheck.report.figures import save_figure
 
-        figs = crack_figures(system, crack, unb, station=st, speeds_rpm=speeds_rpm, rig_id=config.rig_id)
+        figs = crack_figures(system, crack, unb, station=st, speeds_rpm=speeds_rpm, rig_id=config.rig_id,
+                             harmonics=solved)
         for key, stem in zip(("stiffness", "orbit", "spectrum"), stems):
             files += [str(p) for p in save_figure(figs[key], stem, formats)]
     return {"rig_id": config.rig_id, "fault": fault, "station": st, "unbalance_g_m": unbalance_g_m,

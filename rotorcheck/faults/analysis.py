@@ -30,6 +30,7 @@ __all__ = [
     "frozen_system",
     "hb_resonance_hz",
     "unbalance_harmonics",
+    "orbit_from_harmonics",
     "unbalance_orbit",
 ]
 
@@ -159,7 +160,13 @@ def unbalance_orbit(
     """
     outs = [system.dof(station, "x"), system.dof(station, "y")]
     orders, ph = unbalance_harmonics(system, crack, speed_rpm, unbalance, outs, n_harmonics)
+    return orbit_from_harmonics(orders, ph, speed_rpm, n_points)
+
+
+def orbit_from_harmonics(orders: np.ndarray, phasors: np.ndarray, speed_rpm: float, n_points: int = 361
+                         ) -> tuple[np.ndarray, np.ndarray]:
+    """``(t (n_points,) s, xy (n_points, 2) m)`` over one revolution from harmonic phasors (orders, (n, 2))
+    as :func:`unbalance_harmonics` returns them."""
     om = speed_rpm * RPM_TO_RAD_S
     t = np.linspace(0.0, 2.0 * np.pi / om, n_points)
-    xy = np.real(np.exp(1j * om * np.outer(t, orders)) @ ph)
-    return t, xy
+    return t, np.real(np.exp(1j * om * np.outer(t, orders)) @ phasors)

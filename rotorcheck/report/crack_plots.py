@@ -19,7 +19,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
 from rotorcheck.config import Crack, UnbalanceMass
-from rotorcheck.faults.analysis import unbalance_harmonics, unbalance_orbit
+from rotorcheck.faults.analysis import orbit_from_harmonics, unbalance_harmonics
 from rotorcheck.faults.crack import rotating_reduction
 from rotorcheck.fe.system import MechanicalSystem
 from rotorcheck.report.figures import legend_outside
@@ -163,10 +163,12 @@ def crack_figures(
     max_order: int = 5,
     n_harmonics: int = 10,
     rig_id: str = "",
+    harmonics: Mapping[tuple[float, str], tuple[np.ndarray, np.ndarray]] | None = None,
 ) -> dict[str, Any]:
     """Fig. 56-58 for a rig by harmonic balance; returns ``{"stiffness", "orbit", "spectrum"}``
     figures and the plotted ``data`` (harmonic amplitudes in m, orbits in m) at every speed of
-    ``speeds_rpm``."""
+    ``speeds_rpm``. ``harmonics``: :func:`unbalance_harmonics` at ``station`` (x, y) by ``(rpm, "healthy" |
+    "cracked")`` when the caller has them (else solved here, once each)."""
     e = next(el for el in system.elements if el.segment == crack.element)
     outs = [system.dof(station, "x"), system.dof(station, "y")]
     data: dict[str, Any] = {}
@@ -174,13 +176,15 @@ def crack_figures(
     orbits: dict[str, dict[str, np.ndarray]] = {}
     panels = []
     for rpm in speeds_rpm:
-        _, xy_h = unbalance_orbit(system, None, rpm, unbalance, station, n_harmonics=n_harmonics)
-        _, xy_c = unbalance_orbit(system, crack, rpm, unbalance, station, n_harmonics=n_harmonics)
+        hb = {name: (harmonics[rpm, name] if harmonics is not None and (rpm, name) in harmonics
+                     else unbalance_harmonics(system, ck, rpm, unbalance, outs, n_harmonics))
+              for name, ck in (("healthy", None), ("cracked", crack))}
+        xy_h, xy_c = (orbit_from_harmonics(*hb[name], rpm)[1] for name in ("healthy", "cracked"))
         orbits[f"{rpm:g} rpm"] = {"healthy": xy_h, "cracked": xy_c}
         data[f"orbits_{rpm:g}rpm"] = {"healthy": xy_h, "cracked": xy_c}
         amps, orders_kept = [], None
-        for name, ck in (("healthy", None), ("cracked", crack)):
-            orders, ph = unbalance_harmonics(system, ck, rpm, unbalance, outs, n_harmonics)
+        for name in ("healthy", "cracked"):
+            orders, ph = hb[name]
             keep = (orders >= 1) & (orders <= max_order)
             data[f"{name}, {rpm:g} rpm"] = {"orders": orders[keep], "amp": np.abs(ph[keep])}
             amps.append(ph[keep])
