@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from pathlib import Path
 
 
@@ -22,3 +23,11 @@ class InputError(UserInputError):
 
 class OutputExistsError(InputError):
     """An output file exists and ``--force`` was not given."""
+
+
+def check_choice(value: str, choices: Iterable[str], option: str) -> str:
+    """``value`` when it is one of ``choices``, else an InputError naming ``option`` and the choices."""
+    names = list(choices)
+    if value not in names:
+        raise InputError(None, option, f"must be one of {', '.join(names)}, got {value!r}")
+    return value

@@ -15,6 +15,7 @@ UNITS: dict[str, dict[str, float]] = {
     "mass": {"kg": 1.0, "g": 1e-3},
     "density": {"kg/m^3": 1.0, "kg/m3": 1.0, "g/cm^3": 1e3, "g/cm3": 1e3},
     "pressure": {"Pa": 1.0, "kPa": 1e3, "MPa": 1e6, "GPa": 1e9, "N/m^2": 1.0},
+    "receptance": {"m/N": 1.0, "mm/N": 1e-3, "um/N": 1e-6, "µm/N": 1e-6, "nm/N": 1e-9},
     "stiffness": {"N/m": 1.0, "N/mm": 1e3, "kN/m": 1e3, "MN/m": 1e6, "N/um": 1e6},
     "damping": {"N s/m": 1.0, "Ns/m": 1.0, "N*s/m": 1.0, "kg/s": 1.0},
     "inertia": {"kg m^2": 1.0, "kg*m^2": 1.0, "kg m2": 1.0, "g mm^2": 1e-9, "kg mm^2": 1e-6},

@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from rotorcheck.config import RigConfig, load_config
-from rotorcheck.errors import InputError
+from rotorcheck.errors import InputError, check_choice
 from rotorcheck.resources import default_rig_path
 from rotorcheck.signal.lockin import SHAFT_ORDERS
 
@@ -41,8 +41,7 @@ PLOT_FORMATS = {"png": ("png",), "pdf": ("pdf",), "both": ("png", "pdf")}
 
 def plot_formats(name: str) -> tuple[str, ...]:
     """``png`` (default) | ``pdf`` | ``both`` -> file formats; InputError naming ``--plot-format``."""
-    if name not in PLOT_FORMATS:
-        raise InputError(None, "--plot-format", f"must be one of {', '.join(PLOT_FORMATS)}, got {name!r}")
+    check_choice(name, PLOT_FORMATS, "--plot-format")
     return PLOT_FORMATS[name]
 
 
@@ -65,8 +64,7 @@ def model_report(
     config = load_config(rig_path)  # bad input fails here, before any work or output
     from rotorcheck.report.campbell import SPEED_UNITS
 
-    if speed_unit not in SPEED_UNITS:
-        raise InputError(None, "--speed-unit", f"must be one of {', '.join(SPEED_UNITS)}, got {speed_unit!r}")
+    check_choice(speed_unit, SPEED_UNITS, "--speed-unit")
 
     from rotorcheck.fe.assembly import build_system
     from rotorcheck.fe.modal import mode_table, model_summary, modes
@@ -598,8 +596,7 @@ def validate(
     from rotorcheck.nominal import nominal_model
     from rotorcheck.robust import validation
 
-    if enclose not in ENCLOSE_MODES:
-        raise InputError(None, "--enclose", f"must be one of {', '.join(ENCLOSE_MODES)}, got {enclose!r}")
+    check_choice(enclose, ENCLOSE_MODES, "--enclose")
     runs = [runs[0]] + [aligned_pairs(r, pair_keys(runs[0])) for r in runs[1:]]  # same pairs, rows reordered
     first = runs[0]
     for r in runs[1:]:
@@ -1170,8 +1167,8 @@ def detect(
     benign change inside the rig's ``variability`` ranges as bounded nuisance, ``false_alarm`` per
     sweep; :func:`joint_detection`) or 'certified' (the per-point fault points decide).
     """
-    if rule is not None and rule not in RULES:
-        raise InputError(None, "--rule", f"must be one of {', '.join(RULES)}, got {rule!r}")
+    if rule is not None:
+        check_choice(rule, RULES, "--rule")
     if rule == "joint" and baseline.enclose != "measured":
         raise InputError(None, "--rule", f"the joint test needs a baseline validated with --enclose measured "
                          f"(this one: {baseline.enclose!r})")
@@ -1790,9 +1787,7 @@ def check_frf_unit(frf_unit: str) -> str:
     """``frf_unit`` when the plots know it (m/N, mm/N, um/N), else an InputError naming --frf-unit."""
     from rotorcheck.report.plots import FRF_UNITS
 
-    if frf_unit not in FRF_UNITS:
-        raise InputError(None, "--frf-unit", f"must be one of {', '.join(FRF_UNITS)}, got {frf_unit!r}")
-    return frf_unit
+    return check_choice(frf_unit, FRF_UNITS, "--frf-unit")
 
 
 def figure_context(rig: RigConfig, run: MeasuredRun, baseline_path: str | Path | None = None,

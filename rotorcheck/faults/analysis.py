@@ -29,8 +29,8 @@ __all__ = [
     "critical_speed_summary",
     "frozen_system",
     "hb_resonance_hz",
-    "unbalance_harmonics",
     "orbit_from_harmonics",
+    "unbalance_harmonics",
     "unbalance_orbit",
 ]
 

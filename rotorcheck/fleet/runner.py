@@ -26,7 +26,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
-from rotorcheck.errors import InputError
+from rotorcheck.errors import InputError, check_choice
 from rotorcheck.fileio import atomic_write_text
 from rotorcheck.fleet.index import HashIndex
 from rotorcheck.fleet.layout import Fleet, discover
@@ -92,12 +92,10 @@ def default_out(source: Path) -> Path:
 
 def check_options(opts: FleetOptions) -> None:
     """Refuse bad options (InputError naming the option) before any work."""
-    if opts.executor not in EXECUTORS:
-        raise InputError(None, "--executor", f"must be one of {', '.join(EXECUTORS)}, got {opts.executor!r}")
+    check_choice(opts.executor, EXECUTORS, "--executor")
     if opts.workers is not None and opts.workers < 1:
         raise InputError(None, "--workers", f"must be >= 1, got {opts.workers}")
-    if opts.locate not in LOCATE_MODES:
-        raise InputError(None, "--locate", f"must be one of {', '.join(LOCATE_MODES)}, got {opts.locate!r}")
+    check_choice(opts.locate, LOCATE_MODES, "--locate")
     if opts.confirm < 1:
         raise InputError(None, "--confirm", f"must be >= 1, got {opts.confirm}")
     s = opts.settings

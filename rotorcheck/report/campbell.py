@@ -16,6 +16,7 @@ from rotorcheck.fe.elements import TimoshenkoBeam, beam_shape_functions
 from rotorcheck.fe.modal import CampbellResult, campbell, modes
 from rotorcheck.fe.system import MechanicalSystem
 from rotorcheck.report.rotor_drawing import boxes_overlap, text_extent
+from rotorcheck.units import UNITS
 
 
 class WhirlStyle(TypedDict):
@@ -36,7 +37,7 @@ WHIRL_STYLE: dict[str, WhirlStyle] = {
 }
 WHIRL_LETTER = {"forward": "F", "backward": "B", "planar": "P", "none": ""}
 #: spin speed units of the x axis: factor from rpm
-SPEED_UNITS: dict[str, float] = {"rpm": 1.0, "Hz": 1.0 / 60.0}
+SPEED_UNITS: dict[str, float] = {u: 1.0 / UNITS["speed"][u] for u in ("rpm", "Hz")}
 #: critical-speed markers per running-speed order
 ORDER_MARKERS = {1: "o", 2: "s", 3: "D", 4: "^", 5: "v"}
 OPERATING_COLOUR = "tab:green"

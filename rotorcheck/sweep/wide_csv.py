@@ -67,6 +67,7 @@ from rotorcheck.sweep.format import (
     noise_source_problem,
 )
 from rotorcheck.sweep.validation import validate_sweep
+from rotorcheck.units import UNITS
 
 __all__ = [
     "FREQUENCY_UNITS",
@@ -80,7 +81,7 @@ __all__ = [
 ]
 
 #: FRF units a column map may name, as the factor to m/N
-FRF_UNITS = {"m/N": 1.0, "mm/N": 1e-3, "um/N": 1e-6, "µm/N": 1e-6, "nm/N": 1e-9}
+FRF_UNITS = UNITS["receptance"]
 #: frequency units a column map may name, as the factor to Hz
 FREQUENCY_UNITS = {"Hz": 1.0, "kHz": 1e3}
 MAG_UNITS = ("linear", "dB")
