@@ -409,13 +409,10 @@ def mode_shape_figure(
             ax.set_xlabel("axial position (m)", fontsize=8)
         ax.tick_params(labelsize=7)
     if config is not None:
-        from rotorcheck.report.rotor_drawing import draw_rotor, rig_cracks
+        from rotorcheck.report.rotor_drawing import draw_rig
 
         rax = fig.add_subplot(gs[0, :], sharex=axes[0])
-        ports = config.ports
-        draw_rotor(rax, config, sensors=[ports.sensor] if ports is not None else [],
-                   actuators=[ports.actuator] if ports is not None else [], damage_port=config.damage,
-                   crack_elements=rig_cracks(config), fontsize=6.5)
+        draw_rig(rax, config, fontsize=6.5)
         rax.set_xlabel("")
     handles, labels = axes[0].get_legend_handles_labels()
     handles += [h for _, h in marks["legend"]]

@@ -416,8 +416,6 @@ def detectability_figure(config: Any, det: Any) -> Figure:
     """The rotor drawing (elements shaded by their detectable breathing depth with benign ranges) over the
     smallest detectable breathing-crack depth (% of diameter) per element: with the benign ranges, noise
     only, and the likelihood-ratio limit."""
-    import textwrap
-
     from matplotlib import colormaps
 
     from rotorcheck.nominal import parse_port
@@ -484,8 +482,6 @@ def location_figure(config: Any, location: Any, title: str = "") -> Figure:
                sensors=[p for p in (getattr(ports, "sensor", None),) if p is not None],
                candidates=([c.element for c in location.candidates]  # outlined only when not every element
                            if len(location.candidates) < len(config.shaft) else None))
-    import textwrap
-
     ax.set_title("\n".join(textwrap.wrap(title or location.summary(), 100)), fontsize=8, loc="left")
     for c in location.candidates:
         if c.status != "consistent":

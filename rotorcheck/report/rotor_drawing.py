@@ -25,7 +25,7 @@ from matplotlib.text import Text
 from rotorcheck.config import Crack, DamagePort, Port, RigConfig
 from rotorcheck.report.figures import legend_outside
 
-__all__ = ["COLOURS", "draw_rotor", "rig_cracks", "rig_elements", "rotor_figure"]
+__all__ = ["COLOURS", "draw_rig", "draw_rotor", "rig_cracks", "rig_elements", "rotor_figure"]
 
 #: colours of the drawing's parts (kept apart for the common colour-vision deficiencies)
 COLOURS = {
@@ -134,21 +134,18 @@ def draw_rotor(
     ax.plot([z[0] - 0.02 * length, z[-1] + 0.02 * length], [0.0, 0.0], color="0.3", lw=0.5, ls="-.",
             zorder=1)
     handles.setdefault("shaft (radius to scale)", Patch(facecolor=COLOURS["shaft"], edgecolor="black"))
-    for k in sorted(set(crack_elements) | ({damage_port.element} if isinstance(damage_port, DamagePort)
-                                           and damage_port.element is not None else set())):
-        x0, x1 = z[k - 1], z[k]
-        r = 0.5 * max(e.outer_diameter for e in config.shaft if e.start == k)
-        ax.add_patch(Rectangle((x0, -r), x1 - x0, 2 * r, facecolor="none", edgecolor=COLOURS["damage"],
-                               hatch="xxx", lw=1.2, zorder=4, gid=f"crack {k}"))
-        handles.setdefault("cracked / damage element", Patch(facecolor="none", edgecolor=COLOURS["damage"],
-                                                              hatch="xxx"))
-    for k in candidates or ():
-        x0, x1 = z[k - 1], z[k]
-        r = 0.5 * max(e.outer_diameter for e in config.shaft if e.start == k)
-        ax.add_patch(Rectangle((x0, -r), x1 - x0, 2 * r, facecolor="none", edgecolor=COLOURS["candidate"],
-                               hatch="...", lw=1.8, zorder=4, gid=f"candidate {k}"))
-        handles.setdefault("candidate element", Patch(facecolor="none", edgecolor=COLOURS["candidate"],
-                                                      hatch="...", lw=1.8))
+    marked = sorted(set(crack_elements) | ({damage_port.element} if isinstance(damage_port, DamagePort)
+                                           and damage_port.element is not None else set()))
+    for ks, colour, hatch, lw, gid, name in ((marked, "damage", "xxx", 1.2, "crack", "cracked / damage element"),
+                                            (candidates or (), "candidate", "...", 1.8, "candidate",
+                                             "candidate element")):
+        for k in ks:  # the element outlined and hatched over its largest outer radius
+            x0, x1 = z[k - 1], z[k]
+            r = 0.5 * max(e.outer_diameter for e in config.shaft if e.start == k)
+            ax.add_patch(Rectangle((x0, -r), x1 - x0, 2 * r, facecolor="none", edgecolor=COLOURS[colour],
+                                   hatch=hatch, lw=lw, zorder=4, gid=f"{gid} {k}"))
+            handles.setdefault(name, Patch(facecolor="none", edgecolor=COLOURS[colour], hatch=hatch,
+                                           lw=lw if gid == "candidate" else None))
     for d in config.discs:
         h, w, to_scale = _disc_half_height(config, d)
         zs = z[d.station - 1]
@@ -303,14 +300,19 @@ def rig_cracks(config: RigConfig) -> list[int]:
     return sorted({f.element for f in config.faults.values() if isinstance(f, Crack)})
 
 
+def draw_rig(ax: Any, config: RigConfig, **kw: Any) -> None:
+    """:func:`draw_rotor` with the rig's own sensor, actuator, damage port and crack faults marked."""
+    ports = config.ports
+    draw_rotor(ax, config, sensors=[ports.sensor] if ports is not None else [],
+               actuators=[ports.actuator] if ports is not None else [], damage_port=config.damage,
+               crack_elements=rig_cracks(config), **kw)
+
+
 def rotor_figure(config: RigConfig, title: str | None = None) -> Figure:
     """The rig alone: shaft, discs, bearings, the rig's sensor, actuator, damage port and cracks."""
     fig = Figure(figsize=(9.0, 3.6), layout="constrained")
     ax = fig.add_subplot()
-    ports = config.ports
-    draw_rotor(ax, config, sensors=[ports.sensor] if ports is not None else [],
-               actuators=[ports.actuator] if ports is not None else [], damage_port=config.damage,
-               crack_elements=rig_cracks(config))
+    draw_rig(ax, config)
     ax.set_title(title or f"Rotor of {config.rig_id}: {len(config.stations)} stations, "
                  f"{len(rig_elements(config))} shaft elements", fontsize=10)
     return fig
