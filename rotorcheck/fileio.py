@@ -14,13 +14,14 @@ import hashlib
 import json
 import os
 import secrets
+import shutil
 from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
 
 from rotorcheck.errors import InputError, OutputExistsError
 
 __all__ = ["atomic_path", "atomic_write_bytes", "atomic_write_text", "check_replaceable", "check_writable",
-           "read_bounded_text", "record_outputs"]
+           "file_sha256", "publish_dir", "read_bounded_text", "record_outputs", "temp_dir_beside"]
 
 _CREATE_ATTEMPTS = 100
 
@@ -87,6 +88,42 @@ def _publish(tmp: Path, target: Path, overwrite: bool) -> None:
         os.replace(tmp, target)
     else:
         tmp.unlink()
+
+
+def temp_dir_beside(final: str | os.PathLike[str]) -> Path:
+    """A new empty folder ``.<name>.<token>.tmp`` beside ``final`` (its parents created), to build a
+    folder's content in before :func:`publish_dir`."""
+    final = Path(final)
+    final.parent.mkdir(parents=True, exist_ok=True)
+    for _ in range(_CREATE_ATTEMPTS):
+        tmp = final.parent / f".{final.name}.{secrets.token_hex(6)}.tmp"
+        try:
+            tmp.mkdir()
+        except FileExistsError:
+            continue
+        return tmp
+    raise FileExistsError(f"{final}: no free temporary folder name in {final.parent}")
+
+
+def publish_dir(tmp: str | os.PathLike[str], final: str | os.PathLike[str], replace: bool = False) -> bool:
+    """Rename the finished folder ``tmp`` onto ``final`` (atomic on one file system, made durable): a folder
+    exists complete or not at all. ``replace``: an existing ``final`` is moved aside and removed first.
+    Returns False, ``tmp`` removed, when a ``final`` another writer published is in the way."""
+    tmp, final = Path(tmp), Path(final)
+    if replace and final.exists():
+        trash = final.parent / f".{final.name}.{secrets.token_hex(4)}.old"
+        with contextlib.suppress(OSError):
+            os.replace(final, trash)
+            shutil.rmtree(trash, ignore_errors=True)
+    try:
+        os.replace(tmp, final)
+    except OSError:
+        if final.is_dir():
+            shutil.rmtree(tmp, ignore_errors=True)
+            return False
+        raise
+    _fsync_dir(final.parent)
+    return True
 
 
 @contextlib.contextmanager

@@ -52,3 +52,26 @@ def test_failure_leaves_no_trace(tmp_path: Path) -> None:
             tmp.write_text("half")
             raise RuntimeError("boom")
     assert list(p.parent.iterdir()) == []
+
+
+def test_publish_dir_is_all_or_nothing_and_first_writer_wins(tmp_path: Path) -> None:
+    """A folder built beside its final name appears complete by one rename; a second copy finds the first in
+    place (False, its own folder removed); replace=True swaps the old folder for the new one."""
+    from rotorcheck.fileio import publish_dir, temp_dir_beside
+
+    final = tmp_path / "results" / "abc"
+    first = temp_dir_beside(final)
+    assert first.parent == final.parent and first.name.startswith(".abc.") and first.name.endswith(".tmp")
+    (first / "row.json").write_text("1")
+    assert not final.exists()
+    assert publish_dir(first, final) is True
+    assert (final / "row.json").read_text() == "1" and not first.exists()
+    second = temp_dir_beside(final)
+    (second / "row.json").write_text("2")
+    assert publish_dir(second, final) is False
+    assert (final / "row.json").read_text() == "1" and not second.exists()
+    third = temp_dir_beside(final)
+    (third / "row.json").write_text("3")
+    assert publish_dir(third, final, replace=True) is True
+    assert (final / "row.json").read_text() == "3"
+    assert sorted(p.name for p in final.parent.iterdir()) == ["abc"]  # nothing left beside it

@@ -17,17 +17,15 @@ defaults as ``rotorcheck detect`` and ``rotorcheck locate``.
 
 from __future__ import annotations
 
-import contextlib
 import json
 import os
-import secrets
 import shutil
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
 from rotorcheck.errors import UserInputError
-from rotorcheck.fileio import atomic_write_text
+from rotorcheck.fileio import atomic_write_text, publish_dir, temp_dir_beside
 
 DONE = "DONE"
 ROW_FILE = "row.json"
@@ -100,37 +98,6 @@ def is_done(task: SweepTask) -> bool:
         return (task.result_dir / LOCATION_DIR / DONE).exists()
     row = read_row(task.result_dir)
     return row is not None and _is_current(row, task)
-
-
-def _publish_dir(tmp: Path, final: Path, replace: bool) -> bool:
-    """Rename the finished ``tmp`` onto ``final``; False (``tmp`` removed) when another copy of the task
-    published first. ``replace``: an existing (stale) ``final`` is moved aside and removed."""
-    if replace and final.exists():
-        trash = final.parent / f".{final.name}.{secrets.token_hex(4)}.old"
-        with contextlib.suppress(OSError):
-            os.replace(final, trash)
-            shutil.rmtree(trash, ignore_errors=True)
-    try:
-        os.replace(tmp, final)
-    except OSError:
-        if (final / DONE).exists():
-            shutil.rmtree(tmp, ignore_errors=True)
-            return False
-        raise
-    with contextlib.suppress(OSError):
-        fd = os.open(final.parent, os.O_RDONLY)
-        try:
-            os.fsync(fd)
-        finally:
-            os.close(fd)
-    return True
-
-
-def _temp_dir(final: Path) -> Path:
-    final.parent.mkdir(parents=True, exist_ok=True)
-    tmp = final.parent / f".{final.name}.{secrets.token_hex(6)}.tmp"
-    tmp.mkdir()
-    return tmp
 
 
 def _maybe_die(task: SweepTask, tmp: Path) -> None:
@@ -268,7 +235,7 @@ def run_detect(task: SweepTask) -> dict[str, Any]:
             return {"row": row, "executed": False}
     from rotorcheck.report.reports import write_reports
 
-    tmp = _temp_dir(final)
+    tmp = temp_dir_beside(final)
     try:
         _maybe_die(task, tmp)
         try:
@@ -280,7 +247,7 @@ def run_detect(task: SweepTask) -> dict[str, Any]:
         atomic_write_text(tmp / ROW_FILE, json.dumps(row, sort_keys=True, indent=1) + "\n")
         atomic_write_text(tmp / DONE, task.task_key + "\n")
         stale = final.exists() and (task.force or not is_done(task))
-        if not _publish_dir(tmp, final, replace=stale):
+        if not publish_dir(tmp, final, replace=stale):
             return {"row": read_row(final), "executed": False}
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
@@ -299,7 +266,7 @@ def run_locate(task: SweepTask) -> dict[str, Any]:
     from rotorcheck.fe.blas import one_blas_thread
     from rotorcheck.report.reports import render_json
 
-    tmp = _temp_dir(final)
+    tmp = temp_dir_beside(final)
     try:
         _maybe_die(task, tmp)
         with one_blas_thread():
@@ -309,7 +276,7 @@ def run_locate(task: SweepTask) -> dict[str, Any]:
                "rig_id": cfg.rig_id, "speed_rpm": mrun.speed_rpm, **res.to_dict()}
         atomic_write_text(tmp / "location.json", render_json(doc))
         atomic_write_text(tmp / DONE, task.task_key + "\n")
-        if not _publish_dir(tmp, final, replace=task.force):
+        if not publish_dir(tmp, final, replace=task.force):
             return {"location": read_location(task.result_dir), "executed": False}
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
