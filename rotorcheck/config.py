@@ -279,7 +279,8 @@ class SpeedTable(Strict):
         return float(np.interp(speed_rpm, self.speed_rpm, self.values))
 
 
-_BEARING_TERMS = ("kxx", "kyy", "kxy", "kyx", "cxx", "cyy", "cxy", "cyx", "mxx", "myy", "mxy", "myx")
+#: a bearing's lateral coefficients (stiffness, damping, mass; x, y and cross terms)
+BEARING_TERMS = ("kxx", "kyy", "kxy", "kyx", "cxx", "cyy", "cxy", "cyx", "mxx", "myy", "mxy", "myx")
 
 
 class Bearing(Strict):
@@ -322,7 +323,7 @@ class Bearing(Strict):
     def coefficients(self, speed_rpm: float) -> dict[str, float]:
         """All twelve coefficients at ``speed_rpm`` (SI)."""
         out = {}
-        for name in _BEARING_TERMS:
+        for name in BEARING_TERMS:
             v = getattr(self, name)
             out[name] = v.at(speed_rpm) if isinstance(v, SpeedTable) else float(v)
         return out

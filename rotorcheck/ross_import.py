@@ -48,7 +48,7 @@ from typing import Any
 import numpy as np
 import yaml
 
-from rotorcheck.config import MAX_RIG_BYTES, ConfigError, parse_config
+from rotorcheck.config import BEARING_TERMS, MAX_RIG_BYTES, ConfigError, parse_config
 from rotorcheck.errors import InputError
 from rotorcheck.fileio import read_bounded_text
 
@@ -59,7 +59,7 @@ MAX_ROSS_BYTES = 50_000_000
 #: the ROSS version whose file format and interpolation this module follows
 ROSS_FORMAT_VERSION = "2.3.0"
 
-_LATERAL = ("kxx", "kyy", "kxy", "kyx", "cxx", "cyy", "cxy", "cyx", "mxx", "myy", "mxy", "myx")
+_LATERAL = BEARING_TERMS  # the lateral coefficients ROSS and rotorcheck share
 _AXIAL = ("kzz", "czz", "mzz")
 _COSMETIC = frozenset({"tag", "color", "scale_factor"})
 _SHAFT_KEYS = frozenset({

@@ -125,15 +125,15 @@ def _whirl_components(shapes: np.ndarray, lc: float) -> tuple[np.ndarray, np.nda
     return fwd, bwd
 
 
-def _circularize(lam: np.ndarray, vec: np.ndarray, lc: float, n_shaft: int | None = None) -> np.ndarray:
-    """Rotate bases of degenerate eigenvalue pairs to (backward, forward) circular modes."""
+def _circularize(lam: np.ndarray, vec: np.ndarray, lc: float, n_shaft: int) -> np.ndarray:
+    """Rotate bases of degenerate eigenvalue pairs to (backward, forward) circular modes (whirl judged on
+    the first ``n_shaft`` displacement DOF: the shaft's)."""
     vec = vec.copy()
     i = 0
     while i < lam.size - 1:
         if abs(lam[i + 1] - lam[i]) <= _DEGENERATE_TOL * abs(lam[i]):
             Q = vec[:, [i, i + 1]]
-            n = Q.shape[0] // 2
-            fwd, bwd = _whirl_components(Q[: n if n_shaft is None else n_shaft], lc)
+            fwd, bwd = _whirl_components(Q[:n_shaft], lc)
             # forward mode: combination with no backward component, and vice versa
             cf = np.linalg.svd(bwd, full_matrices=False)[2][-1].conj()
             cb = np.linalg.svd(fwd, full_matrices=False)[2][-1].conj()
@@ -144,7 +144,7 @@ def _circularize(lam: np.ndarray, vec: np.ndarray, lc: float, n_shaft: int | Non
     return vec
 
 
-def _normalise(shapes: np.ndarray, kind: str, n_shaft: int | None = None) -> np.ndarray:
+def _normalise(shapes: np.ndarray, kind: str, n_shaft: int) -> np.ndarray:
     """Scale each shape so its largest translational (shaft) component is 1 (real)."""
     trans = shapes[: n_shaft : 4] if kind == "rotor" else shapes
     idx = np.argmax(np.abs(trans), axis=0)
