@@ -33,7 +33,7 @@ from rotorcheck.fe.damping import modal_damping_matrix, rayleigh_damping_matrix
 from rotorcheck.fe.elements import RigidDisc, shear_coefficient
 from rotorcheck.fe.lumped import build_lumped
 from rotorcheck.fe.shaft import ShaftMatrices, shaft_matrices, shear_coefficient_by
-from rotorcheck.fe.system import BeamElementInfo, MechanicalSystem
+from rotorcheck.fe.system import BeamElementInfo, MechanicalSystem, rotor_dof, rotor_plane_dofs
 
 Matrices = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
 _CACHE_SIZE = 64
@@ -192,9 +192,7 @@ def build_rotor(config: RigConfig, modulus_factors: Mapping[int, float] | None =
 
     def xy(station: int) -> np.ndarray:
         """The x and y DOF of a shaft station or a support node."""
-        if station <= n_station:
-            return 4 * station_node[station - 1] + np.array([0, 1])
-        return n_shaft + 2 * (station - n_station - 1) + np.array([0, 1])
+        return np.array([rotor_dof(station_node, positions.size, n_sup, station, d) for d in ("x", "y")])
 
     M, G, K0 = assemble_beams(infos + layers, n_dof)
     C0 = np.zeros_like(M)
@@ -224,9 +222,7 @@ def build_rotor(config: RigConfig, modulus_factors: Mapping[int, float] | None =
             features.append(("bearing", b.name, b.station))
     bearings = tuple(config.bearings)
     damping = config.damping
-    sup = n_shaft + 2 * np.arange(n_sup)
-    base = 4 * np.arange(positions.size)
-    planes = (np.sort(np.r_[base, base + 3, sup]), np.sort(np.r_[base + 1, base + 2, sup + 1]))
+    planes = rotor_plane_dofs(positions.size, n_sup)
     cache: OrderedDict[tuple[float, ...], Matrices] = OrderedDict()
     names = ("kxx", "kxy", "kyx", "kyy", "cxx", "cxy", "cyx", "cyy", "mxx", "mxy", "myx", "myy")
 

@@ -10,7 +10,7 @@ al. (eq. 5.23): ``[u (x), v (y), theta (rotation about x), psi (rotation about y
 
 from __future__ import annotations
 
-from collections.abc import Callable, Hashable
+from collections.abc import Callable, Hashable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -88,6 +88,25 @@ class BeamElementInfo(TaperedSection):
         return np.r_[4 * self.node_i : 4 * self.node_i + 4, 4 * self.node_j : 4 * self.node_j + 4]
 
 
+def rotor_dof(station_node: Sequence[int], n_nodes: int, n_support: int, station: int, direction: str) -> int:
+    """Global DOF of a rotor's shaft ``station`` (1-based; 4 DOF per mesh node: u, v, theta, psi) or of a
+    support node (numbered after the last station; 2 DOF, x and y, after every shaft DOF)."""
+    n = len(station_node)
+    if n < station <= n + n_support and direction in ("x", "y"):
+        return 4 * n_nodes + 2 * (station - n - 1) + DIRECTION_OFFSET[direction]
+    if not 1 <= station <= n:
+        raise KeyError(f"station {station} out of range 1..{n}")
+    return 4 * station_node[station - 1] + DIRECTION_OFFSET[direction]
+
+
+def rotor_plane_dofs(n_nodes: int, n_support: int) -> tuple[np.ndarray, np.ndarray]:
+    """DOF indices of the x plane (u, psi) and the y plane (v, theta) of a rotor of ``n_nodes`` mesh nodes
+    and ``n_support`` support nodes (x and y each, after the shaft's DOF)."""
+    base = 4 * np.arange(n_nodes)
+    sup = 4 * n_nodes + 2 * np.arange(n_support)
+    return np.sort(np.r_[base, base + 3, sup]), np.sort(np.r_[base + 1, base + 2, sup + 1])
+
+
 @dataclass(frozen=True)
 class MechanicalSystem:
     """Assembled matrices of a rig at any speed.
@@ -131,12 +150,9 @@ class MechanicalSystem:
             if mass is None or mass not in self.mass_index:
                 raise KeyError(f"unknown mass {mass!r}")
             return self.mass_index[mass]
-        n = len(self.station_node)
-        if station is not None and n < station <= n + self.n_support and direction in ("x", "y"):
-            return self.n_shaft_dof + 2 * (station - n - 1) + DIRECTION_OFFSET[direction]
-        if station is None or not (1 <= station <= n):
-            raise KeyError(f"station {station} out of range 1..{n}")
-        return 4 * self.station_node[station - 1] + DIRECTION_OFFSET[direction]
+        if station is None:
+            raise KeyError(f"station {station} out of range 1..{len(self.station_node)}")
+        return rotor_dof(self.station_node, self.n_nodes, self.n_support, station, direction)
 
     def port_dof(self, port: object) -> int:
         """DOF of a config :class:`rotorcheck.config.Port`."""
@@ -161,9 +177,7 @@ class MechanicalSystem:
 
     def plane_dofs(self) -> tuple[np.ndarray, np.ndarray]:
         """DOF indices of the x plane (u, psi) and the y plane (v, theta) of a rotor."""
-        base = 4 * np.arange(self.n_nodes)
-        sup = self.n_shaft_dof + 2 * np.arange(self.n_support)
-        return np.sort(np.r_[base, base + 3, sup]), np.sort(np.r_[base + 1, base + 2, sup + 1])
+        return rotor_plane_dofs(self.n_nodes, self.n_support)
 
     def plane_pairs(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """A rotor's DOF under a quarter turn about the shaft axis: ``(ix, iy, sign)`` with
