@@ -14,13 +14,13 @@ from typing import Any
 from matplotlib.figure import Figure
 
 from rotorcheck.fileio import atomic_write_text
-from rotorcheck.fleet.trend import ASSUMPTIONS, Trend, days
+from rotorcheck.fleet.trend import ASSUMPTIONS, Trend, datetime_of_days, days
 
 VERDICT_COLOURS = {"healthy": "tab:green", "damage": "tab:red", "inconclusive": "tab:orange", "error": "tab:gray"}
 
 
 def _dates(x_days: Any) -> list[dt.datetime]:
-    return [dt.datetime.fromtimestamp(float(x) * 86400.0, dt.timezone.utc).replace(tzinfo=None) for x in x_days]
+    return [datetime_of_days(float(x)).replace(tzinfo=None) for x in x_days]
 
 
 def trend_figure(machine: str, rows: list[dict[str, Any]], trend: Trend) -> Figure:

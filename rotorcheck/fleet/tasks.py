@@ -81,15 +81,20 @@ def _is_current(row: dict[str, Any], task: SweepTask) -> bool:
             and row.get("settings") == asdict(task.settings))
 
 
-def read_row(result_dir: Path) -> dict[str, Any] | None:
-    """The finished result's row (None: no finished result there)."""
-    if not (result_dir / DONE).exists():
+def _finished_json(folder: Path, name: str) -> dict[str, Any] | None:
+    """The JSON file ``name`` of a finished (``DONE``) result folder; None when unfinished or unreadable."""
+    if not (folder / DONE).exists():
         return None
     try:
-        row: dict[str, Any] = json.loads((result_dir / ROW_FILE).read_text(encoding="utf-8"))
+        doc: dict[str, Any] = json.loads((folder / name).read_text(encoding="utf-8"))
     except (OSError, ValueError):
         return None
-    return row
+    return doc
+
+
+def read_row(result_dir: Path) -> dict[str, Any] | None:
+    """The finished result's row (None: no finished result there)."""
+    return _finished_json(result_dir, ROW_FILE)
 
 
 def is_done(task: SweepTask) -> bool:
@@ -165,13 +170,18 @@ def _num(x: Any) -> float | None:
     return v if math.isfinite(v) else None
 
 
+def _row_head(task: SweepTask) -> dict[str, Any]:
+    """What every row starts with: the version, the sweep and what its result depends on."""
+    return {"row_version": ROW_VERSION, "machine": task.machine, "time": task.time, "sweep": task.sweep,
+            "sweep_sha256": task.sweep_sha256, "baseline_sha256": task.baseline_sha256,
+            "settings": asdict(task.settings)}
+
+
 def summary_row(task: SweepTask, report: dict[str, Any], mask: Any) -> dict[str, Any]:
     """The summary's figures of one detection report (plain JSON types)."""
     interval = report.get("stiffness_loss_interval") or [None, None]
     row: dict[str, Any] = {
-        "row_version": ROW_VERSION, "machine": task.machine, "time": task.time, "sweep": task.sweep,
-        "sweep_sha256": task.sweep_sha256, "baseline_sha256": task.baseline_sha256, "settings": asdict(task.settings),
-        "verdict": report["verdict"], "verdict_reason": report["verdict_reason"], "error": "",
+        **_row_head(task), "verdict": report["verdict"], "verdict_reason": report["verdict_reason"], "error": "",
         "n_fault_points": int(report["n_fault_points"]), "n_points": int(report["n_points"]),
         "speed_rpm": float(report["speed_rpm"]), "joint_statistic": _num(report.get("joint_statistic")),
         "joint_threshold": _num(report.get("joint_threshold")), "joint_p_value": _num(report.get("joint_p_value")),
@@ -189,9 +199,7 @@ def summary_row(task: SweepTask, report: dict[str, Any], mask: Any) -> dict[str,
 
 def error_row(task: SweepTask, message: str) -> dict[str, Any]:
     """The row of a sweep that could not be checked (bad input): verdict 'error' with the message."""
-    return {"row_version": ROW_VERSION, "machine": task.machine, "time": task.time, "sweep": task.sweep,
-            "sweep_sha256": task.sweep_sha256, "baseline_sha256": task.baseline_sha256,
-            "settings": asdict(task.settings), "verdict": "error", "verdict_reason": message, "error": message,
+    return {**_row_head(task), "verdict": "error", "verdict_reason": message, "error": message,
             "benign_parameters": []}
 
 
@@ -286,14 +294,8 @@ def run_locate(task: SweepTask) -> dict[str, Any]:
 
 def read_location(result_dir: Path) -> dict[str, Any] | None:
     """``{"best_element", "summary"}`` of a finished location of a result, else None."""
-    d = result_dir / LOCATION_DIR
-    if not (d / DONE).exists():
-        return None
-    try:
-        doc = json.loads((d / "location.json").read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return None
-    return {"best_element": doc.get("best_element"), "summary": doc.get("summary", "")}
+    doc = _finished_json(result_dir / LOCATION_DIR, "location.json")
+    return None if doc is None else {"best_element": doc.get("best_element"), "summary": doc.get("summary", "")}
 
 
 def run_task(task: SweepTask) -> dict[str, Any]:

@@ -154,13 +154,20 @@ def days(iso: str) -> float:
     return d.timestamp() / 86400.0
 
 
+def datetime_of_days(x: float) -> Any:
+    """The UTC time (aware ``datetime``) ``x`` days after 1970-01-01 (the inverse of :func:`days`)."""
+    import datetime as dt
+
+    return dt.datetime.fromtimestamp(x * 86400.0, dt.timezone.utc)
+
+
 def iso_of_days(x: float | None) -> str | None:
     """The ISO time ``x`` days after 1970-01-01 (None stays None; far beyond year 9999 is None)."""
-    import datetime as dt
+    from rotorcheck.fleet.layout import iso_utc
 
     if x is None or not math.isfinite(x) or abs(x) > 2.9e6:
         return None
-    return dt.datetime.fromtimestamp(x * 86400.0, dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
+    return iso_utc(datetime_of_days(x))
 
 
 def fit_window(verdicts: list[str], min_points: int = 3) -> list[int]:
