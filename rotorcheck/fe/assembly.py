@@ -209,7 +209,10 @@ def build_rotor(config: RigConfig, modulus_factors: Mapping[int, float] | None =
         ix = xy(pm.station)
         M[ix, ix] += pm.masses
         features.append(("point_mass", pm.name, pm.station))
-    M_rotor, K_rotor = M.copy(), K0.copy()  # Rayleigh damping of scope "rotor"
+    damping = config.damping
+    # Rayleigh damping of scope "rotor": from M and K without springs and bearings, the same at every speed
+    rayleigh_rotor = (rayleigh_damping_matrix(M, K0, damping.alpha, damping.beta)
+                      if isinstance(damping, RayleighDamping) and damping.scope == "rotor" else None)
     for s in config.springs:
         node = station_node[s.station - 1]
         _node_block(K0, node, np.diag([s.kxx, s.kyy, s.k_rot, s.k_rot]))
@@ -221,7 +224,6 @@ def build_rotor(config: RigConfig, modulus_factors: Mapping[int, float] | None =
         if b.station <= n_station:
             features.append(("bearing", b.name, b.station))
     bearings = tuple(config.bearings)
-    damping = config.damping
     planes = rotor_plane_dofs(positions.size, n_sup)
     cache: OrderedDict[tuple[float, ...], Matrices] = OrderedDict()
     names = ("kxx", "kxy", "kyx", "kyy", "cxx", "cxy", "cyx", "cyy", "mxx", "mxy", "myx", "myy")
@@ -250,8 +252,8 @@ def build_rotor(config: RigConfig, modulus_factors: Mapping[int, float] | None =
         if isinstance(damping, ModalDamping):
             C = Cb + modal_damping_matrix(Mb, K, damping.ratios, planes)
         elif isinstance(damping, RayleighDamping):
-            Mr, Kr = (M_rotor, K_rotor) if damping.scope == "rotor" else (Mb, K)
-            C = Cb + rayleigh_damping_matrix(Mr, Kr, damping.alpha, damping.beta)
+            C = Cb + (rayleigh_rotor if rayleigh_rotor is not None
+                      else rayleigh_damping_matrix(Mb, K, damping.alpha, damping.beta))
         else:
             C = Cb
         return Mb, C, G, K
