@@ -1,0 +1,299 @@
+"""The benign-change model (re-solved at the rig's variability parameters), the joint test over every point,
+the per-point certificate beyond benign change, and learning drift from several healthy sweeps."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from rotorcheck.config import RigConfig
+from rotorcheck.errors import InputError
+from rotorcheck.workflow.measured import MeasuredRun, frf_estimate, per_pair
+
+
+def benign_table(joint: Any, rig: RigConfig) -> list[dict[str, Any]]:
+    """The fitted benign parameters: {name, estimate, interval (95 %, linearized), unit, at_range_edge};
+    relative changes in percent, offsets in their unit."""
+    from rotorcheck.variability import benign_parameters
+
+    params = {p.name: p for p in benign_parameters(rig)}
+    out = []
+    for name, x, se, edge in zip(joint.theta_names, joint.theta, joint.theta_se, joint.theta_at_bound):
+        prm = params.get(name)
+        factor = prm is None or prm.kind == "factor"
+        scale, unit = (100.0, "%") if factor else (1.0, prm.unit if prm is not None else "")
+        half = 1.96 * float(se)
+        interval = [scale * (float(x) - half), scale * (float(x) + half)] if np.isfinite(half) else [
+            float("nan"), float("nan")]
+        out.append({"name": name, "estimate": scale * float(x), "interval": interval,
+                    "unit": unit, "at_range_edge": bool(edge)})
+    return out
+
+
+def joint_verdict(joint: Any, certified: Any) -> Any:
+    """The sweep verdict of the joint test (its rule: :data:`rotorcheck.robust.joint.JOINT_RULE`); the
+    certified fault points stay as where in frequency the data depart."""
+    from rotorcheck.robust.validation import Verdict
+
+    e = joint.elements[joint.best] if joint.elements else 0
+    lo, hi = joint.severity_interval
+    if joint.damage:
+        why = (f"joint test: T = {joint.statistic:.4g} > {joint.threshold:.4g} (p = {joint.p_value:.2g} < "
+               f"{joint.false_alarm:g}); best explained by a stiffness loss of element {e}: "
+               f"{100 * joint.severity[joint.best]:.3g} % [{100 * lo:.3g}, {100 * hi:.3g}] (95 %)")
+        return Verdict("damage", why, certified.n_points, certified.n_fault, certified.n_undecided,
+                       certified.longest_run, certified.threshold)
+    benign = "noise" if not joint.theta_names else "benign change inside the configured ranges and noise"
+    why = (f"joint test: T = {joint.statistic:.4g} <= {joint.threshold:.4g} (p = {joint.p_value:.2g}); the change "
+           f"is explained by {benign} at false-alarm rate {joint.false_alarm:g}")
+    return Verdict("healthy", why, certified.n_points, certified.n_fault, certified.n_undecided,
+                   certified.longest_run, certified.threshold)
+
+
+#: relative error of the nominal model's benign-change prediction carried in H0 when the baseline holds
+#: one healthy sweep (limits.md 4: the nominal model predicts benign change only to 40-60 %). Measured on
+#: the crack rig (one healthy sweep; 10 sweeps per benign case with bench.detection_limit's seeds, 20 per
+#: speed at random corners of the ranges with other noise seeds), called damage / detected:
+#:   kappa 1.5: benign cases 0, corners 4 + 2 of 40; breathing 13 % / 20 %: 10 / 10; open E x 0.9: 10
+#:   kappa 2.0: benign cases 0, corners 1 + 0 of 40; breathing 13 % / 20 %: 8 / 9; open E x 0.9: 10
+#:   kappa 2.5: benign cases 0, corners 0 + 0 of 40; breathing 13 % / 20 %: 7 / 8; open E x 0.9: 6
+KAPPA_NOMINAL = 2.0
+
+
+#: kappa values tried, smallest first, when several healthy sweeps test it (never below the nominal:
+#: see :func:`learn_benign`)
+KAPPA_GRID = (KAPPA_NOMINAL, 3.0)
+
+
+def benign_model(rig: RigConfig, f: np.ndarray, speed_rpm: float, Th: np.ndarray, kappa: float,
+                  speed_offset: float = 0.0, correction: np.ndarray | None = None, pairs: Any = None) -> Any:
+    """The model's benign change (re-solved, anchored at ``Th``) for the joint test; None without a
+    ``variability`` section. A recorded speed offset shifts the speed parameter's range. ``correction``
+    (p, f) m/N per unit parameter, learned from healthy sweeps, is added: ``b(theta) + theta C``."""
+    from rotorcheck.robust.joint import BenignModel
+    from rotorcheck.signatures import benign_prediction
+    from rotorcheck.variability import benign_at
+
+    if not rig.variability:
+        return None
+    params = benign_at(rig, speed_rpm)
+    if not params:  # at standstill a speed tolerance changes nothing
+        return None
+    pred = benign_prediction(rig, f, speed_rpm, Th, params, pairs)
+    n = int(np.asarray(Th).size)  # points of every channel pair
+    lo, hi = pred.lo.copy(), pred.hi.copy()
+    step = np.array([1e-4 if p.kind == "factor" else 1e-3 * max(p.hi - p.lo, 1e-9) for p in pred.parameters])
+    for i, prm in enumerate(pred.parameters):
+        if prm.is_speed:
+            lo[i], hi[i] = lo[i] + speed_offset, hi[i] + speed_offset
+            step[i] = 0.5
+    predict = pred.predict
+    if correction is not None:
+        C = np.asarray(correction, dtype=complex)
+        if C.shape != (len(params), n):
+            raise InputError(None, "benign_correction", f"shape {C.shape} does not match the rig's {len(params)} "
+                             f"benign parameters at {n} points")
+
+        def predict(theta: np.ndarray, base: Any = pred.predict) -> np.ndarray:
+            return base(theta) + np.asarray(theta, dtype=float) @ C
+    # the largest benign change the ranges allow at each point: each parameter at either end of its
+    # range, magnitudes added (the triangle inequality over the parameters)
+    # a gain's change is exact (T_h g): it carries no model error; the envelope covers the rest
+    exact = np.array([p.is_gain for p in params], dtype=bool)
+    envelope = np.zeros(n)
+    for i in range(len(params)):
+        if exact[i]:
+            continue
+        ends = []
+        for end in (lo[i], hi[i]):
+            x = np.zeros(len(params))
+            x[i] = end
+            ends.append(np.abs(predict(x)))
+        envelope += np.maximum(*ends)
+    return BenignModel(predict, lo, hi, pred.names, kappa, step, envelope, exact)
+
+
+def _learned(baseline: Any) -> Any:
+    from rotorcheck.robust.joint import LearnedDirections
+
+    if baseline.benign_directions is None:
+        return None
+    U = np.asarray(baseline.benign_directions)
+    return LearnedDirections(U, np.asarray(baseline.benign_direction_bound), np.zeros(0), int(baseline.n_healthy))
+
+
+def joint_detection(rig: RigConfig, Th: np.ndarray, var_h: np.ndarray, run: MeasuredRun, kappa: float,
+                    learned: Any = None, false_alarm: float = 0.01, speed_rpm: float | None = None,
+                    correction: np.ndarray | None = None) -> Any:
+    """The joint test (:mod:`rotorcheck.robust.joint`) of ``run`` against the healthy FRF ``Th`` (f,) or
+    (f, P), one column per channel pair, with the variance of its mean ``var_h`` (same shape), m^2/N^2;
+    every point of every pair enters one statistic. ``correction``: see :func:`learn_benign`."""
+    from rotorcheck.robust.joint import joint_test
+    from rotorcheck.signatures import crack_signatures, stacked
+
+    f = run.frequency_hz
+    speed = run.speed_rpm if speed_rpm is None else speed_rpm
+    est = frf_estimate(run)
+    th, vh = per_pair(Th, f, est.frf.shape[1], run), per_pair(var_h, f, est.frf.shape[1], run)
+    pairs = run.pairs if run.n_pairs > 1 else None
+    els, S = crack_signatures(rig, f, speed, th, pairs=pairs)
+    benign = benign_model(rig, f, speed, th, kappa, run.speed_rpm - speed, correction, pairs)
+    return joint_test(stacked(est.frf - th), stacked(est.var + vh), S, els, benign, learned, false_alarm)
+
+
+def certify_beyond_benign(rig: RigConfig, Th: np.ndarray, var_h: np.ndarray, run: MeasuredRun, joint: Any,
+                          speed_rpm: float | None = None, max_boxes: int = 200) -> tuple[Any, list[str]] | None:
+    """Per point: is the change certified beyond every benign change inside the ranges (the parameters
+    real, branch and bound; :mod:`rotorcheck.robust.real_box`), given both sweeps' noise and the joint
+    test's model-error allowance at that point? With several channel pairs each is certified on its own
+    and a point counts when any pair is (the quantile is Sidak over every point of every pair). None
+    without benign parameters that change the model. Returns the certificate and notes."""
+    from rotorcheck.robust.real_box import BoxCertificate, certify_points, merge_certificates
+    from rotorcheck.signatures import SILENT, benign_box, io_frf
+    from rotorcheck.variability import benign_at
+
+    speed = run.speed_rpm if speed_rpm is None else speed_rpm
+    params = benign_at(rig, speed) if rig.variability else ()
+    if not params or rig.kind != "rotor":
+        return None
+    est = frf_estimate(run)
+    nf, n_pairs = est.frf.shape
+    th, vh = per_pair(Th, run.frequency_hz, n_pairs, run), per_pair(var_h, run.frequency_hz, n_pairs, run)
+    z = float(np.sqrt(joint.point_threshold / 2.0))  # |r|^2 / sigma^2 ~ Exp(1): chi2_2 / 2
+    certs = []
+    g0 = io_frf(rig, run.frequency_hz, speed, run.pairs if n_pairs > 1 else None).reshape(nf, n_pairs)
+    box0 = benign_box(rig, speed, params, run.speed_rpm - speed)  # the parameters once; each pair's view below
+    notes = list(box0.notes)
+    for k in range(n_pairs):
+        if np.max(np.abs(g0[:, k])) <= SILENT * np.max(np.abs(g0)):
+            # the model says this pair does not respond (its planes decouple): nothing benign to predict
+            certs.append(BoxCertificate(np.full(nf, "explained", dtype="<U11"), np.full((nf, len(params)), np.nan),
+                                        np.full(nf, np.nan), np.zeros(nf, dtype=int), np.zeros(nf, dtype=bool)))
+            continue
+        box = box0.for_pair(run.pairs[k]) if n_pairs > 1 else box0
+        certs.append(certify_points(box.model, 2.0 * np.pi * run.frequency_hz, est.frf[:, k], th[:, k],
+                                    est.var[:, k], vh[:, k], z, joint.model_error[k * nf:(k + 1) * nf], box.gain,
+                                    max_boxes))
+    if joint.learned:
+        notes.append("the per-point certificate beyond benign change uses the model's parameters only (the "
+                     "learned benign directions are no parameters of the model)")
+    return merge_certificates(certs), notes
+
+
+@dataclass
+class BenignLearning:
+    """What several healthy sweeps teach about benign change (:func:`learn_benign`)."""
+
+    kappa: float  # relative error of the benign prediction carried in H0
+    correction: np.ndarray | None = None  # (p, f) m/N per unit parameter: data's correction of the model
+    learned: Any = None  # robust.joint.LearnedDirections: what parameters cannot explain
+    theta: np.ndarray | None = None  # (K, p) the training sweeps' fitted parameters
+    # per benign parameter: how much of the data's response to it the model predicts (the part of the
+    # model's sensitivity along the learned one, |<s_model, s_data>| / ||s_data||^2, whitened) and the
+    # cosine between them
+    model_share: dict[str, tuple[float, float]] = field(default_factory=dict)
+    explained: float | None = None  # share of the sweeps' spread the parameters (model + correction) explain
+
+
+def _regress(theta: np.ndarray, left: np.ndarray, ridge: float = 1e-3) -> np.ndarray:
+    """``C`` (p, f) minimizing sum_k ||left_k - theta_k C||^2, each parameter scaled to unit RMS first
+    (parameters come in % and rpm) with a ridge ``ridge`` on the scaled Gram matrix."""
+    scale = np.sqrt(np.mean(theta**2, axis=0))
+    scale = np.where(scale > 0, scale, 1.0)
+    t = theta / scale
+    G = t.T @ t
+    lam = ridge * max(float(np.trace(G)) / max(G.shape[0], 1), 1e-300)
+    return np.linalg.solve(G + lam * np.eye(G.shape[0]), t.T @ left) / scale[:, None]
+
+
+def learn_benign(rig: RigConfig, runs: list[MeasuredRun], false_alarm: float = 0.01, iterations: int = 3
+                 ) -> BenignLearning:
+    """From several healthy sweeps (a warm-up, several days: drifted across the ranges):
+
+    1. each sweep's benign parameters ``theta_k`` fitted against the mean, and what the model leaves,
+       ``e_k``; the model's benign change is corrected by the regression ``e ~ theta C`` (the data's own
+       response to each named parameter, so the ranges keep their meaning), refitted ``iterations`` times;
+    2. benign directions in what remains (:func:`rotorcheck.robust.joint.learn_directions`);
+    3. kappa: the smallest of :data:`KAPPA_GRID` under which no sweep, left out and tested against the
+       others (correction and directions learned without it), is called damage (the largest if none);
+       the grid starts at :data:`KAPPA_NOMINAL`: sweeps drawn inside the ranges do not show their
+       corners (on the crack rig, with an earlier allowance, 8 training sweeps gave 1.0 and 4 of 10
+       benign corners were then called damage).
+
+    One sweep: kappa = :data:`KAPPA_NOMINAL`, nothing learned; two: directions only (no leave-one-out)."""
+    from rotorcheck.robust.joint import learn_directions
+
+    if len(runs) < 2:
+        return BenignLearning(KAPPA_NOMINAL)
+    from rotorcheck.signatures import stacked
+
+    speed = runs[0].speed_rpm
+    ests = [frf_estimate(r) for r in runs]
+    frfs = [e.frf for e in ests]  # (f, P) each
+    mean = np.mean(frfs, axis=0)
+    var_mean = np.sum([e.var for e in ests], axis=0) / len(ests) ** 2
+    var_one = np.mean([e.var for e in ests], axis=0)
+    var_flat = stacked(var_one)
+
+    def fits(C: np.ndarray | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        js = [joint_detection(rig, mean, var_mean, r, 0.0, None, false_alarm, speed, C) for r in runs]
+        th = np.array([j.theta for j in js], dtype=float)
+        left = np.array([j.unexplained for j in js])
+        raw = left + (th @ C if C is not None else 0.0)  # what the uncorrected model leaves
+        return th, left, raw
+
+    C: np.ndarray | None = None
+    th, left, raw = fits(None)
+    # the speed tolerance is corrected by nothing: its effect (gyroscopics) is small beside the others
+    # and its training values are barely identifiable, so a regression on it learns noise (leaving the
+    # gain out of the correction too was tried: bearing me -2 % at 0 rpm then called damage 5 of 10)
+    from rotorcheck.variability import benign_at
+
+    params = benign_at(rig, speed)
+    keep = np.array([not p.is_speed for p in params], dtype=bool)
+
+    def regress(t: np.ndarray, e: np.ndarray) -> np.ndarray:
+        out = np.zeros((t.shape[1], e.shape[1]), dtype=complex)
+        out[keep] = _regress(t[:, keep], e)
+        return out
+
+    if th.shape[1] and len(runs) > int(np.count_nonzero(keep)):
+        for _ in range(iterations):
+            C = regress(th, raw)
+            th, left, raw = fits(C)
+    learned = learn_directions(list(left), 2.0 * var_flat)
+    wgt = 1.0 / var_flat  # whitening of a difference of two sweeps (real parts): 2 / (2 var)
+    share: dict[str, tuple[float, float]] = {}
+    if C is not None:
+        bm = benign_model(rig, runs[0].frequency_hz, speed, mean, 0.0,
+                           pairs=runs[0].pairs if runs[0].n_pairs > 1 else None)
+        zero = np.zeros(len(params))
+        for j, prm in enumerate(params):
+            if not keep[j]:
+                continue
+            x = zero.copy()
+            x[j] = h = float(bm.step[j])
+            s_m = (bm.predict(x) - bm.predict(zero)) / h
+            s_d = s_m + C[j]
+            inner = np.sum(wgt * s_m.conj() * s_d)
+            nd, nm = np.sum(wgt * np.abs(s_d) ** 2), np.sum(wgt * np.abs(s_m) ** 2)
+            share[prm.name] = (float(abs(inner) / nd), float(abs(inner) / np.sqrt(nd * nm)))
+    spread = np.array([stacked(x - mean) for x in frfs])
+    explained = 1.0 - float(np.sum(wgt * np.abs(left) ** 2) / np.sum(wgt * np.abs(spread) ** 2))
+    if len(runs) < 3:
+        return BenignLearning(KAPPA_NOMINAL, C, learned, th, share, explained)
+
+    def left_out_called_damage(i: int, kappa: float) -> bool:
+        rest = [j for j in range(len(runs)) if j != i]
+        c = np.mean([frfs[j] for j in rest], axis=0)
+        v = np.sum([ests[j].var for j in rest], axis=0) / len(rest) ** 2
+        Ci = regress(th[rest], raw[rest]) if C is not None else None
+        lrn = learn_directions([left[j] for j in rest], 2.0 * var_flat)
+        return bool(joint_detection(rig, c, v, runs[i], kappa, lrn, false_alarm, speed, Ci).damage)
+
+    kappa = next((k for k in KAPPA_GRID if not any(left_out_called_damage(i, k) for i in range(len(runs)))),
+                 KAPPA_GRID[-1])
+    return BenignLearning(kappa, C, learned, th, share, explained)
+

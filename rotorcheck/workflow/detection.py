@@ -1,0 +1,477 @@
+"""Steps 4-5: fault points of a new run against a baseline, the sweep verdict and its rule, the damage
+dynamics D_u (N/m) with its bound."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from rotorcheck.config import RigConfig
+from rotorcheck.errors import InputError, check_choice
+from rotorcheck.workflow.benign import (
+    KAPPA_NOMINAL,
+    _learned,
+    benign_table,
+    certify_beyond_benign,
+    joint_detection,
+    joint_verdict,
+)
+from rotorcheck.workflow.directional import damage_per_direction
+from rotorcheck.workflow.measured import (
+    MeasuredRun,
+    _show_pairs,
+    aligned_pairs,
+    baseline_pairs,
+    frf_estimate,
+    grid_mismatch,
+    pair_experiments,
+    pair_keys,
+    per_pair,
+)
+from rotorcheck.workflow.noise import baseline_noise_values
+from rotorcheck.workflow.rigs import baseline_updates, damage_port_name, speed_tolerance, updated_rig
+from rotorcheck.workflow.validation import parameter_structure
+
+VERDICT_RULE = (
+    "damage if the number of fault points is at least max(3, 2 % of the points) or at least 2 "
+    "adjacent points are faults; otherwise inconclusive if any point could not be decided (solver "
+    "failure) or the healthy data could not be enclosed somewhere; otherwise healthy"
+)
+
+
+@dataclass
+class DetectionOutcome:
+    """Per-point detection and identification (arrays (f,)) and the sweep-level verdict."""
+
+    rig: RigConfig
+    baseline: Any
+    run: MeasuredRun
+    model: Any
+    detection: Any  # robust.validation.DetectionResult
+    verdict: Any  # robust.validation.Verdict
+    damage: np.ndarray  # D_u nominal (N/m), eq. 3.11 with the nominal E22
+    damage_set: Any  # robust.identify.DamageSet over the uncertainty inherited from gamma_h and V (eq. 3.12)
+    anchored: np.ndarray | None = None  # D_u with E22 anchored at the healthy data (N/m)
+    anchored_set: Any = None  # its exact set (noise of both sweeps)
+    notes: list[str] = field(default_factory=list)
+    measured: Any = None  # robust.measured.MeasuredDetection (enclose 'measured')
+    anchored_noise_only: Any = None  # the anchored bound over the noise alone (measured)
+    joint: Any = None  # robust.joint.JointResult (the joint test, when it decided)
+    beyond_benign: Any = None  # robust.real_box.BoxCertificate: per-point certificate beyond benign change
+    damage_xy: Any = None  # DirectionalDamage: D at the damage station in x and y (several pairs)
+    location: Any = None  # rotorcheck.location.LocationResult (detect --locate)
+    detectability: Any = None  # rotorcheck.detectability.Detectability of this sweep (a few elements)
+
+    @property
+    def exit_code(self) -> int:
+        return {"healthy": 0, "damage": 1, "inconclusive": 3}[self.verdict.verdict]
+
+    @property
+    def verdict_rule(self) -> str:
+        """The rule that made the verdict: the joint test's, the measured per-point one, or the certified one."""
+        from rotorcheck.robust.joint import JOINT_RULE
+        from rotorcheck.robust.measured import MEASURED_RULE
+
+        if self.joint is not None:
+            return JOINT_RULE
+        return MEASURED_RULE if self.measured is not None else VERDICT_RULE
+
+    @property
+    def fault_beyond_benign(self) -> np.ndarray | None:
+        """(f,) points unexplained after the joint test's fitted benign change in any channel pair (None: no
+        joint test)."""
+        if self.joint is None:
+            return None
+        f = self.run.frequency_hz
+        return np.asarray(np.asarray(self.joint.remaining, dtype=bool).reshape(-1, f.size).any(axis=0))
+
+    def report(self) -> dict[str, Any]:
+        """The report.json document (cli.md keys plus context): :meth:`typed_report` as a dict."""
+        return self.typed_report().to_dict()
+
+    def typed_report(self) -> Any:
+        """The report as a :class:`rotorcheck.report.schema.DetectionReport`."""
+        from rotorcheck.report.schema import DetectionReport
+
+        f = self.run.frequency_hz
+        fault = np.asarray(self.detection.fault, dtype=bool)
+        ds = self.damage_set
+        m = self.measured
+        rep = DetectionReport(
+            verdict=self.verdict.verdict, verdict_reason=self.verdict.reason,
+            verdict_rule=self.verdict_rule,
+            n_points=int(f.size), n_fault_points=int(np.count_nonzero(fault)),
+            fault_frequencies_hz=[float(x) for x in f[fault]], rig_id=self.rig.rig_id,
+            rig_sha256=self.rig.sha256(), sweep=str(self.run.path), sweep_sha256=self.run.sha256,
+            run_id=self.run.run_id, speed_rpm=self.run.speed_rpm, band_hz=list(self.run.band_hz),
+            noise_bound_m=self.baseline.noise_bound_m, noise_method=self.baseline.noise_method,
+            uncertainty=self.baseline.uncertainty, parameter=self.baseline.parameter,
+            enclose=self.baseline.enclose, damage_port=damage_port_name(self.rig),
+            shaft_orders_removed=self.run.harmonics_removed, notes=self.notes, frequency_hz=f,
+            gamma_healthy=self.detection.gamma_healthy, gamma_required=self.detection.gamma_required,
+            gamma_required_upper=self.detection.gamma_required_upper, fault=fault,
+            status=[str(s) for s in self.detection.status],
+            damage_dynamics_re=self.damage.real, damage_dynamics_im=self.damage.imag,
+            damage_bound_kind=[str(k) for k in ds.kind], damage_bound_min_abs=ds.min_abs,
+            damage_bound_max_abs=ds.max_abs, damage_bound_phase_min_deg=np.degrees(ds.phase_min),
+            damage_bound_phase_max_deg=np.degrees(ds.phase_max),
+        )
+        rep.channel_pairs = [f"{o}<-{i}" for o, i in pair_keys(self.run)] or None
+        if m is not None:
+            rep.confidence, rep.n_tests, rep.point_miss_probability = m.confidence, m.n_tests, m.point_miss
+            rep.p_value, rep.point_p_value, rep.variance_dof = m.family_p_value, m.p_value, m.dof[:, 0]
+            rep.gamma_meaning = ("measured detection: gamma_required = |T_new - T_healthy| (m/N), gamma_healthy = "
+                                 "the noise allowance of that difference at the per-point level (m/N)")
+        if self.anchored is not None and self.anchored_set is not None:
+            a = self.anchored_set
+            rep.damage_dynamics_anchored_re, rep.damage_dynamics_anchored_im = self.anchored.real, self.anchored.imag
+            rep.damage_anchored_bound_kind = [str(k) for k in a.kind]
+            rep.damage_anchored_bound_min_abs, rep.damage_anchored_bound_max_abs = a.min_abs, a.max_abs
+            rep.damage_anchored_bound_phase_min_deg = np.degrees(a.phase_min)
+            rep.damage_anchored_bound_phase_max_deg = np.degrees(a.phase_max)
+            rep.damage_anchored_bound_confidence = m.confidence if m is not None else None
+            if self.anchored_noise_only is not None:
+                rep.damage_anchored_channel_error = getattr(a, "channel_error", None)
+                rep.damage_anchored_noise_min_abs = self.anchored_noise_only.min_abs
+                rep.damage_anchored_noise_max_abs = self.anchored_noise_only.max_abs
+        j = self.joint
+        if j is not None:
+            rep.joint_statistic, rep.joint_threshold, rep.joint_p_value = j.statistic, j.threshold, j.p_value
+            rep.false_alarm, rep.candidate_elements = j.false_alarm, list(j.elements)
+            rep.element_statistic = [float(x) for x in j.t_element]
+            if j.elements:
+                rep.best_element = j.elements[j.best]
+                rep.stiffness_loss = float(j.severity[j.best])
+                rep.stiffness_loss_interval = list(j.severity_interval)
+            rep.detectable_stiffness_loss = [float(x) for x in j.detectable]
+            rep.benign_parameters = benign_table(j, self.rig)
+            rep.benign_model_error, rep.learned_benign_directions = j.kappa, j.learned
+            rem = self.fault_beyond_benign
+            assert rem is not None
+            rep.fault_beyond_benign = rem
+            rep.fault_beyond_benign_frequencies_hz = [float(x) for x in f[rem]]
+        if self.location is not None:
+            rep.location = self.location.to_dict()
+        if self.detectability is not None:
+            rep.detectability = self.detectability.to_dict()
+        dxy = self.damage_xy
+        if dxy is not None:
+            rep.damage_dynamics_by_direction = {
+                d: {"re": dxy.estimate[:, k, k].real, "im": dxy.estimate[:, k, k].imag,
+                    "re_interval": [dxy.re_interval[0][:, k], dxy.re_interval[1][:, k]],
+                    "im_interval": [dxy.im_interval[0][:, k], dxy.im_interval[1][:, k]],
+                    "interval_confidence": 0.95, "interval_draws": dxy.draws,
+                    **({} if dxy.bound is None else {
+                        "bound_kind": [str(x) for x in dxy.bound.kind],
+                        "bound_re": [dxy.bound.re_outer[:, k, 0], dxy.bound.re_outer[:, k, 1]],
+                        "bound_im": [dxy.bound.im_outer[:, k, 0], dxy.bound.im_outer[:, k, 1]],
+                        "witness_re": [dxy.bound.re_inner[:, k, 0], dxy.bound.re_inner[:, k, 1]],
+                        "witness_im": [dxy.bound.im_inner[:, k, 0], dxy.bound.im_inner[:, k, 1]],
+                        "bound_confidence": m.confidence if m is not None else None})}
+                for k, d in enumerate("xy")}
+        c = self.beyond_benign
+        if c is not None:
+            rep.beyond_benign_rule, rep.beyond_benign_status = c.rule, [str(x) for x in c.status]
+            rep.certified_beyond_benign_frequencies_hz = [float(x) for x in f[c.unexplained]]
+            rep.n_certified_beyond_benign = int(np.count_nonzero(c.unexplained))
+            rep.n_undecided_beyond_benign = int(np.count_nonzero(c.undecided))
+            rep.n_certified_beyond_benign_complex = int(np.count_nonzero(c.complex_unexplained))
+        return rep
+
+
+def check_baseline(baseline: Any, rig: RigConfig, run: MeasuredRun, baseline_path: str | Path) -> MeasuredRun:
+    """Refuse a baseline made for another rig, speed or grid (InputError naming the field); returns ``run``
+    with its channel pairs in the baseline's order (:func:`aligned_pairs`)."""
+    if not baseline.validated:
+        raise InputError(baseline_path, "/@stage", "baseline holds only a noise fit; run 'rotorcheck validate'")
+    if baseline.rig_sha256 != rig.sha256():
+        raise InputError(baseline_path, "/@rig_sha256",
+                         f"baseline was made for another rig description (rig_id {baseline.rig_id!r}, "
+                         f"sha256 {baseline.rig_sha256[:12]}; this rig {rig.sha256()[:12]})")
+    d_rpm = run.speed_rpm - baseline.speed_rpm
+    tol = speed_tolerance(rig)
+    why = ""
+    if abs(d_rpm) <= 1e-9:
+        pass
+    elif baseline.speed_rpm == 0.0:
+        why = "a baseline at standstill is not compared with a spinning run"
+    elif tol == 0.0:
+        why = "the rig's variability section sets no speed tolerance"
+    elif abs(d_rpm) > tol:
+        why = f"outside the rig's speed tolerance (variability: speed +-{tol:g} rpm)"
+    if why:
+        raise InputError(run.path, f"/runs/{run.run_id}/@speed_rpm",
+                         f"{run.speed_rpm:g} rpm, the baseline is at {baseline.speed_rpm:g} rpm: {why}")
+    grid = grid_mismatch(run.frequency_hz, baseline.frequency_hz)
+    if grid is not None:
+        raise InputError(run.path, f"/runs/{run.run_id}/frequency",
+                         f"grid differs from the baseline's: {grid}; detection compares point by point "
+                         "(--resample interpolates the new sweep onto the baseline's grid)")
+    want = baseline_pairs(baseline)
+    run = aligned_pairs(run, want)
+    have = pair_keys(run)
+    if want is not None and have != want:
+        raise InputError(run.path, "/channels", f"channel pairs {_show_pairs(have)} differ from the baseline's "
+                         f"({_show_pairs(want)}); detection compares the same channels")
+    return run
+
+
+def baseline_for_speed(bases: list[Any], rig: RigConfig, run: MeasuredRun, baseline_path: str | Path) -> Any:
+    """The validated set of a several-run baseline at ``run``'s speed (the closest within the rig's speed
+    tolerance; exact at standstill), refused naming the speeds it holds."""
+    tol = speed_tolerance(rig)
+    ok = [b for b in bases if abs(b.speed_rpm - run.speed_rpm) <= (tol if b.speed_rpm and run.speed_rpm else 1e-9)]
+    if not ok:
+        raise InputError(run.path, f"/runs/{run.run_id}/@speed_rpm", f"{run.speed_rpm:g} rpm: the baseline "
+                         f"{baseline_path} holds " + ", ".join(f"{b.run_id} ({b.speed_rpm:g} rpm)" for b in bases)
+                         + f" (speed tolerance +-{tol:g} rpm)")
+    return min(ok, key=lambda b: abs(b.speed_rpm - run.speed_rpm))
+
+
+def _worst_detection(dets: list[Any]) -> Any:
+    """One per-point detection from several experiments': a point is a fault when any experiment's is;
+    the required gamma is the largest."""
+    from rotorcheck.robust.validation import DetectionResult
+
+    if len(dets) == 1:
+        return dets[0]
+    fault = np.any([d.fault for d in dets], axis=0)
+    lo = np.max([d.gamma_required for d in dets], axis=0)
+    up = np.max([d.gamma_required_upper for d in dets], axis=0)
+    status = np.where(fault, "fault", dets[0].status).astype("<U13")
+    for d in dets:
+        status = np.where(~fault & (d.status != "ok"), d.status, status)
+    return DetectionResult(lo, up, dets[0].gamma_healthy, fault, status, dets[0].rtol,
+                           sum(d.n_solver_calls for d in dets), dets[0].reason)
+
+
+def detect(
+    rig: RigConfig, baseline: Any, run: MeasuredRun, fail_at: tuple[int, ...] = (), confidence: float = 0.99,
+    rule: str | None = None, false_alarm: float = 0.01,
+) -> DetectionOutcome:
+    """Steps 4-5: fault points of ``run`` against the healthy ``baseline``, then D_u with its bound.
+
+    The baseline's ``enclose`` picks the detection: 'measured' (the new sweep against the measured
+    healthy FRF, noise of both sweeps, ``confidence`` family-wise; see
+    :mod:`rotorcheck.robust.measured`) or 'system'/'data' (against the nominal model with gamma_h).
+    ``rule``: the verdict rule, 'joint' (default with a measured baseline: one GLR over every point,
+    benign change inside the rig's ``variability`` ranges as bounded nuisance, ``false_alarm`` per
+    sweep; :func:`joint_detection`) or 'certified' (the per-point fault points decide).
+    """
+    if rule is not None:
+        check_choice(rule, RULES, "--rule")
+    if rule == "joint" and baseline.enclose != "measured":
+        raise InputError(None, "--rule", f"the joint test needs a baseline validated with --enclose measured "
+                         f"(this one: {baseline.enclose!r})")
+    if not 0.0 < false_alarm < 1.0:
+        raise InputError(None, "--false-alarm", f"must be in (0, 1), got {false_alarm}")
+    if rule == "joint" and rig.kind != "rotor":
+        raise InputError(None, "--rule", "the joint test needs a rotor's shaft elements (crack signatures); "
+                         "this rig is lumped: use --rule certified")
+    use_joint = baseline.enclose == "measured" and rule in (None, "joint") and rig.kind == "rotor"
+    from rotorcheck.nominal import nominal_model
+    from rotorcheck.robust import identify, validation
+
+    model = nominal_model(rig, run.frequency_hz, run.speed_rpm)
+    E = model.E
+    T = run.frf
+    notes: list[str] = []
+    measured = None
+    if baseline.enclose == "measured":
+        from rotorcheck.robust.measured import FrfEstimate, measured_detect, measured_verdict
+
+        if not 0.0 < confidence < 1.0:
+            raise InputError(None, "--confidence", f"must be in (0, 1), got {confidence}")
+        healthy = FrfEstimate(baseline.healthy_frf, baseline.healthy_frf_var, baseline.healthy_frf_dof)
+        new_est = frf_estimate(run)
+        per_pair(healthy.frf, run.frequency_hz, new_est.frf.shape[1], run)
+        e21 = E[:, 1:, 0]
+        if run.n_pairs > 1 and rig.damage is not None:
+            from rotorcheck.nominal import damage_direction
+
+            e21 = damage_direction(rig, run.frequency_hz, run.speed_rpm, run.pairs)
+        measured = measured_detect(new_est, healthy, confidence, e21=e21)
+        fault = measured.fault.copy()
+        status = measured.status.astype("<U13")
+        dist = measured.distance[:, 0].copy()
+        for i in fail_at:  # testing hook: the point could not be decided
+            fault[i], status[i], dist[i] = False, "solver_failed", np.nan
+        det = validation.DetectionResult(dist, dist, measured.radius[:, 0], fault, status, 0.0)
+        ver = measured_verdict(fault, status, confidence, measured.n_tests)
+        if run.harmonics_removed == 0 and run.speed_rpm != 0.0:
+            notes.append("the sweep stores no per-period phasors: shaft-speed harmonics (1X, 2X, ...) could not "
+                         "be removed; with a free-running start angle they may show as differences near kX")
+    elif run.n_pairs > 1:
+        me, Ws, Zs, Vp = pair_experiments(rig, run)
+        dets = [validation.detect(me, w, z, Vp, baseline.gamma, fail_at=fail_at) for w, z in zip(Ws, Zs)]
+        det = _worst_detection(dets)
+        ver = validation.verdict(det.fault, det.status, baseline.gamma_status)
+    else:
+        det = validation.detect(model.me, run.W, run.Zt, baseline_noise_values(baseline, run), baseline.gamma,
+                                parameter_structure(model, baseline.enclose), fail_at=fail_at)
+        ver = validation.verdict(det.fault, det.status, baseline.gamma_status)
+    identifiable = rig.damage is not None
+    damage = identify.damage_dynamics(E[:, 0, 0], E[:, 0, 1], E[:, 1, 0], E[:, 1, 1], T) if identifiable else (
+        np.full(T.size, np.nan + 0j))
+    if not identifiable:
+        dset = identify.undecided_set(T.size)
+        notes.append("the rig has no damage port: no damage dynamics are identified (detection needs none)")
+    elif model.structure in ("additive", "multiplicative"):
+        dset = identify.damage_set_io(E[:, 0, 0], E[:, 0, 1], E[:, 1, 0], E[:, 1, 1], T, baseline.gamma,
+                                      baseline.noise_bound_m, run.W, kind=model.structure)
+    else:
+        dset = identify.damage_set(model.P, T, baseline.gamma)
+    if run.resampled_from:
+        notes.append(f"the sweep was resampled from its {run.resampled_from} points onto the baseline's grid "
+                     "(linear interpolation of the FRF; variances combined as for independent neighbours)")
+    if run.noise_source:
+        notes.append(f"FRF-only sweep: its noise is {run.noise_source}")
+    if run.n_pairs > 1:
+        notes.append(f"{run.n_pairs} channel pairs: detection and the joint test use all of them; the damage dynamics "
+                     "D_u are identified from the rig's actuator -> sensor pair alone")
+    if identifiable:
+        notes.append("damage_dynamics_* (eq. 3.11 with the nominal E22) carries the nominal model's error of E22 "
+                     "(its size on a healthy shaft is the model error, not damage); damage_dynamics_anchored_* "
+                     "anchors E22 at the measured healthy FRF and is the estimate to read")
+    anchored: np.ndarray | None = None
+    anchored_set: Any = None
+    noise_only: Any = None
+    Th = healthy_frf_of(baseline)
+    if Th is not None and identifiable:
+        # the member of the inherited set that the healthy data selects: E22 := measured healthy FRF;
+        # its bound: the difference allowance of both sweeps' noise (measured) or the uniform V
+        anchored = identify.damage_dynamics(E[:, 0, 0], E[:, 0, 1], E[:, 1, 0], Th, T)
+        if measured is not None:
+            from rotorcheck.robust.measured import anchored_damage_bound, io_model_error
+
+            radius = measured.radius[:, 0]
+            rho = io_model_error(model.frf, Th)
+            anchored_set = anchored_damage_bound(E[:, 0, 0], E[:, 0, 1], E[:, 1, 0], Th, T, radius, rho)
+            noise_only = anchored_damage_bound(E[:, 0, 0], E[:, 0, 1], E[:, 1, 0], Th, T, radius, 0.0)
+            notes.append("damage_anchored_bound_*: every D consistent with both sweeps' noise (at the stated "
+                         "family-wise confidence) and with the model's damage-port channels E11, E12 E21 in error "
+                         "relatively by up to damage_anchored_channel_error (assumed: no more than the model's "
+                         "io channel errs on the healthy data there); damage_anchored_noise_*: noise only")
+        else:
+            Wh = baseline.input_phasor[:, 0]
+            anchored_set = identify.damage_set_io(E[:, 0, 0], E[:, 0, 1], E[:, 1, 0], Th, T,
+                                                  baseline.noise_bound_m / np.abs(Wh), baseline.noise_bound_m,
+                                                  run.W)
+    if identifiable and baseline.noise_bound_m > 0 and model.structure == "parametric":
+        notes.append("parametric structure: the nominal damage bound covers the parameter uncertainty only, "
+                     "not the noise (a second uncertainty makes the set non-circular)")
+    joint = None
+    beyond = None
+    sweep_det = None
+    if use_joint and Th is not None:
+        kappa = KAPPA_NOMINAL if baseline.benign_kappa is None else float(baseline.benign_kappa)
+        model_rig = updated_rig(rig, baseline_updates(baseline))
+        th_all, var_all = np.asarray(baseline.healthy_frf), np.asarray(baseline.healthy_frf_var)
+        joint = joint_detection(model_rig, th_all, var_all, run, kappa, _learned(baseline), false_alarm,
+                                baseline.speed_rpm, baseline.benign_correction)
+        ver = joint_verdict(joint, ver)
+        notes.extend(joint.notes)
+        certified = certify_beyond_benign(model_rig, th_all, var_all, run, joint, baseline.speed_rpm)
+        if certified is not None:
+            beyond = certified[0]
+            notes.extend(certified[1])
+        if joint.elements:
+            sweep_det = sweep_detectability(model_rig, baseline, run, joint)
+    damage_xy = None
+    if identifiable and baseline.enclose == "measured" and run.n_pairs > 1:
+        damage_xy = damage_per_direction(rig, run, np.asarray(baseline.healthy_frf),
+                                         np.asarray(baseline.healthy_frf_var),
+                                         radius=None if measured is None else measured.radius)
+        if damage_xy is not None:
+            notes.append("damage_dynamics_by_direction: D at the damage station in x and y from every channel "
+                         "pair (eq. 3.11 in matrix form: the weighted least-squares member, anchored at the "
+                         "measured healthy FRF); bound_re/bound_im: the certified outer intervals of every D "
+                         "consistent with both sweeps' noise (each pair's difference within its allowance at the "
+                         "stated family-wise confidence; the set of W is convex, D its Moebius image: SOCP support "
+                         "functions plus an exact remainder bound), witness_re/witness_im the range attained inside "
+                         "it; the model's receptances to and from the damage station taken as exact; "
+                         "re_interval/im_interval: 95 % by Monte Carlo over the noise")
+    return DetectionOutcome(rig, baseline, run, model, det, ver, damage, dset, anchored, anchored_set, notes,
+                            measured, noise_only, joint, beyond, damage_xy, detectability=sweep_det)
+
+
+def sweep_detectability(rig: RigConfig, baseline: Any, run: MeasuredRun, joint: Any) -> Any:
+    """What this sweep could have revealed (:mod:`rotorcheck.detectability` with this sweep's and the
+    baseline's variances): the element easiest to watch and the best candidate. The benign model the joint
+    test allowed is linearized at the healthy state (on the crack rig within 3 % of the re-solved model's
+    figures, 15 % on element 6); learned benign directions are not included."""
+    from rotorcheck.detectability import detectability, linearized
+    from rotorcheck.nominal import primary_pair
+
+    f = run.frequency_hz
+    est = frf_estimate(run)
+    P = est.frf.shape[1]
+    th = per_pair(np.asarray(baseline.healthy_frf), f, P, run)
+    vh = per_pair(np.asarray(baseline.healthy_frf_var), f, P, run)
+    bm = None if joint.benign is None else linearized(joint.benign)
+    easiest = joint.elements[int(np.argmin(joint.detectable))]
+    els = sorted({easiest, joint.elements[joint.best]})
+    run_pairs = list(run.pairs) if run.pairs else [primary_pair(rig)]
+    return detectability(rig, f, baseline.speed_rpm, est.var, vh, run_pairs, th, joint.false_alarm, bm, els,
+                         noise_source="this sweep's and the baseline's variances", workers=1)
+
+
+#: verdict rules of ``detect``: 'joint' (one GLR over all points, benign change as bounded nuisance)
+#: or 'certified' (the per-point certified fault points decide, as before)
+RULES = ("joint", "certified")
+
+
+def joint_summary(outcome: DetectionOutcome) -> str:
+    """Lines for the terminal: the fitted benign parameters and the smallest detectable loss."""
+    j = outcome.joint
+    if j is None:
+        return ""
+    lines = []
+    if j.theta_names:
+        parts = []
+        for b in benign_table(j, outcome.rig):
+            lo, hi = b["interval"]
+            iv = f" [{lo:+.3g}, {hi:+.3g}]" if np.isfinite(lo) and np.isfinite(hi) else " (range edge)"
+            parts.append(f"{b['name']} {b['estimate']:+.3g}{' ' if b['unit'] != '%' else ''}{b['unit']}{iv}")
+        lines.append("benign change fitted: " + ", ".join(parts))
+    c = outcome.beyond_benign
+    if c is not None:
+        lines.append(f"points certified beyond every benign change in the ranges: {int(c.unexplained.sum())} of "
+                     f"{c.status.size} ({int(c.undecided.sum())} undecided; parameters as complex discs: "
+                     f"{int(c.complex_unexplained.sum())})")
+    d = outcome.detectability
+    if d is not None:
+        def pct(x: float | None) -> str:
+            return "none up to 50 %" if x is None else f"{100 * x:.3g} %"
+        for e in d.elements:
+            lines.append(f"this sweep could have revealed a breathing crack of at least {pct(e.breathing_depth_min)} "
+                         f"depth in element {e.element} (open-crack loss {pct(e.open_loss_min)}; noise alone: "
+                         f"{pct(e.breathing_depth_min_noise_only)}), 90 % power at {d.false_alarm:g}")
+    return "\n".join(lines)
+
+
+def anchored_summary(outcome: DetectionOutcome) -> str:
+    """One line: the anchored damage dynamics (median over the fault points, else the band) and its bound."""
+    if outcome.anchored is None or outcome.anchored_set is None:
+        return ""
+    fault = np.asarray(outcome.detection.fault, dtype=bool)
+    sel = fault if np.any(fault) else np.ones_like(fault)
+    a = outcome.anchored[sel]
+    lo = outcome.anchored_set.min_abs[sel]
+    hi = outcome.anchored_set.max_abs[sel]
+    where = "the fault points" if np.any(fault) else "all points"
+    return (f"damage dynamics at {damage_port_name(outcome.rig)} (anchored at the healthy data, median over {where}): "
+            f"Re D_u = {np.median(a.real) / 1e3:.4g} kN/m, |D_u| within [{np.median(lo) / 1e3:.4g}, "
+            f"{np.median(hi) / 1e3:.4g}] kN/m (positive: stiffness loss)")
+
+
+def healthy_frf_of(baseline: Any) -> np.ndarray | None:
+    if baseline.healthy_frf is not None:
+        return np.asarray(baseline.healthy_frf)[:, 0]
+    if baseline.input_phasor is not None and baseline.output_phasor is not None:
+        return np.asarray(baseline.output_phasor[:, 0] / baseline.input_phasor[:, 0])
+    return None
+

@@ -1,0 +1,92 @@
+"""A rig file for a sweep and rig variants: updated benign parameters, the speed tolerance, the damage port."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from rotorcheck.config import RigConfig, load_config
+from rotorcheck.errors import InputError
+from rotorcheck.resources import default_rig_path
+
+
+def load_rig(path: str | Path) -> RigConfig:
+    """Load and validate a rig YAML file (raises ConfigError naming file and field)."""
+    return load_config(path)
+
+
+def rig_with_crack_depth(config: RigConfig, rig_path: str | Path | None, fault: str, depth: float) -> RigConfig:
+    """A copy of ``config`` whose crack ``fault`` has ``depth`` (fraction of the shaft diameter);
+    bad values raise InputError naming ``--crack-depth``."""
+    from rotorcheck.faults.compliance import with_crack_depth
+
+    if fault not in config.faults:
+        raise InputError(rig_path, f"faults.{fault}", f"no such fault (known: {', '.join(config.faults) or 'none'})")
+    try:
+        return with_crack_depth(config, fault, depth)
+    except ValueError as exc:
+        raise InputError(None, "--crack-depth", str(exc)) from None
+
+
+def rig_for(rig_path: str | Path | None, rig_id: str, baseline_path: str | Path | None = None) -> Path:
+    """The rig file for a command on a sweep of rig ``rig_id``: ``--rig``; else the one a baseline at
+    ``baseline_path`` was made with (stored as its ``rig_path``) when it is of the same rig; else the
+    bundled rig named ``rig_id``. A stored rig file that is gone is an error naming it."""
+    if rig_path is not None:
+        return Path(rig_path)
+    if baseline_path is not None and Path(baseline_path).exists():
+        import h5py
+
+        try:
+            with h5py.File(baseline_path, "r") as b:
+                stored, base_id = b.attrs.get("x_rig_path"), b.attrs.get("rig_id")
+        except OSError:
+            stored = base_id = None  # not HDF5: the baseline's own reader says what is wrong
+        if stored is not None and str(base_id) == rig_id:
+            if not Path(str(stored)).exists():
+                raise InputError(baseline_path, "/@x_rig_path", f"the rig file the baseline was made with ({stored}) "
+                                 "is gone; pass --rig")
+            return Path(str(stored))
+    return default_rig_path(rig_id)
+
+
+def updated_rig(rig: RigConfig, values: dict[str, float] | None) -> RigConfig:
+    """``rig`` with updated parameter values applied (the model benign change is predicted around)."""
+    if not values:
+        return rig
+    from rotorcheck.variability import with_benign
+
+    return with_benign(rig, values)[0]
+
+
+def baseline_updates(baseline: Any) -> dict[str, float] | None:
+    """The updated parameter values stored in a baseline, if any."""
+    doc = baseline.extra.get("updated_parameters")
+    return {str(k): float(v) for k, v in json.loads(doc).items()} if doc else None
+
+
+def damage_port_name(rig: RigConfig) -> str:
+    if rig.damage is None:
+        return ""
+    p = rig.damage.port
+    return p.mass if rig.kind == "lumped" and p.mass else f"station {p.station} {p.direction}"
+
+
+def speed_tolerance(rig: RigConfig) -> float:
+    """The rig's speed tolerance (rpm) from its ``variability`` section; 0 without one."""
+    from rotorcheck.variability import benign_parameters
+
+    return max((max(abs(p.lo), abs(p.hi)) for p in benign_parameters(rig) if p.is_speed), default=0.0)
+
+
+def port_static_stiffness(rig: RigConfig, speed_rpm: float) -> float:
+    """The nominal static stiffness at the damage port, N/m: 1 / |E11| at a very low frequency."""
+    from rotorcheck.nominal import nominal_model
+
+    model = nominal_model(rig, np.array([1e-3]), speed_rpm)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return float(1.0 / abs(model.E[0, 0, 0]))
+

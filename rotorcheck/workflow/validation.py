@@ -1,0 +1,189 @@
+"""Step 3: gamma_h(w) enclosing the healthy runs, the measured healthy FRF, and the baseline to store."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from rotorcheck.config import RigConfig
+from rotorcheck.errors import InputError, check_choice
+from rotorcheck.workflow.benign import KAPPA_NOMINAL, BenignLearning, learn_benign
+from rotorcheck.workflow.measured import (
+    MeasuredRun,
+    aligned_pairs,
+    grid_mismatch,
+    healthy_estimate,
+    pair_experiments,
+    pair_keys,
+)
+from rotorcheck.workflow.noise import noise_values
+from rotorcheck.workflow.rigs import updated_rig
+
+
+@dataclass
+class ValidationOutcome:
+    """What :func:`validate` returns: the baseline to store and the numbers behind it."""
+
+    baseline: Any  # rotorcheck.baseline.Baseline
+    result: Any  # rotorcheck.robust.validation.ValidationResult
+    model: Any  # rotorcheck.nominal.NominalModel
+    runs: list[MeasuredRun]
+    rig: RigConfig
+    update: Any = None  # rotorcheck.updating.Update (validate --update)
+    learning: Any = None  # BenignLearning (validate --learn-drift)
+
+    @property
+    def n_not_enclosed(self) -> int:
+        """Points where gamma_h could not be verified (unexplainable, solver failure, bad data)."""
+        return int(np.count_nonzero(self.result.status != "ok"))
+
+    def typed_report(self, noise_bound: Any, baseline_path: str | Path) -> Any:
+        """``validate --json`` as a :class:`rotorcheck.report.schema.ValidationReport`."""
+        from rotorcheck.report.schema import ValidationReport
+
+        res = self.result
+        return ValidationReport(self.runs[0].frequency_hz, res.gamma, res.gamma_lower, [str(x) for x in res.status],
+                                float(noise_bound.value_m), noise_bound.method, self.baseline.enclose,
+                                self.model.structure, int(res.gamma.size), self.n_not_enclosed, str(baseline_path))
+
+
+#: Detection modes (``--enclose``): ``measured`` (default: the healthy set centred on the measured
+#: healthy FRF, uncertainty = the noise of both sweeps), ``system`` and ``data`` (centred on the
+#: nominal model with the model-error bound gamma_h; ``data`` is the dissertation's FDMVOP).
+ENCLOSE_MODES = ("measured", "system", "data")
+
+
+def validate(
+    rig: RigConfig,
+    runs: list[MeasuredRun],
+    noise_bound: Any,
+    enclose: str = "measured",
+    fail_at: tuple[int, ...] = (),
+    update: bool = False,
+    learn_drift: bool = False,
+) -> ValidationOutcome:
+    """Step 3: gamma_h(w) enclosing every healthy run, and the measured healthy FRF with its noise.
+
+    ``enclose``: 'measured' (default; gamma_h as for 'system', detection centred on the healthy
+    data), 'system' or 'data' (see :data:`ENCLOSE_MODES`). ``update``: fit the rig's variability
+    parameters to the healthy FRF (:mod:`rotorcheck.updating`); the joint test then predicts benign
+    change around the updated model (stored in the baseline as ``updated_parameters``).
+    ``learn_drift``: learn from the healthy sweeps (>= 3, drifted across the ranges) how the machine
+    drifts (:func:`learn_benign`); off by default: on the crack rig it did not detect better than one
+    sweep with the nominal model (bench.detection_limit, part B).
+    """
+    from rotorcheck.baseline import Baseline
+    from rotorcheck.nominal import nominal_model
+    from rotorcheck.robust import validation
+
+    check_choice(enclose, ENCLOSE_MODES, "--enclose")
+    runs = [runs[0]] + [aligned_pairs(r, pair_keys(runs[0])) for r in runs[1:]]  # same pairs, rows reordered
+    first = runs[0]
+    for r in runs[1:]:
+        why = grid_mismatch(r.frequency_hz, first.frequency_hz)
+        if why is not None:
+            raise InputError(r.path, f"/runs/{r.run_id}/frequency",
+                             f"grid differs from {first.path}: {why} (healthy sweeps must share the frequency grid)")
+        if r.speed_rpm != first.speed_rpm:
+            raise InputError(r.path, f"/runs/{r.run_id}/@speed_rpm",
+                             f"{r.speed_rpm:g} rpm differs from {first.path} ({first.speed_rpm:g} rpm)")
+    model = nominal_model(rig, first.frequency_hz, first.speed_rpm)
+    # 'measured' detects against the measured healthy FRF; its gamma is still the model-error bound
+    # of 'system' (what validation is for: how far the nominal model is from the healthy rig)
+    V: float | np.ndarray = noise_values(noise_bound)
+    if not isinstance(V, float):  # per-point: every healthy run's own V(w), the largest per point
+        V = np.max(np.array([noise_values(noise_bound, r) for r in runs], dtype=float), axis=0)
+    if enclose != "measured" and first.n_pairs > 1:
+        # several channel pairs against the model: one experiment per input (unit force), the additive
+        # full block over all outputs and inputs, the noise per point from the stored variances
+        if model.structure != "additive":
+            raise InputError(None, "--enclose", f"with several channel pairs the model-centred modes need "
+                             f"additive uncertainty (this rig: {model.structure}); use 'measured'")
+        exps = [pair_experiments(rig, r) for r in runs]
+        res = validation.validate(exps[0][0], [w for e in exps for w in e[1]], [z for e in exps for z in e[2]],
+                                  np.max([e[3] for e in exps], axis=0), enclose=enclose, fail_at=fail_at)
+    else:
+        res = validation.validate(model.me, [r.W for r in runs], [r.Zt for r in runs], V,
+                                  enclose="system" if enclose == "measured" else enclose,
+                                  structure=parameter_structure(model, enclose), fail_at=fail_at)
+    healthy = healthy_estimate(runs)
+    upd = None
+    if update:
+        from rotorcheck.updating import update_parameters
+
+        if not rig.variability:
+            raise InputError(None, "--update", "the rig has no variability section: nothing to update")
+        upd = update_parameters(rig, first.frequency_hz, first.speed_rpm, healthy.frf[:, 0])
+    model_rig = updated_rig(rig, None if upd is None else upd.as_dict())
+    if learn_drift and len(runs) < 3:
+        raise InputError(None, "--learn-drift", f"needs at least 3 healthy sweeps (got {len(runs)})")
+    learning = None
+    if enclose == "measured":
+        learning = learn_benign(model_rig, runs) if learn_drift else BenignLearning(KAPPA_NOMINAL)
+    learned = learning.learned if learning is not None else None
+    base = Baseline(
+        rig_id=rig.rig_id, rig_sha256=rig.sha256(), sweep_sha256=[r.sha256 for r in runs],
+        run_id=first.run_id, speed_rpm=first.speed_rpm, noise_bound_m=float(noise_bound.value_m),
+        noise_method=noise_bound.method, noise_confidence=float(noise_bound.confidence or 0.0),
+        uncertainty=model.structure, parameter=model.parameter or "", enclose=enclose, stage="validated",
+        frequency_hz=first.frequency_hz, gamma=res.gamma, gamma_lower=res.gamma_lower,
+        gamma_status=np.asarray(res.status, dtype=str), model_frf=model.frf[:, None, None],
+        input_phasor=first.W[:, None], output_phasor=first.Zt[:, None],
+        healthy_frf=healthy.frf, healthy_frf_var=healthy.var, healthy_frf_dof=healthy.dof,
+        shaft_orders_removed=first.harmonics_removed,
+        noise_bound_per_point_m=None if isinstance(V, float) else np.asarray(V, dtype=float),
+        benign_directions=None if learned is None else learned.U,
+        benign_direction_bound=None if learned is None else learned.c_max,
+        benign_kappa=learning.kappa if learning is not None else None, n_healthy=len(runs),
+        benign_correction=learning.correction if learning is not None else None,
+    )
+    base.extra["channel_pairs"] = json.dumps(pair_keys(first))
+    for r in runs[1:]:
+        if pair_keys(r) != pair_keys(first):
+            raise InputError(r.path, "/channels", f"channel pairs differ from {first.path}'s (healthy sweeps must "
+                             "share their channels)")
+    if upd is not None:
+        base.extra["updated_parameters"] = json.dumps(upd.as_dict(), sort_keys=True)
+    if learning is not None and learning.model_share:
+        base.extra["benign_model_share"] = json.dumps(learning.model_share, sort_keys=True)
+    return ValidationOutcome(base, res, model, runs, rig, upd, learning)
+
+
+def learning_summary(outcome: ValidationOutcome) -> str:
+    """Lines: how much of each benign direction the model predicts and how much the data show."""
+    lrn = outcome.learning
+    if lrn is None or lrn.theta is None:
+        return ""
+    lines = [f"benign drift learned from {len(outcome.runs)} healthy sweeps: the named parameters (model + "
+             f"learned correction) explain in sample {100 * (lrn.explained or 0.0):.1f} % of their spread "
+             f"(whitened); kappa = {lrn.kappa:g}; "
+             f"{0 if lrn.learned is None else lrn.learned.U.shape[0]} further directions"]
+    for name, (sh, cos) in lrn.model_share.items():
+        lines.append(f"  {name}: the model predicts {100 * sh:.0f} % of the data's response (cosine {cos:.2f})")
+    return "\n".join(lines)
+
+
+def update_summary(outcome: ValidationOutcome) -> str:
+    """One line: the updated parameters with standard errors and the FRF error before and after."""
+    u = outcome.update
+    if u is None:
+        return ""
+    parts = []
+    for n, v, e, b in zip(u.names, u.values, u.se, u.at_bound):
+        parts.append(f"{n} {100 * v:+.3g} % ({'range edge' if b or not np.isfinite(e) else f'se {100 * e:.2g} %'})")
+    return ("model updated to the healthy FRF: " + ", ".join(parts)
+            + f"; RMS relative FRF error {u.rms_before:.3g} -> {u.rms_after:.3g}")
+
+
+def parameter_structure(model: Any, enclose: str) -> Any:
+    """A named physical parameter (``uncertainty.structure: parametric``) is real: a real scalar block
+    (mixed mu, D-G scalings) where the LMI path solves it ('data'); None (one complex block) otherwise
+    ('system'/'measured' enclose through the complex closed form, a relaxation the report notes)."""
+    from rotorcheck.robust.mu import Structure
+
+    return Structure.real() if model.structure == "parametric" and enclose == "data" else None
+
