@@ -458,60 +458,43 @@ def detect(
     """Steps 4-5: verdict (joint test or certified fault points) and the damage with its bound; a file of
     several runs: each run against the baseline's run at its speed, one verdict for the file."""
     from rotorcheck import workflow
-    from rotorcheck.baseline import read_baseline
-    from rotorcheck.fileio import check_writable
-    from rotorcheck.report.reports import REPORT_FILES, write_reports
+    from rotorcheck.fileio import atomic_write_text, check_writable
+    from rotorcheck.report.reports import REPORT_FILES, render_json, write_reports
 
     formats = workflow.plot_formats(plot_format)
     workflow.check_frf_unit(frf_unit)
     base_path = baseline if baseline is not None else out / "baseline.h5"
-    cfg, _, mruns = workflow.load_rig_and_runs(sweep, rig, base_path, run, every_run=True)
-    if len(mruns) > 1:
-        return _detect_runs(sweep, mruns, cfg, out, base_path, at, plots, confidence, rule, false_alarm, resample,
-                            formats, fail_at, as_json, force, locate, frf_unit)
-    check_writable([out / f for f in REPORT_FILES]
-                   + (workflow.plot_paths(out, workflow.PLOT_STEMS_DETECT, formats) if plots else []), force)
-    base = read_baseline(base_path)
-    mrun = mruns[0]
+    cfg, rig_file, pairs = workflow.paired_runs(sweep, base_path, rig, run, resample, say=err.print)
+    several = len(pairs) > 1
+    dirs = [out / r.run_id for _, r in pairs] if several else [out]
+    check_writable(([out / "report.json"] if several else []) + [d / f for d in dirs for f in REPORT_FILES]
+                   + ([p for d in dirs for p in workflow.plot_paths(d, workflow.PLOT_STEMS_DETECT, formats)]
+                      if plots else []), force)
+    settings = workflow.DetectorSettings(confidence, false_alarm, _fail_at(fail_at))
     with _progress(f"detecting {sweep.name} against {base_path}"):
-        outcome = _detect_one(base, cfg, mrun, sweep, base_path, confidence, rule, false_alarm, resample, fail_at,
-                              locate)
-        report = outcome.report()
-    with _progress("writing reports and plots"):
-        plot_files = workflow.detection_plots(outcome, out, at, formats, base_path, frf_unit) if plots else []
-        files = write_reports(report, out, plot_files, base_path)
-    _print_outcome(outcome, report)
-    for p_ in [*map(str, files), *plot_files]:
-        err.print(f"wrote {p_}")
+        check = workflow.detect_pairs(cfg, rig_file, sweep, base_path, pairs, rule, settings, locate, say=err.print)
+    summary: list[dict[str, Any]] = []
+    for d, (base, mrun), outcome in zip(dirs, pairs, check.outcomes):
+        with _progress("writing reports and plots"):
+            report = outcome.report()
+            plot_files = workflow.detection_plots(outcome, d, at, formats, base_path, frf_unit) if plots else []
+            files = write_reports(report, d, plot_files, base_path)
+        _print_outcome(outcome, report, prefix=f"run {mrun.run_id} ({mrun.speed_rpm:g} rpm): " if several else "")
+        if not several:
+            for p_ in [*map(str, files), *plot_files]:
+                err.print(f"wrote {p_}")
+            if as_json:
+                _emit_json(report)
+            return outcome.exit_code
+        summary.append({"run_id": mrun.run_id, "speed_rpm": mrun.speed_rpm, "baseline_run_id": base.run_id,
+                        "verdict": report["verdict"], "verdict_reason": report["verdict_reason"],
+                        "report": str(d / "report.json")})
+    doc = {"sweep": str(sweep), "verdict": check.verdict, "verdict_rule": workflow.FILE_RULE, "runs": summary}
+    atomic_write_text(out / "report.json", render_json(doc))
+    err.print(f"file verdict: {check.verdict.upper()} ({len(pairs)} runs); wrote {out / 'report.json'}")
     if as_json:
-        _emit_json(report)
-    return outcome.exit_code
-
-
-def _detect_one(base: Any, cfg: Any, mrun: Any, sweep: Path, base_path: Path, confidence: float,
-                rule: str | None, false_alarm: float, resample: bool, fail_at: str, locate: bool = False) -> Any:
-    """One run against its baseline: resample when asked, check, detect (and locate a damage when asked)."""
-    from rotorcheck import workflow
-
-    mrun = _resampled(base, mrun, sweep, resample)
-    mrun = workflow.check_baseline(base, cfg, mrun, base_path)
-    outcome = workflow.detect(cfg, base, mrun, fail_at=_fail_at(fail_at), confidence=confidence, rule=rule,
-                              false_alarm=false_alarm)
-    if locate and outcome.verdict.verdict == "damage":
-        outcome.location = workflow.locate_damage(cfg, base, mrun, false_alarm)
-    return outcome
-
-
-def _resampled(base: Any, mrun: Any, sweep: Path, resample: bool) -> Any:
-    """``mrun`` on the baseline's grid when asked and the grids differ (and said so), else as it is."""
-    from rotorcheck import workflow
-
-    if resample and base.frequency_hz is not None and workflow.grid_mismatch(mrun.frequency_hz,
-                                                                             base.frequency_hz) is not None:
-        mrun = workflow.resample_run(mrun, base.frequency_hz)
-        err.print(f"resampled {sweep} ({mrun.resampled_from} points) onto the baseline's grid "
-                  f"({base.frequency_hz.size} points, linear interpolation)")
-    return mrun
+        _emit_json(doc)
+    return check.exit_code
 
 
 def _print_outcome(outcome: Any, report: dict[str, Any], prefix: str = "") -> None:
@@ -528,48 +511,6 @@ def _print_outcome(outcome: Any, report: dict[str, Any], prefix: str = "") -> No
             err.print(line)
     if outcome.location is not None:
         err.print("location: " + outcome.location.summary())
-
-
-def _detect_runs(sweep: Path, mruns: list[Any], cfg: Any, out: Path, base_path: Path, at: float | None,
-                 plots: bool, confidence: float, rule: str | None, false_alarm: float, resample: bool,
-                 formats: tuple[str, ...], fail_at: str, as_json: bool, force: bool, locate: bool = False,
-                 frf_unit: str = "m/N") -> int:
-    """Every run of a file of several runs against the baseline's run at the same speed (within the rig's
-    speed tolerance; the closest): reports in <out>/<run_id>/, one summary <out>/report.json; the file is
-    damage when any run is, inconclusive when none is but one is inconclusive, else healthy."""
-    from rotorcheck import workflow
-    from rotorcheck.baseline import read_baselines
-    from rotorcheck.fileio import atomic_write_text, check_writable
-    from rotorcheck.report.reports import REPORT_FILES, render_json, write_reports
-
-    ids = [r.run_id for r in mruns]
-    check_writable([out / "report.json"] + [out / rid / f for rid in ids for f in REPORT_FILES]
-                   + ([p for rid in ids for p in workflow.plot_paths(out / rid, workflow.PLOT_STEMS_DETECT, formats)]
-                      if plots else []), force)
-    bases = read_baselines(base_path)
-    summary: list[dict[str, Any]] = []
-    for rid, mrun in zip(ids, mruns):
-        base = workflow.baseline_for_speed(bases, cfg, mrun, base_path)
-        with _progress(f"run {rid}: detecting against the baseline's run {base.run_id}"):
-            outcome = _detect_one(base, cfg, mrun, sweep, base_path, confidence, rule, false_alarm, resample, fail_at,
-                                  locate)
-            report = outcome.report()
-            plot_files = (workflow.detection_plots(outcome, out / rid, at, formats, base_path, frf_unit)
-                          if plots else [])
-            write_reports(report, out / rid, plot_files, base_path)
-        _print_outcome(outcome, report, prefix=f"run {rid} ({mrun.speed_rpm:g} rpm): ")
-        summary.append({"run_id": rid, "speed_rpm": mrun.speed_rpm, "baseline_run_id": base.run_id,
-                        "verdict": report["verdict"], "verdict_reason": report["verdict_reason"],
-                        "report": str(out / rid / "report.json")})
-    verdicts = [r["verdict"] for r in summary]
-    verdict = "damage" if "damage" in verdicts else ("inconclusive" if "inconclusive" in verdicts else "healthy")
-    doc = {"sweep": str(sweep), "verdict": verdict, "verdict_rule": "the file: damage if any run is damage, else "
-           "inconclusive if any run is, else healthy; each run by its own rule (its report)", "runs": summary}
-    atomic_write_text(out / "report.json", render_json(doc))
-    err.print(f"file verdict: {verdict.upper()} ({len(ids)} runs); wrote {out / 'report.json'}")
-    if as_json:
-        _emit_json(doc)
-    return {"damage": EXIT_DAMAGE, "inconclusive": EXIT_INCONCLUSIVE, "healthy": EXIT_OK}[verdict]
 
 
 @app.command()
@@ -599,21 +540,20 @@ def locate(
     consistent ones ranked. Writes <out>/location.json (and location.png); exit 1 when a damage is located,
     0 when the change needs none (no damage to locate), 2 on bad input."""
     from rotorcheck import workflow
-    from rotorcheck.baseline import read_baseline
     from rotorcheck.fileio import atomic_write_text, check_writable
     from rotorcheck.report.reports import render_json
 
     formats = workflow.plot_formats(plot_format)
     base_path = baseline if baseline is not None else out / "baseline.h5"
     els = _element_list(elements)
-    cfg, _, mruns = workflow.load_rig_and_runs(sweep, rig, base_path, run)
-    mrun = mruns[0]
     targets = [out / "location.json", out / "location.html"] + (workflow.plot_paths(out, ("location",), formats)
                                                                  if plots else [])
     check_writable(targets, force)
-    base = read_baseline(base_path)
-    mrun = _resampled(base, mrun, sweep, resample)
-    mrun = workflow.check_baseline(base, cfg, mrun, base_path)
+    cfg, _, pairs = workflow.paired_runs(sweep, base_path, rig, run, resample, say=err.print)
+    if len(pairs) > 1:
+        raise InputError(sweep, "/runs", f"{len(pairs)} runs ({', '.join(r.run_id for _, r in pairs)}); choose one "
+                         "with --run")
+    base, mrun = pairs[0]
     with _progress(f"locating the change of {sweep.name} (every candidate element, certified)"):
         res = workflow.locate_damage(cfg, base, mrun, false_alarm, els, section_length)
     doc = {"sweep": str(sweep), "sweep_sha256": mrun.sha256, "baseline": str(base_path), "rig_id": cfg.rig_id,

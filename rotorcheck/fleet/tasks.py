@@ -203,31 +203,32 @@ def error_row(task: SweepTask, message: str) -> dict[str, Any]:
             "benign_parameters": []}
 
 
-def _inputs(task: SweepTask) -> tuple[Any, Any, Any]:
-    """``(rig, baseline, run)`` of a task: the rig, the sweep's one run (a fleet sweep is one run: one speed
-    per sweep, one row per sweep; its sha256 is the plan's) and the baseline's run at its speed, checked."""
+def _inputs(task: SweepTask) -> tuple[Any, Any, Any, Any]:
+    """``(rig, rig file, baseline, run)`` of a task: the sweep's one run (a fleet sweep is one run: one speed per
+    sweep, one row per sweep) with the baseline's run at its speed, checked (the library's
+    :func:`rotorcheck.workflow.paired_runs`, as ``rotorcheck detect``)."""
     from rotorcheck import workflow
-    from rotorcheck.baseline import read_baselines
     from rotorcheck.errors import InputError
 
-    cfg = workflow.load_rig(task.rig)
-    runs = workflow.read_runs(task.sweep, cfg, sha256=task.sweep_sha256)
-    if len(runs) != 1:
-        raise InputError(task.sweep, "/runs", f"{len(runs)} runs: a fleet sweep holds one run (one file per run)")
-    base = workflow.baseline_for_speed(read_baselines(task.baseline), cfg, runs[0], task.baseline)
-    return cfg, base, workflow.check_baseline(base, cfg, runs[0], task.baseline)
+    cfg, rig_file, pairs = workflow.paired_runs(task.sweep, task.baseline, task.rig, sha256=task.sweep_sha256)
+    if len(pairs) != 1:
+        raise InputError(task.sweep, "/runs", f"{len(pairs)} runs: a fleet sweep holds one run (one file per run)")
+    base, run = pairs[0]
+    return cfg, rig_file, base, run
 
 
 def _detect(task: SweepTask) -> tuple[dict[str, Any], dict[str, Any] | None]:
-    """(row, report) of the sweep against its machine's baseline: the library's detect."""
+    """(row, report) of the sweep against its machine's baseline: the library's
+    :func:`rotorcheck.workflow.detect_pairs`, as ``rotorcheck detect``."""
     from rotorcheck import workflow
     from rotorcheck.fe.blas import one_blas_thread
 
     with one_blas_thread():
-        cfg, base, mrun = _inputs(task)
+        cfg, rig_file, base, mrun = _inputs(task)
         s = task.settings
-        outcome = workflow.detect(cfg, base, mrun, confidence=s.confidence, false_alarm=s.false_alarm)
-        report = outcome.report()
+        check = workflow.detect_pairs(cfg, rig_file, task.sweep, task.baseline, [(base, mrun)],
+                                      settings=workflow.DetectorSettings(s.confidence, s.false_alarm))
+        report = check.outcomes[0].report()
     healthy = base.healthy_frf if base.healthy_frf is not None else mrun.frf
     report["baseline"] = task.baseline
     return summary_row(task, report, low_band(mrun.frequency_hz, healthy, s.low_band_hz)), report
@@ -278,7 +279,7 @@ def run_locate(task: SweepTask) -> dict[str, Any]:
     try:
         _maybe_die(task, tmp)
         with one_blas_thread():
-            cfg, base, mrun = _inputs(task)
+            cfg, _, base, mrun = _inputs(task)
             res = workflow.locate_damage(cfg, base, mrun, task.settings.false_alarm)
         doc = {"sweep": task.sweep, "sweep_sha256": task.sweep_sha256, "baseline": task.baseline,
                "rig_id": cfg.rig_id, "speed_rpm": mrun.speed_rpm, **res.to_dict()}

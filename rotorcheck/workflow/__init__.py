@@ -26,20 +26,22 @@ from rotorcheck.workflow.benign import (
     benign_table,
     certify_beyond_benign,
     joint_detection,
-    joint_verdict,
     learn_benign,
 )
+from rotorcheck.workflow.checking import FILE_RULE, SweepCheck, check_sweep, detect_pairs, paired_runs
 from rotorcheck.workflow.detection import (
-    RULES,
-    VERDICT_RULE,
     DetectionOutcome,
     anchored_summary,
     baseline_for_speed,
     check_baseline,
     detect,
+    diagnose,
     joint_summary,
     sweep_detectability,
 )
+from rotorcheck.workflow.detectors import DETECTORS, RULES, Detection, Detector, DetectorSettings, make_detector
+from rotorcheck.workflow.detectors.enclosure import VERDICT_RULE
+from rotorcheck.workflow.detectors.joint import joint_verdict
 from rotorcheck.workflow.directional import DirectionalDamage, damage_per_direction
 from rotorcheck.workflow.figures import (
     PLOT_STEMS_DETECT,
@@ -94,7 +96,9 @@ from rotorcheck.workflow.validation import (
 
 __all__ = [
     "DETECTABILITY_POINTS",
+    "DETECTORS",
     "ENCLOSE_MODES",
+    "FILE_RULE",
     "GRID_TOLERANCE_HZ",
     "KAPPA_GRID",
     "KAPPA_NOMINAL",
@@ -105,10 +109,14 @@ __all__ = [
     "RULES",
     "VERDICT_RULE",
     "BenignLearning",
+    "Detection",
     "DetectionOutcome",
+    "Detector",
+    "DetectorSettings",
     "DirectionalDamage",
     "InputError",
     "MeasuredRun",
+    "SweepCheck",
     "ValidationOutcome",
     "aligned_pairs",
     "anchored_summary",
@@ -120,12 +128,15 @@ __all__ = [
     "certify_beyond_benign",
     "check_baseline",
     "check_frf_unit",
+    "check_sweep",
     "crack_report",
     "damage_per_direction",
     "detect",
+    "detect_pairs",
     "detectability_for_rig",
     "detection_figures",
     "detection_plots",
+    "diagnose",
     "figure_context",
     "fit_noise",
     "frf_estimate",
@@ -142,6 +153,7 @@ __all__ = [
     "load_run",
     "locate_damage",
     "locate_run",
+    "make_detector",
     "measured_run",
     "model_report",
     "noise_baseline",
@@ -149,6 +161,7 @@ __all__ = [
     "noise_values",
     "pair_experiments",
     "pair_keys",
+    "paired_runs",
     "parameter_structure",
     "plot_formats",
     "plot_paths",

@@ -32,26 +32,6 @@ def benign_table(joint: Any, rig: RigConfig) -> list[dict[str, Any]]:
     return out
 
 
-def joint_verdict(joint: Any, certified: Any) -> Any:
-    """The sweep verdict of the joint test (its rule: :data:`rotorcheck.robust.joint.JOINT_RULE`); the
-    certified fault points stay as where in frequency the data depart."""
-    from rotorcheck.robust.validation import Verdict
-
-    e = joint.elements[joint.best] if joint.elements else 0
-    lo, hi = joint.severity_interval
-    if joint.damage:
-        why = (f"joint test: T = {joint.statistic:.4g} > {joint.threshold:.4g} (p = {joint.p_value:.2g} < "
-               f"{joint.false_alarm:g}); best explained by a stiffness loss of element {e}: "
-               f"{100 * joint.severity[joint.best]:.3g} % [{100 * lo:.3g}, {100 * hi:.3g}] (95 %)")
-        return Verdict("damage", why, certified.n_points, certified.n_fault, certified.n_undecided,
-                       certified.longest_run, certified.threshold)
-    benign = "noise" if not joint.theta_names else "benign change inside the configured ranges and noise"
-    why = (f"joint test: T = {joint.statistic:.4g} <= {joint.threshold:.4g} (p = {joint.p_value:.2g}); the change "
-           f"is explained by {benign} at false-alarm rate {joint.false_alarm:g}")
-    return Verdict("healthy", why, certified.n_points, certified.n_fault, certified.n_undecided,
-                   certified.longest_run, certified.threshold)
-
-
 #: relative error of the nominal model's benign-change prediction carried in H0 when the baseline holds
 #: one healthy sweep (limits.md 4: the nominal model predicts benign change only to 40-60 %). Measured on
 #: the crack rig (one healthy sweep; 10 sweeps per benign case with bench.detection_limit's seeds, 20 per
@@ -60,8 +40,6 @@ def joint_verdict(joint: Any, certified: Any) -> Any:
 #:   kappa 2.0: benign cases 0, corners 1 + 0 of 40; breathing 13 % / 20 %: 8 / 9; open E x 0.9: 10
 #:   kappa 2.5: benign cases 0, corners 0 + 0 of 40; breathing 13 % / 20 %: 7 / 8; open E x 0.9: 6
 KAPPA_NOMINAL = 2.0
-
-
 #: kappa values tried, smallest first, when several healthy sweeps test it (never below the nominal:
 #: see :func:`learn_benign`)
 KAPPA_GRID = (KAPPA_NOMINAL, 3.0)
@@ -113,15 +91,6 @@ def benign_model(rig: RigConfig, f: np.ndarray, speed_rpm: float, Th: np.ndarray
             ends.append(np.abs(predict(x)))
         envelope += np.maximum(*ends)
     return BenignModel(predict, lo, hi, pred.names, kappa, step, envelope, exact)
-
-
-def _learned(baseline: Any) -> Any:
-    from rotorcheck.robust.joint import LearnedDirections
-
-    if baseline.benign_directions is None:
-        return None
-    U = np.asarray(baseline.benign_directions)
-    return LearnedDirections(U, np.asarray(baseline.benign_direction_bound), np.zeros(0), int(baseline.n_healthy))
 
 
 def joint_detection(rig: RigConfig, Th: np.ndarray, var_h: np.ndarray, run: MeasuredRun, kappa: float,

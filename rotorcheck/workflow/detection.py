@@ -9,17 +9,22 @@ from typing import Any
 
 import numpy as np
 
+from rotorcheck.baseline import Baseline
 from rotorcheck.config import RigConfig
-from rotorcheck.errors import InputError, check_choice
-from rotorcheck.workflow.benign import (
-    KAPPA_NOMINAL,
-    _learned,
-    benign_table,
-    certify_beyond_benign,
-    joint_detection,
-    joint_verdict,
-)
-from rotorcheck.workflow.directional import damage_per_direction
+from rotorcheck.detectability import Detectability, detectability, linearized
+from rotorcheck.errors import InputError
+from rotorcheck.location import LocationResult
+from rotorcheck.nominal import NominalModel, primary_pair
+from rotorcheck.report.schema import DetectionReport
+from rotorcheck.robust import identify
+from rotorcheck.robust.identify import DamageSet
+from rotorcheck.robust.joint import JointResult
+from rotorcheck.robust.measured import AnchoredDamageBound, MeasuredDetection, anchored_damage_bound, io_model_error
+from rotorcheck.robust.real_box import BoxCertificate
+from rotorcheck.robust.validation import DetectionResult, Verdict
+from rotorcheck.workflow.benign import benign_table
+from rotorcheck.workflow.detectors import Detection, DetectorSettings, make_detector
+from rotorcheck.workflow.directional import DirectionalDamage, damage_per_direction
 from rotorcheck.workflow.measured import (
     MeasuredRun,
     _show_pairs,
@@ -27,19 +32,13 @@ from rotorcheck.workflow.measured import (
     baseline_pairs,
     frf_estimate,
     grid_mismatch,
-    pair_experiments,
     pair_keys,
     per_pair,
 )
-from rotorcheck.workflow.noise import baseline_noise_values
-from rotorcheck.workflow.rigs import baseline_updates, damage_port_name, speed_tolerance, updated_rig
-from rotorcheck.workflow.validation import parameter_structure
+from rotorcheck.workflow.rigs import baseline_updates, damage_port_name, nominal_for, speed_tolerance, updated_rig
 
-VERDICT_RULE = (
-    "damage if the number of fault points is at least max(3, 2 % of the points) or at least 2 "
-    "adjacent points are faults; otherwise inconclusive if any point could not be decided (solver "
-    "failure) or the healthy data could not be enclosed somewhere; otherwise healthy"
-)
+#: exit codes of the verdicts (cli.md)
+EXIT_CODES = {"healthy": 0, "damage": 1, "inconclusive": 3}
 
 
 @dataclass
@@ -47,46 +46,59 @@ class DetectionOutcome:
     """Per-point detection and identification (arrays (f,)) and the sweep-level verdict."""
 
     rig: RigConfig
-    baseline: Any
+    baseline: Baseline
     run: MeasuredRun
-    model: Any
-    detection: Any  # robust.validation.DetectionResult
-    verdict: Any  # robust.validation.Verdict
+    model: NominalModel
+    found: Detection  # the detector's verdict, rule, statistic and per-point evidence
     damage: np.ndarray  # D_u nominal (N/m), eq. 3.11 with the nominal E22
-    damage_set: Any  # robust.identify.DamageSet over the uncertainty inherited from gamma_h and V (eq. 3.12)
+    damage_set: DamageSet  # over the uncertainty inherited from gamma_h and V (eq. 3.12)
     anchored: np.ndarray | None = None  # D_u with E22 anchored at the healthy data (N/m)
-    anchored_set: Any = None  # its exact set (noise of both sweeps)
+    anchored_set: AnchoredDamageBound | DamageSet | None = None  # its exact set (noise of both sweeps)
     notes: list[str] = field(default_factory=list)
-    measured: Any = None  # robust.measured.MeasuredDetection (enclose 'measured')
-    anchored_noise_only: Any = None  # the anchored bound over the noise alone (measured)
-    joint: Any = None  # robust.joint.JointResult (the joint test, when it decided)
-    beyond_benign: Any = None  # robust.real_box.BoxCertificate: per-point certificate beyond benign change
-    damage_xy: Any = None  # DirectionalDamage: D at the damage station in x and y (several pairs)
-    location: Any = None  # rotorcheck.location.LocationResult (detect --locate)
-    detectability: Any = None  # rotorcheck.detectability.Detectability of this sweep (a few elements)
+    anchored_noise_only: AnchoredDamageBound | None = None  # the anchored bound over the noise alone (measured)
+    damage_xy: DirectionalDamage | None = None  # D at the damage station in x and y (several pairs)
+    location: LocationResult | None = None  # detect --locate
+    detectability: Detectability | None = None  # what this sweep could have revealed (a few elements)
+
+    @property
+    def detection(self) -> DetectionResult:
+        """The per-point evidence (f,): gamma_required, gamma_healthy, fault, status."""
+        return self.found.points
+
+    @property
+    def verdict(self) -> Verdict:
+        """The sweep verdict and its reason."""
+        return self.found.verdict
+
+    @property
+    def measured(self) -> MeasuredDetection | None:
+        """The per-point test against the measured healthy FRF (baseline ``--enclose measured``)."""
+        return self.found.measured
+
+    @property
+    def joint(self) -> JointResult | None:
+        """The joint test, when it decided."""
+        return self.found.joint
+
+    @property
+    def beyond_benign(self) -> BoxCertificate | None:
+        """Per-point certificate beyond every benign change in the ranges (joint test)."""
+        return self.found.beyond_benign
 
     @property
     def exit_code(self) -> int:
-        return {"healthy": 0, "damage": 1, "inconclusive": 3}[self.verdict.verdict]
+        return EXIT_CODES[self.verdict.verdict]
 
     @property
     def verdict_rule(self) -> str:
-        """The rule that made the verdict: the joint test's, the measured per-point one, or the certified one."""
-        from rotorcheck.robust.joint import JOINT_RULE
-        from rotorcheck.robust.measured import MEASURED_RULE
-
-        if self.joint is not None:
-            return JOINT_RULE
-        return MEASURED_RULE if self.measured is not None else VERDICT_RULE
+        """The rule that made the verdict (the detector's)."""
+        return self.found.rule
 
     @property
     def fault_beyond_benign(self) -> np.ndarray | None:
         """(f,) points unexplained after the joint test's fitted benign change in any channel pair (None: no
         joint test)."""
-        if self.joint is None:
-            return None
-        f = self.run.frequency_hz
-        return np.asarray(np.asarray(self.joint.remaining, dtype=bool).reshape(-1, f.size).any(axis=0))
+        return self.found.fault_beyond_benign
 
     def report(self) -> dict[str, Any]:
         """The report.json document (cli.md keys plus context): :meth:`typed_report` as a dict."""
@@ -94,8 +106,6 @@ class DetectionOutcome:
 
     def typed_report(self) -> Any:
         """The report as a :class:`rotorcheck.report.schema.DetectionReport`."""
-        from rotorcheck.report.schema import DetectionReport
-
         f = self.run.frequency_hz
         fault = np.asarray(self.detection.fault, dtype=bool)
         ds = self.damage_set
@@ -231,88 +241,34 @@ def baseline_for_speed(bases: list[Any], rig: RigConfig, run: MeasuredRun, basel
     return min(ok, key=lambda b: abs(b.speed_rpm - run.speed_rpm))
 
 
-def _worst_detection(dets: list[Any]) -> Any:
-    """One per-point detection from several experiments': a point is a fault when any experiment's is;
-    the required gamma is the largest."""
-    from rotorcheck.robust.validation import DetectionResult
-
-    if len(dets) == 1:
-        return dets[0]
-    fault = np.any([d.fault for d in dets], axis=0)
-    lo = np.max([d.gamma_required for d in dets], axis=0)
-    up = np.max([d.gamma_required_upper for d in dets], axis=0)
-    status = np.where(fault, "fault", dets[0].status).astype("<U13")
-    for d in dets:
-        status = np.where(~fault & (d.status != "ok"), d.status, status)
-    return DetectionResult(lo, up, dets[0].gamma_healthy, fault, status, dets[0].rtol,
-                           sum(d.n_solver_calls for d in dets), dets[0].reason)
-
-
 def detect(
-    rig: RigConfig, baseline: Any, run: MeasuredRun, fail_at: tuple[int, ...] = (), confidence: float = 0.99,
+    rig: RigConfig, baseline: Baseline, run: MeasuredRun, fail_at: tuple[int, ...] = (), confidence: float = 0.99,
     rule: str | None = None, false_alarm: float = 0.01,
 ) -> DetectionOutcome:
-    """Steps 4-5: fault points of ``run`` against the healthy ``baseline``, then D_u with its bound.
+    """Steps 4-5: fault points of ``run`` against the healthy ``baseline`` and the verdict (the detector
+    ``rule`` of :mod:`rotorcheck.workflow.detectors`; None: the default for the rig and baseline), then the
+    damage dynamics D_u with its bound (:func:`diagnose`).
 
-    The baseline's ``enclose`` picks the detection: 'measured' (the new sweep against the measured
-    healthy FRF, noise of both sweeps, ``confidence`` family-wise; see
-    :mod:`rotorcheck.robust.measured`) or 'system'/'data' (against the nominal model with gamma_h).
-    ``rule``: the verdict rule, 'joint' (default with a measured baseline: one GLR over every point,
-    benign change inside the rig's ``variability`` ranges as bounded nuisance, ``false_alarm`` per
-    sweep; :func:`joint_detection`) or 'certified' (the per-point fault points decide).
+    Detectors: 'joint' (default with a measured baseline on a rotor: one GLR over every point, benign
+    change inside the rig's ``variability`` ranges as bounded nuisance, ``false_alarm`` per sweep),
+    'certified' (the per-point fault points against the measured healthy FRF decide, ``confidence``
+    family-wise), 'system' / 'data' (against the nominal model with gamma_h; the baseline's ``enclose``).
     """
-    if rule is not None:
-        check_choice(rule, RULES, "--rule")
-    if rule == "joint" and baseline.enclose != "measured":
-        raise InputError(None, "--rule", f"the joint test needs a baseline validated with --enclose measured "
-                         f"(this one: {baseline.enclose!r})")
-    if not 0.0 < false_alarm < 1.0:
-        raise InputError(None, "--false-alarm", f"must be in (0, 1), got {false_alarm}")
-    if rule == "joint" and rig.kind != "rotor":
-        raise InputError(None, "--rule", "the joint test needs a rotor's shaft elements (crack signatures); "
-                         "this rig is lumped: use --rule certified")
-    use_joint = baseline.enclose == "measured" and rule in (None, "joint") and rig.kind == "rotor"
-    from rotorcheck.nominal import nominal_model
-    from rotorcheck.robust import identify, validation
+    settings = DetectorSettings(confidence, false_alarm, tuple(fail_at))
+    return diagnose(rig, baseline, run, make_detector(rig, baseline, rule, settings).detect(run))
 
-    model = nominal_model(rig, run.frequency_hz, run.speed_rpm)
+
+def diagnose(rig: RigConfig, baseline: Baseline, run: MeasuredRun, found: Detection) -> DetectionOutcome:
+    """What follows a detector's answer ``found``: the damage dynamics D_u at the damage port (eq. 3.11) with
+    its bound (eq. 3.12), anchored at the measured healthy FRF where the baseline holds it, per direction
+    with several channel pairs, and what the sweep could have revealed (joint test)."""
+    if baseline.gamma is None:
+        raise InputError(None, "gamma", "baseline holds only a noise fit; run 'rotorcheck validate'")
+    model = nominal_for(rig, run.frequency_hz, run.speed_rpm)
     E = model.E
     T = run.frf
-    notes: list[str] = []
-    measured = None
-    if baseline.enclose == "measured":
-        from rotorcheck.robust.measured import FrfEstimate, measured_detect, measured_verdict
-
-        if not 0.0 < confidence < 1.0:
-            raise InputError(None, "--confidence", f"must be in (0, 1), got {confidence}")
-        healthy = FrfEstimate(baseline.healthy_frf, baseline.healthy_frf_var, baseline.healthy_frf_dof)
-        new_est = frf_estimate(run)
-        per_pair(healthy.frf, run.frequency_hz, new_est.frf.shape[1], run)
-        e21 = E[:, 1:, 0]
-        if run.n_pairs > 1 and rig.damage is not None:
-            from rotorcheck.nominal import damage_direction
-
-            e21 = damage_direction(rig, run.frequency_hz, run.speed_rpm, run.pairs)
-        measured = measured_detect(new_est, healthy, confidence, e21=e21)
-        fault = measured.fault.copy()
-        status = measured.status.astype("<U13")
-        dist = measured.distance[:, 0].copy()
-        for i in fail_at:  # testing hook: the point could not be decided
-            fault[i], status[i], dist[i] = False, "solver_failed", np.nan
-        det = validation.DetectionResult(dist, dist, measured.radius[:, 0], fault, status, 0.0)
-        ver = measured_verdict(fault, status, confidence, measured.n_tests)
-        if run.harmonics_removed == 0 and run.speed_rpm != 0.0:
-            notes.append("the sweep stores no per-period phasors: shaft-speed harmonics (1X, 2X, ...) could not "
-                         "be removed; with a free-running start angle they may show as differences near kX")
-    elif run.n_pairs > 1:
-        me, Ws, Zs, Vp = pair_experiments(rig, run)
-        dets = [validation.detect(me, w, z, Vp, baseline.gamma, fail_at=fail_at) for w, z in zip(Ws, Zs)]
-        det = _worst_detection(dets)
-        ver = validation.verdict(det.fault, det.status, baseline.gamma_status)
-    else:
-        det = validation.detect(model.me, run.W, run.Zt, baseline_noise_values(baseline, run), baseline.gamma,
-                                parameter_structure(model, baseline.enclose), fail_at=fail_at)
-        ver = validation.verdict(det.fault, det.status, baseline.gamma_status)
+    notes: list[str] = list(found.notes)
+    measured = found.measured
     identifiable = rig.damage is not None
     damage = identify.damage_dynamics(E[:, 0, 0], E[:, 0, 1], E[:, 1, 0], E[:, 1, 1], T) if identifiable else (
         np.full(T.size, np.nan + 0j))
@@ -345,8 +301,6 @@ def detect(
         # its bound: the difference allowance of both sweeps' noise (measured) or the uniform V
         anchored = identify.damage_dynamics(E[:, 0, 0], E[:, 0, 1], E[:, 1, 0], Th, T)
         if measured is not None:
-            from rotorcheck.robust.measured import anchored_damage_bound, io_model_error
-
             radius = measured.radius[:, 0]
             rho = io_model_error(model.frf, Th)
             anchored_set = anchored_damage_bound(E[:, 0, 0], E[:, 0, 1], E[:, 1, 0], Th, T, radius, rho)
@@ -355,7 +309,7 @@ def detect(
                          "family-wise confidence) and with the model's damage-port channels E11, E12 E21 in error "
                          "relatively by up to damage_anchored_channel_error (assumed: no more than the model's "
                          "io channel errs on the healthy data there); damage_anchored_noise_*: noise only")
-        else:
+        elif baseline.input_phasor is not None:
             Wh = baseline.input_phasor[:, 0]
             anchored_set = identify.damage_set_io(E[:, 0, 0], E[:, 0, 1], E[:, 1, 0], Th, T,
                                                   baseline.noise_bound_m / np.abs(Wh), baseline.noise_bound_m,
@@ -363,23 +317,10 @@ def detect(
     if identifiable and baseline.noise_bound_m > 0 and model.structure == "parametric":
         notes.append("parametric structure: the nominal damage bound covers the parameter uncertainty only, "
                      "not the noise (a second uncertainty makes the set non-circular)")
-    joint = None
-    beyond = None
     sweep_det = None
-    if use_joint and Th is not None:
-        kappa = KAPPA_NOMINAL if baseline.benign_kappa is None else float(baseline.benign_kappa)
-        model_rig = updated_rig(rig, baseline_updates(baseline))
-        th_all, var_all = np.asarray(baseline.healthy_frf), np.asarray(baseline.healthy_frf_var)
-        joint = joint_detection(model_rig, th_all, var_all, run, kappa, _learned(baseline), false_alarm,
-                                baseline.speed_rpm, baseline.benign_correction)
-        ver = joint_verdict(joint, ver)
-        notes.extend(joint.notes)
-        certified = certify_beyond_benign(model_rig, th_all, var_all, run, joint, baseline.speed_rpm)
-        if certified is not None:
-            beyond = certified[0]
-            notes.extend(certified[1])
-        if joint.elements:
-            sweep_det = sweep_detectability(model_rig, baseline, run, joint)
+    joint = found.joint
+    if joint is not None and joint.elements:
+        sweep_det = sweep_detectability(updated_rig(rig, baseline_updates(baseline)), baseline, run, joint)
     damage_xy = None
     if identifiable and baseline.enclose == "measured" and run.n_pairs > 1:
         damage_xy = damage_per_direction(rig, run, np.asarray(baseline.healthy_frf),
@@ -394,8 +335,8 @@ def detect(
                          "functions plus an exact remainder bound), witness_re/witness_im the range attained inside "
                          "it; the model's receptances to and from the damage station taken as exact; "
                          "re_interval/im_interval: 95 % by Monte Carlo over the noise")
-    return DetectionOutcome(rig, baseline, run, model, det, ver, damage, dset, anchored, anchored_set, notes,
-                            measured, noise_only, joint, beyond, damage_xy, detectability=sweep_det)
+    return DetectionOutcome(rig, baseline, run, model, found, damage, dset, anchored, anchored_set, notes,
+                            noise_only, damage_xy, detectability=sweep_det)
 
 
 def sweep_detectability(rig: RigConfig, baseline: Any, run: MeasuredRun, joint: Any) -> Any:
@@ -403,9 +344,6 @@ def sweep_detectability(rig: RigConfig, baseline: Any, run: MeasuredRun, joint: 
     baseline's variances): the element easiest to watch and the best candidate. The benign model the joint
     test allowed is linearized at the healthy state (on the crack rig within 3 % of the re-solved model's
     figures, 15 % on element 6); learned benign directions are not included."""
-    from rotorcheck.detectability import detectability, linearized
-    from rotorcheck.nominal import primary_pair
-
     f = run.frequency_hz
     est = frf_estimate(run)
     P = est.frf.shape[1]
@@ -421,7 +359,6 @@ def sweep_detectability(rig: RigConfig, baseline: Any, run: MeasuredRun, joint: 
 
 #: verdict rules of ``detect``: 'joint' (one GLR over all points, benign change as bounded nuisance)
 #: or 'certified' (the per-point certified fault points decide, as before)
-RULES = ("joint", "certified")
 
 
 def joint_summary(outcome: DetectionOutcome) -> str:

@@ -135,22 +135,14 @@ def detection_figures(outcome: DetectionOutcome, at_hz: float | None = None,
         centre, radius = healthy, outcome.measured.radius[:, 0]
         set_label = "healthy data's set (noise of both sweeps)"
     else:
+        assert b.gamma is not None, "a validated baseline"
         centre, radius = uncertainty_disk(model, b.gamma, _v_of(b), run.W)
         set_label = "uncertainty set (model + gamma_h + noise)"
     j = outcome.joint
     joint = None if j is None else {"statistic": j.statistic, "threshold": j.threshold, "p_value": j.p_value,
                                     "false_alarm": j.false_alarm}
-    if outcome.measured is not None:  # the statistic that decided: the largest over the pairs (and the
-        # damage-direction test) of |T_new - T_h| / allowance; measured.statistic holds its square
-        decided = np.sqrt(np.asarray(outcome.measured.statistic, dtype=float))
-        meaning = ("|T_new - T_healthy| / its noise allowance" if run.n_pairs == 1 else
-                   f"largest over the {run.n_pairs} channel pairs\nand the damage direction of "
-                   "|T_new - T_h| / allowance")
-    else:
-        with np.errstate(divide="ignore", invalid="ignore"):
-            decided = (np.asarray(outcome.detection.gamma_required, dtype=float)
-                       / np.asarray(outcome.detection.gamma_healthy, dtype=float))
-        meaning = "gamma_required / gamma_healthy"
+    found = outcome.found  # the statistic that decided, per point, as the detector computed it
+    decided, meaning = found.ratio, found.ratio_meaning
     figs["detection_decision"] = decision_figure(run.frequency_hz, decided, fault,
                                                  np.asarray(outcome.detection.status), ctx, outcome.verdict.verdict,
                                                  outcome.verdict_rule, meaning, joint, outcome.fault_beyond_benign)

@@ -20,7 +20,7 @@ def locate_damage(rig: RigConfig, baseline: Any, run: MeasuredRun, false_alarm: 
     """Where and how big (:func:`rotorcheck.location.locate`) against a baseline validated with
     ``--enclose measured``: :func:`locate_run` with its healthy FRF, speed and updated model."""
     if baseline.enclose != "measured" or healthy_frf_of(baseline) is None:
-        raise InputError(baseline.path, "enclose", "locating needs a baseline validated with --enclose measured "
+        raise InputError(None, "--baseline", "locating needs a baseline validated with --enclose measured "
                          f"(this one: {baseline.enclose!r})")
     return locate_run(updated_rig(rig, baseline_updates(baseline)), run, np.asarray(baseline.healthy_frf),
                       np.asarray(baseline.healthy_frf_var), baseline.speed_rpm, false_alarm, elements,

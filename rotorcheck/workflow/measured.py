@@ -57,18 +57,18 @@ class MeasuredRun:
 
 
 def load_rig_and_runs(sweep_path: str | Path, rig_path: str | Path | None = None,
-                      baseline_path: str | Path | None = None, run_id: str | None = None, every_run: bool = False
-                      ) -> tuple[RigConfig, Path, list[MeasuredRun]]:
+                      baseline_path: str | Path | None = None, run_id: str | None = None, every_run: bool = False,
+                      sha256: str | None = None) -> tuple[RigConfig, Path, list[MeasuredRun]]:
     """Read a sweep file once: its rig (:func:`rig_for`), that rig's file, and its runs checked against the
     rig: ``run_id``; else every run with ``every_run``; else the file's one run (several: an error asking
-    for ``--run``)."""
+    for ``--run``); ``sha256``: the file's digest when the caller has it (else computed)."""
     from rotorcheck.sweep.hdf5io import read_sweep, sweep_sha256
 
     p = Path(sweep_path)
     sweep = read_sweep(p)
     rig_file = rig_for(rig_path, sweep.rig_id, baseline_path)
     config = load_config(rig_file)
-    sha = sweep_sha256(p)
+    sha = sha256 if sha256 is not None else sweep_sha256(p)
     ids: list[str | None] = list(sweep.runs) if every_run and run_id is None else [run_id]
     return config, rig_file, [measured_run(sweep, config, rid, p, sha) for rid in ids]
 

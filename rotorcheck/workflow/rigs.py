@@ -10,6 +10,7 @@ import numpy as np
 
 from rotorcheck.config import RigConfig, load_config
 from rotorcheck.errors import InputError
+from rotorcheck.nominal import NominalModel, nominal_model
 from rotorcheck.resources import default_rig_path
 
 
@@ -90,3 +91,21 @@ def port_static_stiffness(rig: RigConfig, speed_rpm: float) -> float:
     with np.errstate(divide="ignore", invalid="ignore"):
         return float(1.0 / abs(model.E[0, 0, 0]))
 
+
+
+#: the last nominal model built by :func:`nominal_for` (a detector and the diagnosis after it share one)
+_MODEL_MEMO: dict[tuple[int, bytes, float], tuple[RigConfig, NominalModel]] = {}
+
+
+def nominal_for(rig: RigConfig, freq_hz: np.ndarray, speed_rpm: float) -> NominalModel:
+    """:func:`rotorcheck.nominal.nominal_model` of ``rig`` on ``freq_hz`` (Hz) at ``speed_rpm``, built once
+    for the same rig object, grid and speed (one entry kept)."""
+    f = np.asarray(freq_hz, dtype=float)
+    key = (id(rig), f.tobytes(), float(speed_rpm))
+    hit = _MODEL_MEMO.get(key)
+    if hit is not None and hit[0] is rig:
+        return hit[1]
+    model = nominal_model(rig, f, speed_rpm)
+    _MODEL_MEMO.clear()
+    _MODEL_MEMO[key] = (rig, model)
+    return model

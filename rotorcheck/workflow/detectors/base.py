@@ -1,0 +1,108 @@
+"""The :class:`Detector` protocol, its settings and the typed :class:`Detection` every detector returns.
+
+A detector is made with :class:`DetectorSettings`, then ``prepare(rig, baseline)`` once per baseline and
+``detect(run)`` once per measured run. Registering a new one: a module in this package with a class that
+meets the protocol, and one ``@register`` line (see :mod:`rotorcheck.workflow.detectors.registry`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, ClassVar, Protocol
+
+import numpy as np
+
+from rotorcheck.baseline import Baseline
+from rotorcheck.config import RigConfig
+from rotorcheck.robust.joint import JointResult
+from rotorcheck.robust.measured import MeasuredDetection
+from rotorcheck.robust.real_box import BoxCertificate
+from rotorcheck.robust.validation import DetectionResult, Verdict
+from rotorcheck.workflow.measured import MeasuredRun
+
+if TYPE_CHECKING:  # matplotlib only for .plot()
+    from matplotlib.figure import Figure
+
+
+@dataclass(frozen=True)
+class DetectorSettings:
+    """What the user sets for a detection: the per-point test's family-wise ``confidence`` (over every point
+    and channel pair), the joint test's per-sweep ``false_alarm`` rate, and ``fail_at`` (a testing hook: these
+    point indices are reported as a solver failure)."""
+
+    confidence: float = 0.99
+    false_alarm: float = 0.01
+    fail_at: tuple[int, ...] = ()
+
+
+@dataclass
+class Detection:
+    """One detector's answer for one run.
+
+    ``verdict`` ('damage' | 'healthy' | 'inconclusive' with its reason); ``rule``: the rule that made it,
+    in words; ``statistic``, ``threshold``, ``p_value``: the sweep-level test where there is one (None for a
+    per-point rule without a sweep statistic); ``points``: the per-point evidence over the f points
+    (``gamma_required``, ``gamma_healthy``, ``fault``, ``status``); ``ratio`` (f,): the statistic that decided
+    per point, against a threshold of 1; ``notes``: what the reader must know. The detector's own results
+    stay typed beside it (``measured``, ``joint``, ``beyond_benign``).
+    """
+
+    detector: str
+    frequency_hz: np.ndarray
+    verdict: Verdict
+    rule: str
+    points: DetectionResult
+    ratio: np.ndarray
+    ratio_meaning: str
+    statistic: float | None = None
+    threshold: float | None = None
+    p_value: float | None = None
+    notes: list[str] = field(default_factory=list)
+    measured: MeasuredDetection | None = None
+    joint: JointResult | None = None
+    beyond_benign: BoxCertificate | None = None
+
+    @property
+    def fault(self) -> np.ndarray:
+        """(f,) bool: the certified fault points."""
+        return np.asarray(self.points.fault, dtype=bool)
+
+    @property
+    def fault_beyond_benign(self) -> np.ndarray | None:
+        """(f,) points unexplained after the joint test's fitted benign change in any channel pair (None: no
+        joint test)."""
+        if self.joint is None:
+            return None
+        f = self.frequency_hz
+        return np.asarray(np.asarray(self.joint.remaining, dtype=bool).reshape(-1, f.size).any(axis=0))
+
+    def plot(self, title: str = "") -> Figure:
+        """The decision figure: the deciding ratio per frequency against 1, fault points, the sweep test."""
+        from rotorcheck.report.plots import FigureContext, decision_figure
+
+        joint = None if self.joint is None else {
+            "statistic": self.joint.statistic, "threshold": self.joint.threshold, "p_value": self.joint.p_value,
+            "false_alarm": self.joint.false_alarm}
+        ctx = FigureContext(rig_id=title or self.detector)
+        return decision_figure(self.frequency_hz, self.ratio, self.fault, np.asarray(self.points.status), ctx,
+                               self.verdict.verdict, self.rule, self.ratio_meaning, joint, self.fault_beyond_benign)
+
+
+class Detector(Protocol):
+    """A detection rule: ``prepare`` once against a rig and baseline, then ``detect`` each run.
+
+    ``name``: the registry key (``--rule``); ``encloses``: the baseline ``enclose`` modes it accepts;
+    ``rotor_only``: needs a rotor's shaft elements.
+    """
+
+    name: ClassVar[str]
+    encloses: ClassVar[tuple[str, ...]]
+    rotor_only: ClassVar[bool]
+
+    def __init__(self, settings: DetectorSettings) -> None: ...
+
+    def prepare(self, rig: RigConfig, baseline: Baseline) -> None:
+        """Hold what every run against this rig and baseline shares."""
+
+    def detect(self, run: MeasuredRun) -> Detection:
+        """The verdict for ``run`` with its rule, statistic and per-point evidence."""

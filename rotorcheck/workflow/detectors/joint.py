@@ -1,0 +1,90 @@
+"""The joint test (default with a measured baseline on a rotor): one generalized likelihood ratio over every
+point and channel pair, benign change inside the rig's ``variability`` ranges as bounded nuisance (the model
+re-solved at the parameters, with a model-error allowance), a crack signature per shaft element as the
+alternative (:mod:`rotorcheck.robust.joint`). The per-point certified test runs first and stays as where in
+frequency the data depart; each point is also certified beyond every benign change where it can be
+(:func:`rotorcheck.workflow.benign.certify_beyond_benign`).
+"""
+
+from __future__ import annotations
+
+from typing import ClassVar
+
+import numpy as np
+
+from rotorcheck.baseline import Baseline
+from rotorcheck.config import RigConfig
+from rotorcheck.robust.joint import JOINT_RULE, JointResult, LearnedDirections
+from rotorcheck.robust.validation import Verdict
+from rotorcheck.workflow.benign import KAPPA_NOMINAL, certify_beyond_benign, joint_detection
+from rotorcheck.workflow.detectors.base import Detection, DetectorSettings
+from rotorcheck.workflow.detectors.certified import CertifiedDetector
+from rotorcheck.workflow.measured import MeasuredRun
+from rotorcheck.workflow.rigs import baseline_updates, updated_rig
+
+
+def learned_directions(baseline: Baseline) -> LearnedDirections | None:
+    """The benign directions a baseline learned from several healthy sweeps (None: none stored)."""
+    if baseline.benign_directions is None:
+        return None
+    U = np.asarray(baseline.benign_directions)
+    return LearnedDirections(U, np.asarray(baseline.benign_direction_bound), np.zeros(0), int(baseline.n_healthy))
+
+
+def joint_verdict(joint: JointResult, certified: Verdict) -> Verdict:
+    """The sweep verdict of the joint test (its rule: :data:`rotorcheck.robust.joint.JOINT_RULE`); the
+    certified fault points stay as where in frequency the data depart."""
+    e = joint.elements[joint.best] if joint.elements else 0
+    lo, hi = joint.severity_interval
+    if joint.damage:
+        why = (f"joint test: T = {joint.statistic:.4g} > {joint.threshold:.4g} (p = {joint.p_value:.2g} < "
+               f"{joint.false_alarm:g}); best explained by a stiffness loss of element {e}: "
+               f"{100 * joint.severity[joint.best]:.3g} % [{100 * lo:.3g}, {100 * hi:.3g}] (95 %)")
+        return Verdict("damage", why, certified.n_points, certified.n_fault, certified.n_undecided,
+                       certified.longest_run, certified.threshold)
+    benign = "noise" if not joint.theta_names else "benign change inside the configured ranges and noise"
+    why = (f"joint test: T = {joint.statistic:.4g} <= {joint.threshold:.4g} (p = {joint.p_value:.2g}); the change "
+           f"is explained by {benign} at false-alarm rate {joint.false_alarm:g}")
+    return Verdict("healthy", why, certified.n_points, certified.n_fault, certified.n_undecided,
+                   certified.longest_run, certified.threshold)
+
+
+class JointDetector:
+    """The joint GLR decides; the per-point certified test says where."""
+
+    name: ClassVar[str] = "joint"
+    title: ClassVar[str] = "joint test"
+    encloses: ClassVar[tuple[str, ...]] = ("measured",)
+    rotor_only: ClassVar[bool] = True
+
+    def __init__(self, settings: DetectorSettings) -> None:
+        self.settings = settings
+        self.points = CertifiedDetector(settings)
+        self.model_rig: RigConfig | None = None
+        self.baseline: Baseline | None = None
+
+    def prepare(self, rig: RigConfig, baseline: Baseline) -> None:
+        """The rig as updated by the baseline (``validate --update``) and the per-point test."""
+        self.points.prepare(rig, baseline)
+        self.model_rig = updated_rig(rig, baseline_updates(baseline))
+        self.baseline = baseline
+
+    def detect(self, run: MeasuredRun) -> Detection:
+        """The per-point evidence, then the joint verdict and the per-point certificate beyond benign change."""
+        rig, b = self.model_rig, self.baseline
+        if rig is None or b is None:
+            raise RuntimeError("prepare() the detector first")
+        found = self.points.detect(run)
+        kappa = KAPPA_NOMINAL if b.benign_kappa is None else float(b.benign_kappa)
+        th, var = np.asarray(b.healthy_frf), np.asarray(b.healthy_frf_var)
+        joint = joint_detection(rig, th, var, run, kappa, learned_directions(b), self.settings.false_alarm,
+                                b.speed_rpm, b.benign_correction)
+        found.detector, found.rule, found.joint = self.name, JOINT_RULE, joint
+        found.verdict = joint_verdict(joint, found.verdict)
+        found.statistic, found.threshold, found.p_value = joint.statistic, joint.threshold, joint.p_value
+        found.notes.extend(joint.notes)
+        certified = certify_beyond_benign(rig, th, var, run, joint, b.speed_rpm)
+        if certified is not None:
+            found.beyond_benign = certified[0]
+            found.notes.extend(certified[1])
+        return found
