@@ -66,3 +66,7 @@ def _parse(value: object, dimension: str) -> float:
         return number * table[unit]
     allowed = ", ".join(repr(u) for u in table if u) or "no unit"
     raise UnitError(f"unit {unit!r} is not a {dimension} unit (use one of {allowed} or a bare SI number)")
+
+
+#: the receptance units the plots draw in (``--frf-unit``)
+PLOT_FRF_UNITS: tuple[str, ...] = ("m/N", "mm/N", "um/N")

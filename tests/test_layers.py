@@ -112,3 +112,59 @@ def test_the_check_catches_an_upward_import(tmp_path: Path) -> None:
     assert layer_of("rotorcheck.sweep.format")[0] == layer_of("rotorcheck.faults.crack")[0]
     assert layer_of("rotorcheck.sweep.format")[1] != layer_of("rotorcheck.faults.crack")[1]
     assert layer_of("rotorcheck.workflow")[0] < layer_of("rotorcheck.cli")[0]
+
+
+def _graph() -> dict[str, set[str]]:
+    """module -> the rotorcheck modules it imports (at module level or inside a function)."""
+    graph: dict[str, set[str]] = {}
+    for path in _modules():
+        module = _module_name(path)
+        graph[module] = {n for _, n in _imports(path, module) if _exists(n) and n != module and n != "rotorcheck"}
+    return graph
+
+
+def _cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """The import loops of ``graph``: its strongly connected components of more than one module (Tarjan)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on: set[str] = set()
+    out: list[list[str]] = []
+
+    def visit(v: str) -> None:
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on.add(v)
+        for w in graph.get(v, ()):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = []
+            while True:
+                w = stack.pop()
+                on.discard(w)
+                comp.append(w)
+                if w == v:
+                    break
+            if len(comp) > 1:
+                out.append(sorted(comp))
+
+    for v in sorted(graph):
+        if v not in index:
+            visit(v)
+    return out
+
+
+def test_no_import_loop_anywhere() -> None:
+    """Modules of one package may import each other (the layer rule allows it), but never in a loop: a loop
+    is a module that cannot be read without the other (issue 28)."""
+    loops = _cycles(_graph())
+    assert not loops, "import loops:\n" + "\n".join(" <-> ".join(c) for c in loops)
+
+
+def test_the_loop_check_finds_a_planted_loop() -> None:
+    assert _cycles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
+    assert _cycles({"a": {"b"}, "b": set()}) == []

@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from rotorcheck.report.reports import damage_columns, headline_damage
+from rotorcheck.report.content import damage_columns, headline_damage
 
 VERDICT_COLOUR = {"damage": "#b00020", "healthy": "#1b7a2f", "inconclusive": "#a66a00", "located": "#b00020",
                   "nothing to locate": "#1b7a2f"}

@@ -21,10 +21,10 @@ from matplotlib.figure import Figure
 
 from rotorcheck.report.figures import legend_outside
 from rotorcheck.report.rotor_drawing import draw_rotor
-from rotorcheck.units import UNITS
+from rotorcheck.units import PLOT_FRF_UNITS, UNITS
 
 #: receptance units a plot may use: factor from m/N (rotorcheck.units' receptance table, inverted)
-FRF_UNITS: dict[str, float] = {u: 1.0 / UNITS["receptance"][u] for u in ("m/N", "mm/N", "um/N")}
+FRF_UNITS: dict[str, float] = {u: 1.0 / UNITS["receptance"][u] for u in PLOT_FRF_UNITS}
 #: colours that stay apart for readers with the common colour-vision deficiencies
 COLOURS = {"model": "0.35", "band": "tab:blue", "healthy": "k", "new": "tab:orange", "fault": "tab:red",
            "ok": "0.55", "reference": "tab:green"}

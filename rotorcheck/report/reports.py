@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from rotorcheck.fileio import atomic_write_text
+from rotorcheck.report.content import headline_damage
 
 REPORT_FILES = ("report.json", "report.md", "fault_points.csv", "report.html")
 
@@ -123,36 +124,6 @@ def render_markdown(report: dict[str, Any], plots: list[str]) -> str:
             name = Path(p).name
             lines += ([f"![{Path(p).stem}]({name})", ""] if name.endswith((".png", ".svg")) else [f"- `{name}`"])
     return "\n".join(lines) + "\n"
-
-
-def damage_columns(report: dict[str, Any]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, str]:
-    """The damage estimate to read (f,): ``(re, im, min_abs, max_abs, kind)`` in N/m, the anchored D_u and its
-    bound where the report has it, else the nominal-E22 one; ``kind`` says which."""
-    if "damage_dynamics_anchored_re" in report:
-        keys = ("damage_dynamics_anchored_re", "damage_dynamics_anchored_im", "damage_anchored_bound_min_abs",
-                "damage_anchored_bound_max_abs")
-        kind = "anchored at the healthy data"
-    else:
-        keys = ("damage_dynamics_re", "damage_dynamics_im", "damage_bound_min_abs", "damage_bound_max_abs")
-        kind = "nominal E22 (eq. 3.11; carries the model error)"
-    re, im, lo, hi = (np.asarray(report[k], dtype=float) for k in keys)
-    return re, im, lo, hi, kind
-
-
-def headline_damage(report: dict[str, Any]) -> list[str]:
-    """The headline damage figure: the anchored D_u (the estimate free of the nominal model's error) over
-    the fault points (or the band) with its bound; the nominal-E22 one only where no anchored one exists."""
-    fault = np.asarray(report["fault"], dtype=bool)
-    sel = fault if np.any(fault) else np.ones_like(fault)
-    where = f"median over the {int(np.sum(sel))} fault points" if np.any(fault) else "median over the band"
-    re_all, _, lo_all, hi_all, kind = damage_columns(report)
-    re, lo, hi = re_all[sel], lo_all[sel], hi_all[sel]
-    if re.size == 0 or not np.any(np.isfinite(re)):
-        return []
-    significant = int(np.count_nonzero(lo > 0))
-    return [f"Damage dynamics at {report['damage_port']} ({kind}), {where}: Re D_u = {np.nanmedian(re):.4g} N/m "
-            f"(positive: a stiffness loss); |D_u| within [{np.nanmedian(lo):.4g}, {np.nanmedian(hi):.4g}] N/m "
-            f"(medians of the bound); the bound excludes 0 at {significant} of {re.size} points.", ""]
 
 
 def _step(report: dict[str, Any]) -> float:

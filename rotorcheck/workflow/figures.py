@@ -9,6 +9,7 @@ import numpy as np
 
 from rotorcheck.config import RigConfig
 from rotorcheck.errors import check_choice
+from rotorcheck.units import PLOT_FRF_UNITS
 from rotorcheck.workflow.detection import DetectionOutcome, healthy_frf_of
 from rotorcheck.workflow.measured import MeasuredRun
 from rotorcheck.workflow.noise import frf_noise_radius
@@ -60,9 +61,7 @@ def _telling_fault(ratio: np.ndarray, fault: np.ndarray) -> int:
 
 def check_frf_unit(frf_unit: str) -> str:
     """``frf_unit`` when the plots know it (m/N, mm/N, um/N), else an InputError naming --frf-unit."""
-    from rotorcheck.report.plots import FRF_UNITS
-
-    return check_choice(frf_unit, FRF_UNITS, "--frf-unit")
+    return check_choice(frf_unit, PLOT_FRF_UNITS, "--frf-unit")  # without importing matplotlib
 
 
 def figure_context(rig: RigConfig, run: MeasuredRun, baseline_path: str | Path | None = None,
