@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -37,6 +37,47 @@ from rotorcheck.workflow.measured import (
 )
 from rotorcheck.workflow.rigs import baseline_updates, damage_port_name, nominal_for, speed_tolerance, updated_rig
 
+if TYPE_CHECKING:  # matplotlib only for .plot()
+    from matplotlib.figure import Figure
+
+
+@dataclass
+class Diagnosis:
+    """What follows a detector's answer: the damage dynamics at the damage port, N/m per frequency (f,).
+
+    ``damage``: D_u with the nominal model's E22 (eq. 3.11), ``damage_set`` its exact set over the uncertainty
+    inherited from gamma_h and V (eq. 3.12; it carries the model's error of E22: not the estimate to read);
+    ``anchored``: D_u with E22 anchored at the measured healthy FRF, ``anchored_set`` its bound (assumption: the
+    noise of both sweeps at the detector's family-wise confidence, and with a measured baseline the model's
+    damage-port channels in error by up to ``anchored_set.channel_error``), ``anchored_noise_only`` the same
+    over the noise alone; ``damage_xy``: D at the damage station in x and y (several channel pairs; 95 % Monte
+    Carlo intervals and a certified bound); ``location``: where and how big (``detect --locate``);
+    ``detectability``: what this sweep could have revealed; ``notes``: what each of these rests on.
+    """
+
+    frequency_hz: np.ndarray
+    damage: np.ndarray
+    damage_set: DamageSet
+    anchored: np.ndarray | None = None
+    anchored_set: AnchoredDamageBound | DamageSet | None = None
+    anchored_noise_only: AnchoredDamageBound | None = None
+    damage_xy: DirectionalDamage | None = None
+    location: LocationResult | None = None
+    detectability: Detectability | None = None
+    notes: list[str] = field(default_factory=list)
+
+    def plot(self, fault: np.ndarray | None = None, title: str = "Damage dynamics D_u") -> Figure:
+        """D_u per frequency with its bound: the anchored estimate where there is one, else the nominal."""
+        from rotorcheck.report.plots import damage_dynamics_figure
+
+        if self.anchored is not None and self.anchored_set is not None:
+            d, b = self.anchored, self.anchored_set
+        else:
+            d, b = self.damage, self.damage_set
+        return damage_dynamics_figure(self.frequency_hz, d, b.min_abs, b.max_abs, np.degrees(b.phase_min),
+                                      np.degrees(b.phase_max), fault=fault, title=title)
+
+
 #: exit codes of the verdicts (cli.md)
 EXIT_CODES = {"healthy": 0, "damage": 1, "inconclusive": 3}
 
@@ -50,15 +91,56 @@ class DetectionOutcome:
     run: MeasuredRun
     model: NominalModel
     found: Detection  # the detector's verdict, rule, statistic and per-point evidence
-    damage: np.ndarray  # D_u nominal (N/m), eq. 3.11 with the nominal E22
-    damage_set: DamageSet  # over the uncertainty inherited from gamma_h and V (eq. 3.12)
-    anchored: np.ndarray | None = None  # D_u with E22 anchored at the healthy data (N/m)
-    anchored_set: AnchoredDamageBound | DamageSet | None = None  # its exact set (noise of both sweeps)
-    notes: list[str] = field(default_factory=list)
-    anchored_noise_only: AnchoredDamageBound | None = None  # the anchored bound over the noise alone (measured)
-    damage_xy: DirectionalDamage | None = None  # D at the damage station in x and y (several pairs)
-    location: LocationResult | None = None  # detect --locate
-    detectability: Detectability | None = None  # what this sweep could have revealed (a few elements)
+    diagnosis: Diagnosis  # the damage dynamics with their bounds, location, what the sweep could reveal
+
+    @property
+    def notes(self) -> list[str]:
+        """The detector's notes, then the diagnosis's."""
+        return [*self.found.notes, *self.diagnosis.notes]
+
+    @property
+    def damage(self) -> np.ndarray:
+        """D_u with the nominal E22, N/m (f,)."""
+        return self.diagnosis.damage
+
+    @property
+    def damage_set(self) -> DamageSet:
+        """The exact set of :attr:`damage` (eq. 3.12)."""
+        return self.diagnosis.damage_set
+
+    @property
+    def anchored(self) -> np.ndarray | None:
+        """D_u anchored at the measured healthy FRF, N/m (f,)."""
+        return self.diagnosis.anchored
+
+    @property
+    def anchored_set(self) -> AnchoredDamageBound | DamageSet | None:
+        """The bound of :attr:`anchored`."""
+        return self.diagnosis.anchored_set
+
+    @property
+    def anchored_noise_only(self) -> AnchoredDamageBound | None:
+        """The anchored bound over the noise alone."""
+        return self.diagnosis.anchored_noise_only
+
+    @property
+    def damage_xy(self) -> DirectionalDamage | None:
+        """D at the damage station in x and y (several channel pairs)."""
+        return self.diagnosis.damage_xy
+
+    @property
+    def location(self) -> LocationResult | None:
+        """Where and how big (``detect --locate``)."""
+        return self.diagnosis.location
+
+    @location.setter
+    def location(self, value: LocationResult | None) -> None:
+        self.diagnosis.location = value
+
+    @property
+    def detectability(self) -> Detectability | None:
+        """What this sweep could have revealed."""
+        return self.diagnosis.detectability
 
     @property
     def detection(self) -> DetectionResult:
@@ -104,7 +186,7 @@ class DetectionOutcome:
         """The report.json document (cli.md keys plus context): :meth:`typed_report` as a dict."""
         return self.typed_report().to_dict()
 
-    def typed_report(self) -> Any:
+    def typed_report(self) -> DetectionReport:
         """The report as a :class:`rotorcheck.report.schema.DetectionReport`."""
         f = self.run.frequency_hz
         fault = np.asarray(self.detection.fault, dtype=bool)
@@ -192,10 +274,10 @@ class DetectionOutcome:
         return rep
 
 
-def check_baseline(baseline: Any, rig: RigConfig, run: MeasuredRun, baseline_path: str | Path) -> MeasuredRun:
+def check_baseline(baseline: Baseline, rig: RigConfig, run: MeasuredRun, baseline_path: str | Path) -> MeasuredRun:
     """Refuse a baseline made for another rig, speed or grid (InputError naming the field); returns ``run``
     with its channel pairs in the baseline's order (:func:`aligned_pairs`)."""
-    if not baseline.validated:
+    if not baseline.validated or baseline.frequency_hz is None:
         raise InputError(baseline_path, "/@stage", "baseline holds only a noise fit; run 'rotorcheck validate'")
     if baseline.rig_sha256 != rig.sha256():
         raise InputError(baseline_path, "/@rig_sha256",
@@ -229,7 +311,8 @@ def check_baseline(baseline: Any, rig: RigConfig, run: MeasuredRun, baseline_pat
     return run
 
 
-def baseline_for_speed(bases: list[Any], rig: RigConfig, run: MeasuredRun, baseline_path: str | Path) -> Any:
+def baseline_for_speed(bases: list[Baseline], rig: RigConfig, run: MeasuredRun, baseline_path: str | Path
+                       ) -> Baseline:
     """The validated set of a several-run baseline at ``run``'s speed (the closest within the rig's speed
     tolerance; exact at standstill), refused naming the speeds it holds."""
     tol = speed_tolerance(rig)
@@ -267,7 +350,7 @@ def diagnose(rig: RigConfig, baseline: Baseline, run: MeasuredRun, found: Detect
     model = nominal_for(rig, run.frequency_hz, run.speed_rpm)
     E = model.E
     T = run.frf
-    notes: list[str] = list(found.notes)
+    notes: list[str] = []
     measured = found.measured
     identifiable = rig.damage is not None
     damage = identify.damage_dynamics(E[:, 0, 0], E[:, 0, 1], E[:, 1, 0], E[:, 1, 1], T) if identifiable else (
@@ -293,8 +376,8 @@ def diagnose(rig: RigConfig, baseline: Baseline, run: MeasuredRun, found: Detect
                      "(its size on a healthy shaft is the model error, not damage); damage_dynamics_anchored_* "
                      "anchors E22 at the measured healthy FRF and is the estimate to read")
     anchored: np.ndarray | None = None
-    anchored_set: Any = None
-    noise_only: Any = None
+    anchored_set: AnchoredDamageBound | DamageSet | None = None
+    noise_only: AnchoredDamageBound | None = None
     Th = healthy_frf_of(baseline)
     if Th is not None and identifiable:
         # the member of the inherited set that the healthy data selects: E22 := measured healthy FRF;
@@ -335,11 +418,12 @@ def diagnose(rig: RigConfig, baseline: Baseline, run: MeasuredRun, found: Detect
                          "functions plus an exact remainder bound), witness_re/witness_im the range attained inside "
                          "it; the model's receptances to and from the damage station taken as exact; "
                          "re_interval/im_interval: 95 % by Monte Carlo over the noise")
-    return DetectionOutcome(rig, baseline, run, model, found, damage, dset, anchored, anchored_set, notes,
-                            noise_only, damage_xy, detectability=sweep_det)
+    diagnosis = Diagnosis(run.frequency_hz, damage, dset, anchored, anchored_set, noise_only, damage_xy,
+                          detectability=sweep_det, notes=notes)
+    return DetectionOutcome(rig, baseline, run, model, found, diagnosis)
 
 
-def sweep_detectability(rig: RigConfig, baseline: Any, run: MeasuredRun, joint: Any) -> Any:
+def sweep_detectability(rig: RigConfig, baseline: Baseline, run: MeasuredRun, joint: JointResult) -> Detectability:
     """What this sweep could have revealed (:mod:`rotorcheck.detectability` with this sweep's and the
     baseline's variances): the element easiest to watch and the best candidate. The benign model the joint
     test allowed is linearized at the healthy state (on the crack rig within 3 % of the re-solved model's
@@ -405,7 +489,7 @@ def anchored_summary(outcome: DetectionOutcome) -> str:
             f"{np.median(hi) / 1e3:.4g}] kN/m (positive: stiffness loss)")
 
 
-def healthy_frf_of(baseline: Any) -> np.ndarray | None:
+def healthy_frf_of(baseline: Baseline) -> np.ndarray | None:
     if baseline.healthy_frf is not None:
         return np.asarray(baseline.healthy_frf)[:, 0]
     if baseline.input_phasor is not None and baseline.output_phasor is not None:
