@@ -13,7 +13,9 @@ import numpy as np
 
 from rotorcheck.config import RigConfig, load_config
 from rotorcheck.errors import InputError
+from rotorcheck.nominal import ChannelPair
 from rotorcheck.signal.lockin import SHAFT_ORDERS
+from rotorcheck.workflow.frf import MeasuredFRF
 from rotorcheck.workflow.rigs import rig_for
 
 
@@ -38,7 +40,7 @@ class MeasuredRun:
     # every measured channel pair (output <- input), the rig's own actuator -> sensor first; W, Zt and
     # output_var above are that first pair's phasors. Several pairs: their FRFs (f, P) m/N, the
     # variances of those FRFs (f, P) m^2/N^2 and the variances' real degrees of freedom (f, P)
-    pairs: tuple[Any, ...] = ()
+    pairs: tuple[ChannelPair, ...] = ()
     frf_pairs: np.ndarray | None = None
     var_pairs: np.ndarray | None = None
     dof_pairs: np.ndarray | None = None
@@ -54,6 +56,14 @@ class MeasuredRun:
     def frf(self) -> np.ndarray:
         """Measured receptance Zt / W (f,), m/N."""
         return self.Zt / self.W
+
+    def measured_frf(self) -> MeasuredFRF:
+        """The run as a :class:`~rotorcheck.workflow.frf.MeasuredFRF`: (f, P) with variances, dof and labels."""
+        est = frf_estimate(self)
+        labels = [f"{o}<-{i}" for o, i in pair_keys(self)] or ["sensor<-actuator"]
+        return MeasuredFRF(self.frequency_hz, est.frf, est.var, est.dof, labels, self.path, self.sha256,
+                           self.rig_id, self.run_id, self.speed_rpm, self.band_hz, self.harmonics_removed,
+                           self.noise_source)
 
 
 def load_rig_and_runs(sweep_path: str | Path, rig_path: str | Path | None = None,
@@ -154,7 +164,7 @@ def _channel_pairs(sweep: Any, config: RigConfig, p: Path) -> tuple[list[Any], l
     and each pair's (output, input) column. A channel off the model, or a sweep without the rig's own
     actuator and sensor, is refused naming the channel."""
     from rotorcheck.fe.assembly import build_system
-    from rotorcheck.nominal import ChannelPair, channel_port, port_label
+    from rotorcheck.nominal import channel_port, port_label
 
     system = build_system(config) if config.kind == "rotor" else None  # to check each channel's station
 
