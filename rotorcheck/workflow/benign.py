@@ -10,13 +10,16 @@ import numpy as np
 
 from rotorcheck.config import RigConfig
 from rotorcheck.errors import InputError
+from rotorcheck.robust.joint import BenignModel, joint_test, learn_directions
+from rotorcheck.robust.real_box import BoxCertificate, certify_points, merge_certificates
+from rotorcheck.signatures import SILENT, benign_box, benign_prediction, crack_signatures, io_frf, stacked
+from rotorcheck.variability import benign_at, benign_parameters
 from rotorcheck.workflow.measured import MeasuredRun, frf_estimate, per_pair
 
 
 def benign_table(joint: Any, rig: RigConfig) -> list[dict[str, Any]]:
     """The fitted benign parameters: {name, estimate, interval (95 %, linearized), unit, at_range_edge};
     relative changes in percent, offsets in their unit."""
-    from rotorcheck.variability import benign_parameters
 
     params = {p.name: p for p in benign_parameters(rig)}
     out = []
@@ -50,9 +53,6 @@ def benign_model(rig: RigConfig, f: np.ndarray, speed_rpm: float, Th: np.ndarray
     """The model's benign change (re-solved, anchored at ``Th``) for the joint test; None without a
     ``variability`` section. A recorded speed offset shifts the speed parameter's range. ``correction``
     (p, f) m/N per unit parameter, learned from healthy sweeps, is added: ``b(theta) + theta C``."""
-    from rotorcheck.robust.joint import BenignModel
-    from rotorcheck.signatures import benign_prediction
-    from rotorcheck.variability import benign_at
 
     if not rig.variability:
         return None
@@ -99,8 +99,6 @@ def joint_detection(rig: RigConfig, Th: np.ndarray, var_h: np.ndarray, run: Meas
     """The joint test (:mod:`rotorcheck.robust.joint`) of ``run`` against the healthy FRF ``Th`` (f,) or
     (f, P), one column per channel pair, with the variance of its mean ``var_h`` (same shape), m^2/N^2;
     every point of every pair enters one statistic. ``correction``: see :func:`learn_benign`."""
-    from rotorcheck.robust.joint import joint_test
-    from rotorcheck.signatures import crack_signatures, stacked
 
     f = run.frequency_hz
     speed = run.speed_rpm if speed_rpm is None else speed_rpm
@@ -119,9 +117,6 @@ def certify_beyond_benign(rig: RigConfig, Th: np.ndarray, var_h: np.ndarray, run
     test's model-error allowance at that point? With several channel pairs each is certified on its own
     and a point counts when any pair is (the quantile is Sidak over every point of every pair). None
     without benign parameters that change the model. Returns the certificate and notes."""
-    from rotorcheck.robust.real_box import BoxCertificate, certify_points, merge_certificates
-    from rotorcheck.signatures import SILENT, benign_box, io_frf
-    from rotorcheck.variability import benign_at
 
     speed = run.speed_rpm if speed_rpm is None else speed_rpm
     params = benign_at(rig, speed) if rig.variability else ()
@@ -192,11 +187,9 @@ def learn_benign(rig: RigConfig, runs: list[MeasuredRun], false_alarm: float = 0
        benign corners were then called damage).
 
     One sweep: kappa = :data:`KAPPA_NOMINAL`, nothing learned; two: directions only (no leave-one-out)."""
-    from rotorcheck.robust.joint import learn_directions
 
     if len(runs) < 2:
         return BenignLearning(KAPPA_NOMINAL)
-    from rotorcheck.signatures import stacked
 
     speed = runs[0].speed_rpm
     ests = [frf_estimate(r) for r in runs]
@@ -218,7 +211,6 @@ def learn_benign(rig: RigConfig, runs: list[MeasuredRun], false_alarm: float = 0
     # the speed tolerance is corrected by nothing: its effect (gyroscopics) is small beside the others
     # and its training values are barely identifiable, so a regression on it learns noise (leaving the
     # gain out of the correction too was tried: bearing me -2 % at 0 rpm then called damage 5 of 10)
-    from rotorcheck.variability import benign_at
 
     params = benign_at(rig, speed)
     keep = np.array([not p.is_speed for p in params], dtype=bool)

@@ -7,7 +7,10 @@ from typing import Any
 
 import numpy as np
 
-from rotorcheck.config import RigConfig
+from rotorcheck.config import Port, RigConfig
+from rotorcheck.nominal import ChannelPair, pair_receptance
+from rotorcheck.robust.damage_block import damage_block_bound
+from rotorcheck.robust.identify import damage_dynamics
 from rotorcheck.workflow.measured import MeasuredRun, PairGrid
 
 
@@ -36,9 +39,6 @@ def damage_per_direction(rig: RigConfig, run: MeasuredRun, healthy_frf: np.ndarr
     ``radius`` (f, P) m/N: the noise allowance of each pair's difference at a family-wise confidence; with
     it, the certified set of D over that noise polydisc (:func:`rotorcheck.robust.damage_block.damage_block_bound`).
     None with one pair or no damage port, or when the pairs are not every output against every input."""
-    from rotorcheck.config import Port
-    from rotorcheck.nominal import ChannelPair, pair_receptance
-    from rotorcheck.robust.identify import damage_dynamics
 
     grid = PairGrid.of(run)
     if grid is None or rig.damage is None or rig.kind != "rotor" or run.frf_pairs is None:
@@ -69,7 +69,6 @@ def damage_per_direction(rig: RigConfig, run: MeasuredRun, healthy_frf: np.ndarr
         return None
     bound = None
     if radius is not None:
-        from rotorcheck.robust.damage_block import damage_block_bound
 
         bound = damage_block_bound(E11, E12, E21, T - Th, matrix(np.asarray(radius, dtype=float).reshape(nf, -1)))
         est = bound.estimate  # the weighted least-squares member (its W) rather than the pseudo-inverse's

@@ -9,6 +9,9 @@ import numpy as np
 
 from rotorcheck.config import RigConfig
 from rotorcheck.errors import check_choice
+from rotorcheck.nominal import primary_pair
+from rotorcheck.robust.identify import moebius_disk_image
+from rotorcheck.robust.lft import lft_upper
 from rotorcheck.units import PLOT_FRF_UNITS
 from rotorcheck.workflow.detection import DetectionOutcome, healthy_frf_of
 from rotorcheck.workflow.measured import MeasuredRun
@@ -26,8 +29,6 @@ def uncertainty_disk(model: Any, gamma: np.ndarray, noise_bound_m: float | np.nd
         return G, gamma + noise
     if model.structure == "multiplicative":
         return G, gamma * np.abs(G) + noise
-    from rotorcheck.robust.identify import moebius_disk_image
-    from rotorcheck.robust.lft import lft_upper
 
     me = model.me
 
@@ -68,8 +69,7 @@ def figure_context(rig: RigConfig, run: MeasuredRun, baseline_path: str | Path |
                    frf_unit: str = "m/N") -> Any:
     """What a validation or detection figure shows: rig, speed (none for a lumped rig), the channel pair
     drawn (the rig's actuator -> sensor), the sweep file and the baseline file."""
-    from rotorcheck.nominal import primary_pair
-    from rotorcheck.report.plots import FigureContext
+    from rotorcheck.report.plots import FigureContext  # lazy import: matplotlib only when plotting
 
     check_frf_unit(frf_unit)
     pair = run.pairs[0] if run.pairs else primary_pair(rig)
@@ -85,7 +85,7 @@ def validation_plots(outcome: ValidationOutcome, out_dir: str | Path, at_hz: flo
                      formats: tuple[str, ...] = ("png",), baseline_path: str | Path | None = None,
                      frf_unit: str = "m/N") -> list[str]:
     """:func:`validation_figures` written to ``out_dir`` (``formats``); returns the written paths."""
-    from rotorcheck.report.figures import save_figures
+    from rotorcheck.report.figures import save_figures  # lazy import: matplotlib only when plotting
 
     return save_figures(validation_figures(outcome, at_hz, baseline_path, frf_unit), out_dir, formats)
 
@@ -94,7 +94,10 @@ def validation_figures(outcome: ValidationOutcome, at_hz: float | None = None,
                        baseline_path: str | Path | None = None, frf_unit: str = "m/N") -> dict[str, Any]:
     """Bode with the uncertainty band and the complex plane at one frequency (``at_hz``, default the point
     of the largest relative model error), by file stem (:data:`PLOT_STEMS_VALIDATE`)."""
-    from rotorcheck.report.plots import bode_band_figure, complex_plane_figure
+    from rotorcheck.report.plots import (  # lazy import: matplotlib only when plotting
+        bode_band_figure,
+        complex_plane_figure,
+    )
 
     b, run, model = outcome.baseline, outcome.runs[0], outcome.model
     ctx = figure_context(outcome.rig, run, baseline_path, frf_unit)
@@ -112,7 +115,7 @@ def detection_plots(outcome: DetectionOutcome, out_dir: str | Path, at_hz: float
                     formats: tuple[str, ...] = ("png",), baseline_path: str | Path | None = None,
                     frf_unit: str = "m/N") -> list[str]:
     """:func:`detection_figures` written to ``out_dir`` (``formats``); returns the written paths."""
-    from rotorcheck.report.figures import save_figures
+    from rotorcheck.report.figures import save_figures  # lazy import: matplotlib only when plotting
 
     return save_figures(detection_figures(outcome, at_hz, baseline_path, frf_unit), out_dir, formats)
 
@@ -123,7 +126,12 @@ def detection_figures(outcome: DetectionOutcome, at_hz: float | None = None,
     against its threshold, the joint test), Bode with band, healthy and new data and fault points, complex
     plane at one frequency (``at_hz``, default the fault point nearest ratio 2), damage dynamics with its
     bound and the port's stiffness as reference."""
-    from rotorcheck.report.plots import bode_band_figure, complex_plane_figure, damage_dynamics_figure, decision_figure
+    from rotorcheck.report.plots import (  # lazy import: matplotlib only when plotting
+        bode_band_figure,
+        complex_plane_figure,
+        damage_dynamics_figure,
+        decision_figure,
+    )
 
     figs: dict[str, Any] = {}
     b, run, model = outcome.baseline, outcome.run, outcome.model

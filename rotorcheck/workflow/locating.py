@@ -8,6 +8,9 @@ import numpy as np
 
 from rotorcheck.config import RigConfig
 from rotorcheck.errors import InputError
+from rotorcheck.location import locate
+from rotorcheck.signatures import benign_box
+from rotorcheck.variability import benign_at
 from rotorcheck.workflow.benign import KAPPA_NOMINAL, benign_model
 from rotorcheck.workflow.detection import healthy_frf_of
 from rotorcheck.workflow.measured import MeasuredRun, frf_estimate, per_pair
@@ -36,9 +39,6 @@ def locate_run(rig: RigConfig, run: MeasuredRun, healthy_frf: np.ndarray, health
     offset from it moves the speed range). With several channel pairs and ``both``, the rig's own actuator
     -> sensor pair alone is located too (``result.single_channel``). ``section_length`` (m): the breathing
     crack's, for depths. ``options`` go to :func:`rotorcheck.location.locate`."""
-    from rotorcheck.location import locate
-    from rotorcheck.signatures import benign_box
-    from rotorcheck.variability import benign_at
 
     if rig.kind != "rotor":
         raise InputError(None, "--rig", "locating needs a rotor's shaft elements; this rig is lumped")

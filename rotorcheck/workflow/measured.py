@@ -13,8 +13,15 @@ import numpy as np
 
 from rotorcheck.config import RigConfig, load_config
 from rotorcheck.errors import InputError
-from rotorcheck.nominal import ChannelPair
-from rotorcheck.signal.lockin import SHAFT_ORDERS
+from rotorcheck.fe.assembly import build_system
+from rotorcheck.nominal import ChannelPair, channel_port, pair_receptance, port_label
+from rotorcheck.robust.lft import additive_me
+from rotorcheck.robust.measured import FrfEstimate, combine_sweeps
+from rotorcheck.robust.measured import frf_estimate as _est
+from rotorcheck.robust.noise import point_miss
+from rotorcheck.signal.lockin import SHAFT_ORDERS, fit_shaft_harmonics, remove_shaft_harmonics
+from rotorcheck.sweep.format import ls_frf, ls_frf_var
+from rotorcheck.sweep.hdf5io import read_sweep, sweep_sha256
 from rotorcheck.workflow.frf import MeasuredFRF
 from rotorcheck.workflow.rigs import rig_for
 
@@ -72,7 +79,6 @@ def load_rig_and_runs(sweep_path: str | Path, rig_path: str | Path | None = None
     """Read a sweep file once: its rig (:func:`rig_for`), that rig's file, and its runs checked against the
     rig: ``run_id``; else every run with ``every_run``; else the file's one run (several: an error asking
     for ``--run``); ``sha256``: the file's digest when the caller has it (else computed)."""
-    from rotorcheck.sweep.hdf5io import read_sweep, sweep_sha256
 
     p = Path(sweep_path)
     sweep = read_sweep(p)
@@ -95,7 +101,6 @@ def read_runs(path: str | Path, config: RigConfig, run_ids: list[str] | None = N
               sha256: str | None = None) -> list[MeasuredRun]:
     """Every run of a sweep file (or those of ``run_ids``), read once, checked against ``config``;
     ``sha256``: the file's digest when the caller has it already (else it is computed)."""
-    from rotorcheck.sweep.hdf5io import read_sweep, sweep_sha256
 
     p = Path(path)
     sweep = read_sweep(p)
@@ -111,7 +116,6 @@ def load_run(path: str | Path, config: RigConfig, run_id: str | None = None,
     ``shaft_orders`` X) fitted out before the phasor and its variance are formed (0: keep the
     file's averaged phasors).
     """
-    from rotorcheck.sweep.hdf5io import read_sweep, sweep_sha256
 
     p = Path(path)
     return measured_run(read_sweep(p), config, run_id, p, sweep_sha256(p), shaft_orders)
@@ -146,7 +150,6 @@ def measured_run(sweep: Any, config: RigConfig, run_id: str | None = None, path:
     if run.period_phasor is not None and run.speed_rpm != 0.0 and shaft_orders > 0:
         in_col = next(i for i, c in enumerate(sweep.channels) if c.role == "input")
         out_col = next(i for i, c in enumerate(sweep.channels) if c.role == "output")
-        from rotorcheck.signal.lockin import remove_shaft_harmonics
 
         W, Z, var, dof = remove_shaft_harmonics(run.period_phasor, run.n_periods, f, abs(run.speed_rpm) / 60.0,
                                                 in_col, out_col, shaft_orders)
@@ -163,8 +166,6 @@ def _channel_pairs(sweep: Any, config: RigConfig, p: Path) -> tuple[list[Any], l
     """Every (output, input) channel pair of ``sweep`` as model ports, the rig's actuator -> sensor first,
     and each pair's (output, input) column. A channel off the model, or a sweep without the rig's own
     actuator and sensor, is refused naming the channel."""
-    from rotorcheck.fe.assembly import build_system
-    from rotorcheck.nominal import channel_port, port_label
 
     system = build_system(config) if config.kind == "rotor" else None  # to check each channel's station
 
@@ -223,7 +224,6 @@ def _multi_pair_run(sweep: Any, run: Any, pairs: list[Any], cols: list[tuple[int
     """Several channel pairs: per excitation pattern and channel the phasors (shaft harmonics fitted out of
     the per-period phasors where stored), the FRF matrix ``Y X^+`` per frequency and each entry's
     variance ``sum_e var(Y_eo) |X^+_ei|^2``, dof the smallest of the patterns that enter."""
-    from rotorcheck.sweep.format import ls_frf, ls_frf_var
 
     f = run.frequency
     X = np.array(run.input_phasor_exc, dtype=complex)  # (f, n_exc, n_in)
@@ -234,7 +234,6 @@ def _multi_pair_run(sweep: Any, run: Any, pairs: list[Any], cols: list[tuple[int
     removed = 0
     pp = run.period_phasor_exc
     if pp is not None and run.speed_rpm != 0.0 and shaft_orders > 0:
-        from rotorcheck.signal.lockin import fit_shaft_harmonics
 
         in_cols = [j for j, c in enumerate(sweep.channels) if c.role == "input"]
         out_cols = [j for j, c in enumerate(sweep.channels) if c.role == "output"]
@@ -314,8 +313,6 @@ def variance_dof(run: MeasuredRun) -> np.ndarray:
 def frf_estimate(run: MeasuredRun) -> Any:
     """The run's FRF with its noise (variance of the mean FRF and its dof) for measured detection: one
     column per channel pair (f, P), the rig's actuator -> sensor first."""
-    from rotorcheck.robust.measured import FrfEstimate
-    from rotorcheck.robust.measured import frf_estimate as _est
 
     if run.frf_pairs is not None and run.var_pairs is not None and run.dof_pairs is not None:
         return FrfEstimate(run.frf_pairs, run.var_pairs, run.dof_pairs)
@@ -324,7 +321,6 @@ def frf_estimate(run: MeasuredRun) -> Any:
 
 def healthy_estimate(runs: list[MeasuredRun]) -> Any:
     """The measured healthy FRF: the mean of the healthy runs with its variance and Welch dof."""
-    from rotorcheck.robust.measured import combine_sweeps
 
     return combine_sweeps([frf_estimate(r) for r in runs])
 
@@ -361,7 +357,6 @@ class PairGrid:
     @classmethod
     def of(cls, run: MeasuredRun) -> PairGrid | None:
         """The grid of ``run``'s pairs; None with one pair or when some output/input pair is missing."""
-        from rotorcheck.nominal import port_label
 
         if run.n_pairs < 2:
             return None
@@ -388,9 +383,6 @@ def pair_experiments(rig: RigConfig, run: MeasuredRun, confidence: float = 0.99
     input (unit force, W (f, n_in); Z the measured FRF column (f, n_out)) and V (f,) m/N the noise bound
     per point: the largest pair's standard deviation times the complex-Gaussian quantile, Sidak over
     every point and pair at ``confidence``."""
-    from rotorcheck.nominal import pair_receptance
-    from rotorcheck.robust.lft import additive_me
-    from rotorcheck.robust.noise import point_miss
 
     grid = PairGrid.of(run)
     if run.n_pairs < 2 or run.frf_pairs is None or run.var_pairs is None:

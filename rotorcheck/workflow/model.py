@@ -8,8 +8,12 @@ from typing import Any
 
 import numpy as np
 
-from rotorcheck.config import RigConfig, load_config
+from rotorcheck.config import Crack, RigConfig, UnbalanceMass, load_config
 from rotorcheck.errors import InputError, check_choice
+from rotorcheck.faults.analysis import critical_speed_summary, unbalance_harmonics
+from rotorcheck.fe.assembly import build_system
+from rotorcheck.fe.modal import campbell, mode_table, model_summary, modes
+from rotorcheck.fileio import check_replaceable, check_writable, record_outputs
 
 
 def model_report(
@@ -24,12 +28,10 @@ def model_report(
     Returns ``{"summary": <cli.md model keys>, "files": [written paths]}``.
     """
     config = load_config(rig_path)  # bad input fails here, before any work or output
-    from rotorcheck.report.campbell import SPEED_UNITS
+    from rotorcheck.report.campbell import SPEED_UNITS  # lazy import: matplotlib only when plotting
 
     check_choice(speed_unit, SPEED_UNITS, "--speed-unit")
 
-    from rotorcheck.fe.assembly import build_system
-    from rotorcheck.fe.modal import mode_table, model_summary, modes
 
     speeds = [float(speed_rpm)] if speed_rpm is not None else [float(x) for x in config.analysis.speeds_rpm]
     speed_rpm = speeds[0]
@@ -51,13 +53,14 @@ def _model_plots(config: RigConfig, system: Any, speed_rpm: float, out: Path, fo
                  formats: tuple[str, ...], speed_unit: str = "rpm") -> list[str]:
     """Campbell diagram (1X and 2X criticals, operating speed ``speed_rpm``, speed axis in ``speed_unit``),
     the table's mode shapes at ``speed_rpm`` and the rotor drawing (rotor rigs)."""
-    import numpy as np
 
-    from rotorcheck.fe.modal import campbell
-    from rotorcheck.fileio import check_replaceable, record_outputs
-    from rotorcheck.report.campbell import campbell_figure, mode_shape_figure, order_criticals
-    from rotorcheck.report.figures import save_figure
-    from rotorcheck.report.rotor_drawing import rotor_figure
+    from rotorcheck.report.campbell import (  # lazy import: matplotlib only when plotting
+        campbell_figure,
+        mode_shape_figure,
+        order_criticals,
+    )
+    from rotorcheck.report.figures import save_figure  # lazy import: matplotlib only when plotting
+    from rotorcheck.report.rotor_drawing import rotor_figure  # lazy import: matplotlib only when plotting
 
     rotor = system.kind == "rotor"
     stems = [out / "campbell", out / "mode_shapes"] + ([out / "rotor"] if rotor else [])
@@ -89,7 +92,6 @@ def crack_report(
     the harmonic amplitudes (m) healthy and cracked at each speed, the critical speeds and, with
     ``out_dir``, the three figures (PNG and PDF).
     """
-    from rotorcheck.config import Crack, UnbalanceMass
 
     config = load_config(rig_path)
     crack = config.faults.get(fault)
@@ -103,13 +105,10 @@ def crack_report(
         raise InputError(rig_path, "ports.sensor.station", "the illustration needs a sensor station")
     stems = []
     if out_dir is not None:
-        from rotorcheck.fileio import check_writable
 
         stems = [Path(out_dir) / n for n in ("crack_stiffness", "crack_orbit", "crack_spectrum")]
         check_writable([s.with_suffix("." + e) for s in stems for e in formats], force)
 
-    from rotorcheck.faults.analysis import critical_speed_summary, unbalance_harmonics
-    from rotorcheck.fe.assembly import build_system
 
     system = build_system(config)
     unb = [UnbalanceMass(station=config.discs[0].station, amount=unbalance_g_m * 1e-3, phase=-np.pi / 2)]
@@ -124,8 +123,8 @@ def crack_report(
     crit = critical_speed_summary(system, crack, speeds_rpm[0], config.analysis.campbell_max_rpm)
     files: list[str] = []
     if out_dir is not None:
-        from rotorcheck.report.crack_plots import crack_figures
-        from rotorcheck.report.figures import save_figure
+        from rotorcheck.report.crack_plots import crack_figures  # lazy import: matplotlib only when plotting
+        from rotorcheck.report.figures import save_figure  # lazy import: matplotlib only when plotting
 
         figs = crack_figures(system, crack, unb, station=st, speeds_rpm=speeds_rpm, rig_id=config.rig_id,
                              harmonics=solved)

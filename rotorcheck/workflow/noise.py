@@ -7,8 +7,12 @@ from typing import Any
 
 import numpy as np
 
+from rotorcheck.baseline import Baseline, read_baseline
 from rotorcheck.config import RigConfig
 from rotorcheck.errors import InputError
+from rotorcheck.report.schema import NoiseReport
+from rotorcheck.robust import noise
+from rotorcheck.robust.noise import NoiseBound, noise_bound_per_point
 from rotorcheck.workflow.measured import MeasuredRun, variance_dof
 
 NOISE_METHODS = ("pooled", "per-point", "max", "floor", "manual")
@@ -29,7 +33,6 @@ def fit_noise(
     and degrees of freedom (F quantile; ``details["per_point_m"]``), used per frequency by
     validate/detect with ``--enclose system|data`` (detect then takes the new sweep's own V(w)).
     """
-    from rotorcheck.robust import noise
 
     if method == "manual":
         if manual_m is None or not np.isfinite(manual_m) or manual_m < 0:
@@ -52,7 +55,6 @@ def fit_noise(
 
 def noise_baseline(rig: RigConfig, run: MeasuredRun, noise_bound: Any) -> Any:
     """The baseline after step 2 (stage 'noise'): the noise bound and where it came from."""
-    from rotorcheck.baseline import Baseline
 
     return Baseline(rig_id=rig.rig_id, rig_sha256=rig.sha256(), sweep_sha256=[run.sha256], run_id=run.run_id,
                     speed_rpm=run.speed_rpm, noise_bound_m=noise_bound.value_m, noise_method=noise_bound.method,
@@ -72,8 +74,6 @@ def prior_noise(baseline_path: str | Path, rig: RigConfig, force: bool, sweep_sh
     made for another rig description is refused (InputError naming the field). ``details["run_id"]``: the
     run the bound was fitted on.
     """
-    from rotorcheck.baseline import read_baseline
-    from rotorcheck.robust.noise import NoiseBound
 
     path = Path(baseline_path)
     if not path.exists():
@@ -103,7 +103,6 @@ def prior_noise(baseline_path: str | Path, rig: RigConfig, force: bool, sweep_sh
 
 def noise_report(noise_bound: Any, sweep: str | Path, baseline_path: str | Path) -> Any:
     """``fit-noise --json`` as a :class:`rotorcheck.report.schema.NoiseReport`."""
-    from rotorcheck.report.schema import NoiseReport
 
     return NoiseReport(noise_bound.value_m, noise_bound.method, noise_bound.confidence, str(sweep),
                        str(baseline_path), noise_bound.details)
@@ -122,7 +121,6 @@ def noise_values(noise_bound: Any, run: MeasuredRun | None = None) -> float | np
 
 def _own_v(run: MeasuredRun, confidence: float) -> np.ndarray:
     """The run's own per-point noise bound V(w) (m) at ``confidence`` family-wise."""
-    from rotorcheck.robust.noise import noise_bound_per_point
 
     return np.asarray(noise_bound_per_point(run.output_var, variance_dof(run), confidence).details["per_point_m"],
                       dtype=float)

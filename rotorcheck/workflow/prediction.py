@@ -8,7 +8,16 @@ from typing import Any
 import numpy as np
 
 from rotorcheck.config import RigConfig
+from rotorcheck.detectability import (
+    DETECTABILITY_RULE_SETS,
+    detectability,
+    rank_sensor_sets,
+    score_sensor_set,
+    stated_noise_variance,
+)
 from rotorcheck.errors import InputError
+from rotorcheck.nominal import ChannelPair, parse_port
+from rotorcheck.signatures import io_frf
 from rotorcheck.workflow.benign import KAPPA_NOMINAL, benign_model
 
 DETECTABILITY_POINTS = 262  # grid of a prediction from stated noise without analysis.n_points
@@ -18,7 +27,6 @@ def _prediction_ports(config: RigConfig, sensors: Sequence[str] | None, actuator
                       source: str, candidates: Sequence[str] = ()) -> tuple[list[Any], list[Any], list[Any]]:
     """``(sensors, actuators, candidates)`` as ports (``6x``, ``s2.y``; default: the rig's sensor and actuator),
     every station checked against the rig; no actuator is an InputError."""
-    from rotorcheck.nominal import parse_port
 
     ports = config.ports
     acts = [parse_port(a, "--actuators") for a in actuators] if actuators else (
@@ -42,7 +50,6 @@ def _stated_prediction(config: RigConfig, speed_rpm: float | None, noise_std_m: 
     """``(grid Hz, speed rpm, FRF variance per point and sweep m^2/N^2, its description)`` from stated noise
     (``noise_std_m`` over ``periods``, defaults the rig's ``measurement``) on the rig's analysis grid
     (``n_points`` or :data:`DETECTABILITY_POINTS`) at ``speed_rpm`` (default: its first speed)."""
-    from rotorcheck.detectability import stated_noise_variance
 
     m = config.measurement
     sigma = noise_std_m if noise_std_m is not None else (m.output_noise_std or None)
@@ -79,9 +86,6 @@ def detectability_for_rig(
     the rig's ``measurement``), else the rig's own ``measurement.output_noise_std``; none of them: an
     :class:`~rotorcheck.errors.InputError`. Sensors and actuators: ports as ``6x``, ``s2.y`` (default: the
     rig's); every sensor with every actuator is one channel pair."""
-    from rotorcheck.detectability import detectability
-    from rotorcheck.nominal import ChannelPair
-    from rotorcheck.signatures import io_frf
 
     sens, acts, _ = _prediction_ports(config, sensors, actuators, source)
     if not sens:
@@ -134,8 +138,6 @@ def sensor_ranking_for_rig(
     breathing depth with the benign ranges (:func:`rotorcheck.detectability.rank_sensor_sets`; stated
     noise as :func:`detectability_for_rig`), with the current set (``sensors`` or the rig's) scored the
     same way. Returns the JSON section ``sensor_sets``."""
-    from rotorcheck.detectability import DETECTABILITY_RULE_SETS, rank_sensor_sets, score_sensor_set
-    from rotorcheck.nominal import ChannelPair
 
     if max_sensors < 1:
         raise InputError(None, "--max-sensors", "must be >= 1")

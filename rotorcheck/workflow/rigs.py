@@ -6,12 +6,15 @@ import json
 from pathlib import Path
 from typing import Any
 
+import h5py
 import numpy as np
 
 from rotorcheck.config import RigConfig, load_config
 from rotorcheck.errors import InputError
+from rotorcheck.faults.compliance import with_crack_depth
 from rotorcheck.nominal import NominalModel, nominal_model
 from rotorcheck.resources import default_rig_path
+from rotorcheck.variability import benign_parameters, with_benign
 
 
 def load_rig(path: str | Path) -> RigConfig:
@@ -22,7 +25,6 @@ def load_rig(path: str | Path) -> RigConfig:
 def rig_with_crack_depth(config: RigConfig, rig_path: str | Path | None, fault: str, depth: float) -> RigConfig:
     """A copy of ``config`` whose crack ``fault`` has ``depth`` (fraction of the shaft diameter);
     bad values raise InputError naming ``--crack-depth``."""
-    from rotorcheck.faults.compliance import with_crack_depth
 
     if fault not in config.faults:
         raise InputError(rig_path, f"faults.{fault}", f"no such fault (known: {', '.join(config.faults) or 'none'})")
@@ -39,7 +41,6 @@ def rig_for(rig_path: str | Path | None, rig_id: str, baseline_path: str | Path 
     if rig_path is not None:
         return Path(rig_path)
     if baseline_path is not None and Path(baseline_path).exists():
-        import h5py
 
         try:
             with h5py.File(baseline_path, "r") as b:
@@ -58,7 +59,6 @@ def updated_rig(rig: RigConfig, values: dict[str, float] | None) -> RigConfig:
     """``rig`` with updated parameter values applied (the model benign change is predicted around)."""
     if not values:
         return rig
-    from rotorcheck.variability import with_benign
 
     return with_benign(rig, values)[0]
 
@@ -78,14 +78,12 @@ def damage_port_name(rig: RigConfig) -> str:
 
 def speed_tolerance(rig: RigConfig) -> float:
     """The rig's speed tolerance (rpm) from its ``variability`` section; 0 without one."""
-    from rotorcheck.variability import benign_parameters
 
     return max((max(abs(p.lo), abs(p.hi)) for p in benign_parameters(rig) if p.is_speed), default=0.0)
 
 
 def port_static_stiffness(rig: RigConfig, speed_rpm: float) -> float:
     """The nominal static stiffness at the damage port, N/m: 1 / |E11| at a very low frequency."""
-    from rotorcheck.nominal import nominal_model
 
     model = nominal_model(rig, np.array([1e-3]), speed_rpm)
     with np.errstate(divide="ignore", invalid="ignore"):

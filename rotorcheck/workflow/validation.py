@@ -9,8 +9,14 @@ from typing import Any
 
 import numpy as np
 
+from rotorcheck.baseline import Baseline
 from rotorcheck.config import RigConfig
 from rotorcheck.errors import InputError, check_choice
+from rotorcheck.nominal import nominal_model
+from rotorcheck.report.schema import ValidationReport
+from rotorcheck.robust import validation
+from rotorcheck.robust.mu import Structure
+from rotorcheck.updating import update_parameters
 from rotorcheck.workflow.benign import KAPPA_NOMINAL, BenignLearning, learn_benign
 from rotorcheck.workflow.measured import (
     MeasuredRun,
@@ -43,7 +49,6 @@ class ValidationOutcome:
 
     def typed_report(self, noise_bound: Any, baseline_path: str | Path) -> Any:
         """``validate --json`` as a :class:`rotorcheck.report.schema.ValidationReport`."""
-        from rotorcheck.report.schema import ValidationReport
 
         res = self.result
         return ValidationReport(self.runs[0].frequency_hz, res.gamma, res.gamma_lower, [str(x) for x in res.status],
@@ -76,9 +81,6 @@ def validate(
     drifts (:func:`learn_benign`); off by default: on the crack rig it did not detect better than one
     sweep with the nominal model (bench.detection_limit, part B).
     """
-    from rotorcheck.baseline import Baseline
-    from rotorcheck.nominal import nominal_model
-    from rotorcheck.robust import validation
 
     check_choice(enclose, ENCLOSE_MODES, "--enclose")
     runs = [runs[0]] + [aligned_pairs(r, pair_keys(runs[0])) for r in runs[1:]]  # same pairs, rows reordered
@@ -113,7 +115,6 @@ def validate(
     healthy = healthy_estimate(runs)
     upd = None
     if update:
-        from rotorcheck.updating import update_parameters
 
         if not rig.variability:
             raise InputError(None, "--update", "the rig has no variability section: nothing to update")
@@ -183,7 +184,6 @@ def parameter_structure(model: Any, enclose: str) -> Any:
     """A named physical parameter (``uncertainty.structure: parametric``) is real: a real scalar block
     (mixed mu, D-G scalings) where the LMI path solves it ('data'); None (one complex block) otherwise
     ('system'/'measured' enclose through the complex closed form, a relaxation the report notes)."""
-    from rotorcheck.robust.mu import Structure
 
     return Structure.real() if model.structure == "parametric" and enclose == "data" else None
 
