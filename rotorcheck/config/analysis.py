@@ -1,0 +1,37 @@
+"""The measurement (noise, periods, force) and analysis (band, points, speeds, modes) sections."""
+
+from __future__ import annotations
+
+from pydantic import Field, model_validator
+
+from rotorcheck.config.base import Strict
+from rotorcheck.config.faults import Misalignment, UnbalanceMass
+from rotorcheck.config.quantities import Force, FrequencyHz, Length, SpeedRpm
+
+
+class Measurement(Strict):
+    """How the simulator plays a stepped-sine measurement on this rig (truth configs)."""
+
+    force_amplitude: Force = Field(default=1.0, gt=0, description="N, actuator force amplitude")
+    n_periods: int = Field(default=64, ge=1)
+    settle_periods: int = Field(default=16, ge=0)
+    output_noise_std: Length = Field(default=0.0, ge=0, description="m, per sample")
+    input_noise_std: Force = Field(default=0.0, ge=0, description="N, per sample")
+    samples_per_period: int = Field(default=64, ge=8)
+    unbalance: list[UnbalanceMass] = Field(default_factory=list)
+    misalignment: Misalignment | None = None
+
+
+class Analysis(Strict):
+    band_hz: tuple[FrequencyHz, FrequencyHz] = (30.0, 600.0)
+    n_points: int | None = Field(default=None, ge=2, description="points of a simulated sweep, linear over band_hz")
+    speeds_rpm: list[SpeedRpm] = Field(default_factory=lambda: [0.0])
+    campbell_max_rpm: SpeedRpm = Field(default=10000.0, gt=0)
+    n_modes: int = Field(default=6, ge=1)
+
+    @model_validator(mode="after")
+    def _band(self) -> Analysis:
+        if not (0 <= self.band_hz[0] < self.band_hz[1]):
+            raise ValueError("band_hz: must be [low, high] with 0 <= low < high")
+        return self
+
