@@ -52,6 +52,7 @@ from rotorcheck.faults.breathing import (
     mayes_davies_steering,
 )
 from rotorcheck.faults.compliance import crack_compliances
+from rotorcheck.faults.kinds.open_crack import OpenCrackModel
 from rotorcheck.fe.assembly import build_system, element_matrices
 from rotorcheck.fe.elements import X_PLANE
 from rotorcheck.fe.system import BeamElementInfo, MechanicalSystem
@@ -418,4 +419,4 @@ def open_crack_system(config: RigConfig, crack: Crack | None = None) -> Mechanic
         crack = cracks[0]
     if crack.modulus_factor is None:
         raise ValueError("the crack has no modulus_factor (open-crack model)")
-    return build_system(config, modulus_factors={crack.element: crack.modulus_factor})
+    return build_system(config, modulus_factors=OpenCrackModel().built_in(crack).modulus_factors)

@@ -22,7 +22,8 @@ from matplotlib.patches import Patch, PathPatch, Polygon, Rectangle
 from matplotlib.path import Path
 from matplotlib.text import Text
 
-from rotorcheck.config import Crack, DamagePort, Port, RigConfig
+from rotorcheck.config import DamagePort, Port, RigConfig
+from rotorcheck.faults.kinds import fault_elements
 from rotorcheck.report.figures import legend_outside
 
 __all__ = ["COLOURS", "draw_rig", "draw_rotor", "rig_cracks", "rig_elements", "rotor_figure"]
@@ -296,8 +297,8 @@ def declutter(fig: Any, texts: Sequence[Any], avoid: Sequence[Any] = (), max_mov
 
 
 def rig_cracks(config: RigConfig) -> list[int]:
-    """Elements of the rig's crack faults (1-based)."""
-    return sorted({f.element for f in config.faults.values() if isinstance(f, Crack)})
+    """Elements of the rig's faults (1-based): :func:`rotorcheck.faults.kinds.fault_elements`."""
+    return fault_elements(config)
 
 
 def draw_rig(ax: Any, config: RigConfig, **kw: Any) -> None:

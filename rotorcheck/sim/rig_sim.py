@@ -29,9 +29,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from rotorcheck import __version__
-from rotorcheck.config import Crack, Port, RigConfig, SpringChange
+from rotorcheck.config import Crack, Port, RigConfig
 from rotorcheck.errors import InputError
 from rotorcheck.faults.harmonic_balance import misalignment_force, unbalance_force
+from rotorcheck.faults.kinds import fault_model
 from rotorcheck.fe.assembly import build_system
 from rotorcheck.fe.frf import system_receptance
 from rotorcheck.fe.system import RPM_TO_RAD_S, MechanicalSystem
@@ -107,14 +108,13 @@ def _rig_system(config: RigConfig, fault: str | None) -> tuple[MechanicalSystem,
             msg = f"rig {config.rig_id!r} has no fault {fault!r} (known: {known})"
             raise InputError(None, "--fault", msg)
         spec = config.faults[fault]
-    if isinstance(spec, SpringChange):
-        system = build_system(config, stiffness_overrides={spec.spring: spec.stiffness})
-    elif isinstance(spec, Crack) and spec.model == "open":
-        assert spec.modulus_factor is not None
-        system = build_system(config, modulus_factors={spec.element: spec.modulus_factor})
-    else:
-        system = build_system(config)
-    breathing = spec if isinstance(spec, Crack) and spec.model != "open" else None
+    if spec is None:
+        return build_system(config), None
+    model = fault_model(spec)
+    change = model.built_in(spec)
+    system = build_system(config, modulus_factors=change.modulus_factors or None,
+                          stiffness_overrides=change.stiffness_overrides or None)
+    breathing = model.time_varying(spec)
     return system, breathing
 
 
