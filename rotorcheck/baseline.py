@@ -1,4 +1,5 @@
-"""The baseline file (``baseline.h5``): noise bound (step 2) and healthy uncertainty bound (step 3).
+"""The baseline (typed by part: :class:`Provenance`, :class:`NoiseFit`, :class:`ModelBound`, :class:`HealthyData`,
+:class:`DriftModel`) and its file ``baseline.h5``: this module alone reads and writes it.
 
 Root attributes: ``schema = "rotorcheck.baseline"``, ``schema_version = 1``, ``stage`` (``"noise"``
 after fit-noise, ``"validated"`` after validate), ``rig_id``, ``rig_sha256``, ``sweep_sha256``
@@ -24,8 +25,10 @@ the baseline's speed).
 from __future__ import annotations
 
 import datetime as _dt
+import json
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import h5py
 import numpy as np
@@ -38,65 +41,195 @@ SCHEMA_VERSION = 1
 
 
 @dataclass
-class Baseline:
-    """Noise bound and, once validated, the per-frequency uncertainty bound gamma."""
+class Provenance:
+    """Where a baseline came from: the rig (id, sha256 of its description, the file it was loaded from), the
+    healthy sweeps (sha256 each), the run and its speed (rpm), when (UTC), and the sweep a reused noise bound
+    was fitted on (None: fitted on these sweeps)."""
 
     rig_id: str
     rig_sha256: str
     sweep_sha256: list[str]
     run_id: str
     speed_rpm: float
-    noise_bound_m: float
-    noise_method: str
-    noise_confidence: float
-    uncertainty: str
-    parameter: str = ""
-    enclose: str = ""
-    stage: str = "noise"
     created_utc: str = ""
-    frequency_hz: np.ndarray | None = None
-    gamma: np.ndarray | None = None
+    rig_path: str | None = None
+    noise_fitted_on_sweep: str | None = None
+
+
+@dataclass
+class NoiseFit:
+    """Step 2: the noise bound V (m), uniform or per point (``per_point_m``, f), at family-wise ``confidence``
+    over the points (complex circular Gaussian noise assumed), and the method that fitted it. ``uncertainty``
+    and ``parameter``: the rig's uncertainty structure the noise was fitted for."""
+
+    bound_m: float
+    method: str
+    confidence: float
+    per_point_m: np.ndarray | None = None
+    uncertainty: str = ""
+    parameter: str = ""
+
+
+@dataclass
+class ModelBound:
+    """Step 3: the nominal model's error bound gamma_h per frequency (Hz) enclosing the healthy data (``gamma``
+    upper, ``gamma_lower`` lower, ``gamma_status`` per point), the uncertainty structure it is measured in
+    (``additive`` m/N, ``multiplicative`` relative, ``parametric`` the parameter's unit), the detection mode
+    ``enclose`` and the nominal receptance ``model_frf`` (f, 1, 1) m/N."""
+
+    enclose: str
+    uncertainty: str
+    parameter: str
+    frequency_hz: np.ndarray
+    gamma: np.ndarray
+    model_frf: np.ndarray
     gamma_lower: np.ndarray | None = None
     gamma_status: np.ndarray | None = None
-    model_frf: np.ndarray | None = None
+
+
+@dataclass
+class HealthyData:
+    """The measured healthy FRF (f, P) m/N: mean over ``n_healthy`` sweeps, the variance of that mean (m^2/N^2)
+    and its real degrees of freedom (inf: stated); the first sweep's phasors (N, m); the shaft orders removed;
+    the channel pairs as ``[output, input]`` labels (None: made before pairs were stored)."""
+
+    frf: np.ndarray | None = None
+    var: np.ndarray | None = None
+    dof: np.ndarray | None = None
     input_phasor: np.ndarray | None = None
     output_phasor: np.ndarray | None = None
-    healthy_frf: np.ndarray | None = None
-    healthy_frf_var: np.ndarray | None = None
-    healthy_frf_dof: np.ndarray | None = None
     shaft_orders_removed: int = 0
-    noise_bound_per_point_m: np.ndarray | None = None
-    benign_directions: np.ndarray | None = None
-    benign_direction_bound: np.ndarray | None = None
-    benign_kappa: float | None = None
-    benign_correction: np.ndarray | None = None
     n_healthy: int = 1
-    extra: dict[str, str] = field(default_factory=dict)
+    channel_pairs: list[list[str]] | None = None
+
+
+@dataclass
+class DriftModel:
+    """What the joint test allows as benign change: the model-error factor ``kappa`` (None: the default),
+    benign directions learned from several healthy sweeps (q, f) m/N with the bound on each coefficient, the
+    data's correction of the model's benign change (p, f) m/N per unit parameter, the parameter values
+    ``validate --update`` fitted, and how much of each benign direction the model predicts."""
+
+    kappa: float | None = None
+    directions: np.ndarray | None = None
+    direction_bound: np.ndarray | None = None
+    correction: np.ndarray | None = None
+    updated_parameters: dict[str, float] | None = None
+    model_share: dict[str, list[float]] | None = None
+
+
+def _field(part: str, name: str, doc: str) -> property:
+    """A read-only view of ``baseline.<part>.<name>`` under the file's name (None where the part is absent)."""
+    return property(lambda self: None if getattr(self, part) is None else getattr(getattr(self, part), name),
+                    doc=doc)
+
+
+@dataclass
+class Baseline:
+    """A baseline typed by part: :class:`Provenance`, :class:`NoiseFit` (step 2), :class:`ModelBound` (step 3;
+    None after fit-noise alone), :class:`HealthyData` and :class:`DriftModel`. The flat read-only names
+    (``noise_bound_m``, ``gamma``, ``healthy_frf``, ...) are the file's attribute and dataset names."""
+
+    provenance: Provenance
+    noise: NoiseFit
+    bound: ModelBound | None = None
+    healthy: HealthyData = field(default_factory=HealthyData)
+    drift: DriftModel = field(default_factory=DriftModel)
 
     @property
     def validated(self) -> bool:
-        return self.stage == "validated"
+        """Step 3 done: the baseline holds gamma_h."""
+        return self.bound is not None
+
+    @property
+    def stage(self) -> str:
+        """``noise`` after fit-noise, ``validated`` after validate."""
+        return "validated" if self.validated else "noise"
+
+    @property
+    def uncertainty(self) -> str:
+        """The uncertainty structure (``additive`` | ``multiplicative`` | ``parametric``)."""
+        return self.bound.uncertainty if self.bound is not None else self.noise.uncertainty
+
+    @property
+    def parameter(self) -> str:
+        """The parametric structure's parameter ('' otherwise)."""
+        return self.bound.parameter if self.bound is not None else self.noise.parameter
+
+    @property
+    def enclose(self) -> str:
+        """The detection mode the baseline was validated for ('' before validation)."""
+        return self.bound.enclose if self.bound is not None else ""
+
+    rig_id = _field("provenance", "rig_id", "rig id")
+    rig_sha256 = _field("provenance", "rig_sha256", "sha256 of the rig description")
+    sweep_sha256 = _field("provenance", "sweep_sha256", "sha256 of each healthy sweep")
+    run_id = _field("provenance", "run_id", "the healthy run")
+    speed_rpm = _field("provenance", "speed_rpm", "speed, rpm")
+    created_utc = _field("provenance", "created_utc", "written at (UTC)")
+    noise_bound_m = _field("noise", "bound_m", "noise bound V, m")
+    noise_method = _field("noise", "method", "how V was fitted")
+    noise_confidence = _field("noise", "confidence", "V's family-wise confidence")
+    noise_bound_per_point_m = _field("noise", "per_point_m", "V per point, m")
+    frequency_hz = _field("bound", "frequency_hz", "grid, Hz")
+    gamma = _field("bound", "gamma", "gamma_h upper")
+    gamma_lower = _field("bound", "gamma_lower", "gamma_h lower")
+    gamma_status = _field("bound", "gamma_status", "gamma_h status per point")
+    model_frf = _field("bound", "model_frf", "nominal receptance (f, 1, 1), m/N")
+    input_phasor = _field("healthy", "input_phasor", "first healthy sweep's input phasors, N")
+    output_phasor = _field("healthy", "output_phasor", "first healthy sweep's output phasors, m")
+    healthy_frf = _field("healthy", "frf", "healthy FRF (f, P), m/N")
+    healthy_frf_var = _field("healthy", "var", "its variance, m^2/N^2")
+    healthy_frf_dof = _field("healthy", "dof", "its real dof")
+    shaft_orders_removed = _field("healthy", "shaft_orders_removed", "shaft orders removed")
+    n_healthy = _field("healthy", "n_healthy", "healthy sweeps averaged")
+    benign_kappa = _field("drift", "kappa", "model-error factor of the benign prediction")
+    benign_directions = _field("drift", "directions", "learned benign directions (q, f), m/N")
+    benign_direction_bound = _field("drift", "direction_bound", "bound per learned coefficient")
+    benign_correction = _field("drift", "correction", "the data's correction of the benign change (p, f)")
 
 
 _ATTRS = ("rig_id", "rig_sha256", "run_id", "speed_rpm", "noise_bound_m", "noise_method",
           "noise_confidence", "uncertainty", "parameter", "enclose", "stage", "created_utc")
-_DATASETS = ("frequency_hz", "gamma", "gamma_lower", "model_frf", "input_phasor", "output_phasor",
-             "healthy_frf", "healthy_frf_var", "healthy_frf_dof", "noise_bound_per_point_m", "benign_directions",
-             "benign_direction_bound", "benign_correction")
+#: the file's datasets: (name in the file, part, field)
+_DATASETS = (("frequency_hz", "bound", "frequency_hz"), ("gamma", "bound", "gamma"),
+             ("gamma_lower", "bound", "gamma_lower"), ("model_frf", "bound", "model_frf"),
+             ("input_phasor", "healthy", "input_phasor"), ("output_phasor", "healthy", "output_phasor"),
+             ("healthy_frf", "healthy", "frf"), ("healthy_frf_var", "healthy", "var"),
+             ("healthy_frf_dof", "healthy", "dof"), ("noise_bound_per_point_m", "noise", "per_point_m"),
+             ("benign_directions", "drift", "directions"), ("benign_direction_bound", "drift", "direction_bound"),
+             ("benign_correction", "drift", "correction"))
+#: typed fields kept as JSON text in ``x_<name>`` attributes (the layout of schema_version 1)
+_JSON_ATTRS = (("channel_pairs", "healthy", "channel_pairs"), ("updated_parameters", "drift", "updated_parameters"),
+               ("benign_model_share", "drift", "model_share"))
+#: typed text fields kept in ``x_<name>`` attributes
+_TEXT_ATTRS = (("rig_path", "provenance", "rig_path"), ("noise_fitted_on_sweep", "provenance", "noise_fitted_on_sweep"))
 
 
 def _write_into(h5: h5py.Group, baseline: Baseline) -> None:
-    for name in _ATTRS:
-        h5.attrs[name] = getattr(baseline, name)
-    h5.attrs["sweep_sha256"] = ",".join(baseline.sweep_sha256)
-    h5.attrs["shaft_orders_removed"] = int(baseline.shaft_orders_removed)
-    h5.attrs["n_healthy"] = int(baseline.n_healthy)
-    if baseline.benign_kappa is not None:
-        h5.attrs["benign_kappa"] = float(baseline.benign_kappa)
-    for k, v in baseline.extra.items():
-        h5.attrs[f"x_{k}"] = v
-    for name in _DATASETS:
-        value = getattr(baseline, name)
+    pv, nz = baseline.provenance, baseline.noise
+    for name, attr in (("rig_id", pv.rig_id), ("rig_sha256", pv.rig_sha256), ("run_id", pv.run_id),
+                        ("speed_rpm", pv.speed_rpm), ("noise_bound_m", nz.bound_m), ("noise_method", nz.method),
+                        ("noise_confidence", nz.confidence), ("uncertainty", baseline.uncertainty),
+                        ("parameter", baseline.parameter), ("enclose", baseline.enclose), ("stage", baseline.stage),
+                        ("created_utc", pv.created_utc)):
+        h5.attrs[name] = attr
+    h5.attrs["sweep_sha256"] = ",".join(pv.sweep_sha256)
+    h5.attrs["shaft_orders_removed"] = int(baseline.healthy.shaft_orders_removed)
+    h5.attrs["n_healthy"] = int(baseline.healthy.n_healthy)
+    if baseline.drift.kappa is not None:
+        h5.attrs["benign_kappa"] = float(baseline.drift.kappa)
+    for name, part, key in _TEXT_ATTRS:
+        value = getattr(getattr(baseline, part), key)
+        if value is not None:
+            h5.attrs[f"x_{name}"] = str(value)
+    for name, part, key in _JSON_ATTRS:
+        value = getattr(getattr(baseline, part), key)
+        if value is not None:
+            h5.attrs[f"x_{name}"] = json.dumps(value, sort_keys=True)
+    for name, part, key in _DATASETS:
+        obj = getattr(baseline, part)
+        value = None if obj is None else getattr(obj, key)
         if value is not None:
             h5.create_dataset(name, data=value)
     if baseline.gamma_status is not None:
@@ -158,18 +291,33 @@ def _verify(h5: h5py.Group, p: Path, where: str) -> None:
 def write_baseline(baseline: Baseline, path: str | Path, others: list[Baseline] | None = None) -> None:
     """Write atomically (temp file in the same folder, then rename). Overwrite policy is the caller's.
     ``others``: the validated sets of a file's further runs (speeds), each in ``/runs/<run_id>``."""
-    if not baseline.created_utc:
-        baseline.created_utc = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
+    if not baseline.provenance.created_utc:
+        baseline.provenance.created_utc = _dt.datetime.now(_dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
     with atomic_path(path) as tmp, h5py.File(tmp, "w") as h5:
         h5.attrs["schema"] = SCHEMA
         h5.attrs["schema_version"] = SCHEMA_VERSION
         _write_into(h5, baseline)
         for b in others or []:
-            b.created_utc = b.created_utc or baseline.created_utc
+            b.provenance.created_utc = b.provenance.created_utc or baseline.provenance.created_utc
             g = h5.require_group("runs").create_group(b.run_id)
             _write_into(g, b)
             _seal(g)
         _seal(h5)  # the root's own items (each run group carries its own digest)
+
+
+def stored_rig(path: str | Path) -> tuple[str | None, str | None]:
+    """``(rig_id, rig file)`` a baseline file at ``path`` was made with, without checking the rest of it;
+    ``(None, None)`` when there is no such file or it is no HDF5 (its reader then says what is wrong)."""
+    if not Path(path).exists():
+        return None, None
+    try:
+        with h5py.File(path, "r") as h5:
+            rig_id, rig_path = h5.attrs.get("rig_id"), h5.attrs.get("x_rig_path")
+    except OSError:
+        return None, None
+    def text(v: object) -> str | None:
+        return None if v is None else (v.decode() if isinstance(v, bytes) else str(v))
+    return text(rig_id), text(rig_path)
 
 
 def read_baseline(path: str | Path) -> Baseline:
@@ -203,34 +351,81 @@ def read_baselines(path: str | Path) -> list[Baseline]:
     return out
 
 
+def _attr(h5: h5py.Group, p: Path, where: str, name: str, kind: type, default: object = None) -> Any:
+    """Attribute ``name`` as ``kind`` (str, float or int), refused naming it when missing or of another type."""
+    if name not in h5.attrs:
+        if default is not None:
+            return default
+        raise InputError(p, f"{where}/@{name}", "missing attribute")
+    v = h5.attrs[name]
+    v = v.decode() if isinstance(v, bytes) else (v.item() if hasattr(v, "item") else v)
+    if kind is str and isinstance(v, str):
+        return v
+    if kind in (float, int) and isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool):
+        return kind(v)
+    raise InputError(p, f"{where}/@{name}", f"must be {'text' if kind is str else 'a number'}, got {v!r}")
+
+
+def _json_attr(h5: h5py.Group, p: Path, where: str, name: str, check: type) -> Any:
+    """A typed field kept as JSON text in ``x_<name>`` (None when absent)."""
+    if f"x_{name}" not in h5.attrs:
+        return None
+    try:
+        value = json.loads(_attr(h5, p, where, f"x_{name}", str))
+    except ValueError:
+        raise InputError(p, f"{where}/@x_{name}", "not JSON") from None
+    if not isinstance(value, check):
+        raise InputError(p, f"{where}/@x_{name}", f"must be a JSON {check.__name__}")
+    return value
+
+
 def _read_from(h5: h5py.Group, p: Path, where: str) -> Baseline:
     """One validated set from a group of the baseline file (``where``: its path, for messages)."""
-    values: dict[str, object] = {}
-    for name in _ATTRS:
-        if name not in h5.attrs:
-            raise InputError(p, f"{where}/@{name}", "missing attribute")
-        v = h5.attrs[name]
-        values[name] = v.decode() if isinstance(v, bytes) else (v.item() if hasattr(v, "item") else v)
-    sweeps = str(h5.attrs.get("sweep_sha256", ""))
-    b = Baseline(sweep_sha256=[s for s in sweeps.split(",") if s], **values)  # type: ignore[arg-type]
-    b.extra = {k[2:]: str(v) for k, v in h5.attrs.items() if k.startswith("x_")}
-    b.shaft_orders_removed = int(h5.attrs.get("shaft_orders_removed", 0))
-    b.n_healthy = int(h5.attrs.get("n_healthy", 1))
-    if "benign_kappa" in h5.attrs:
-        b.benign_kappa = float(h5.attrs["benign_kappa"])
-    for name in _DATASETS:
-        if name in h5:
-            setattr(b, name, h5[name][()])
-    if "gamma_status" in h5:
-        b.gamma_status = np.char.decode(h5["gamma_status"][()], "utf-8")
+    def text(name: str, default: str | None = None) -> str:
+        return str(_attr(h5, p, where, name, str, default))
+
+    def number(name: str) -> float:
+        return float(_attr(h5, p, where, name, float))
+
+    def data(name: str) -> np.ndarray | None:
+        return h5[name][()] if name in h5 else None
+
+    stage = text("stage")
+    if stage not in ("noise", "validated"):
+        raise InputError(p, f"{where}/@stage", f"must be 'noise' or 'validated', got {stage!r}")
+    prov = Provenance(text("rig_id"), text("rig_sha256"), [s for s in text("sweep_sha256", "").split(",") if s],
+                      text("run_id"), number("speed_rpm"), text("created_utc"),
+                      text("x_rig_path") if "x_rig_path" in h5.attrs else None,
+                      text("x_noise_fitted_on_sweep") if "x_noise_fitted_on_sweep" in h5.attrs else None)
+    noise = NoiseFit(number("noise_bound_m"), text("noise_method"), number("noise_confidence"),
+                     data("noise_bound_per_point_m"), text("uncertainty"), text("parameter"))
+    pairs = _json_attr(h5, p, where, "channel_pairs", list)
+    healthy = HealthyData(data("healthy_frf"), data("healthy_frf_var"), data("healthy_frf_dof"), data("input_phasor"),
+                          data("output_phasor"), int(_attr(h5, p, where, "shaft_orders_removed", int, 0)),
+                          int(_attr(h5, p, where, "n_healthy", int, 1)),
+                          None if pairs is None else [[str(x) for x in pr] for pr in pairs])
+    updated = _json_attr(h5, p, where, "updated_parameters", dict)
+    drift = DriftModel(float(_attr(h5, p, where, "benign_kappa", float)) if "benign_kappa" in h5.attrs else None,
+                       data("benign_directions"), data("benign_direction_bound"), data("benign_correction"),
+                       None if updated is None else {str(k): float(v) for k, v in updated.items()},
+                       _json_attr(h5, p, where, "benign_model_share", dict))
+    bound = None
+    if stage == "validated":
+        for name in ("frequency_hz", "gamma", "model_frf"):
+            if name not in h5:
+                raise InputError(p, f"{where}/{name}", "missing dataset in a validated baseline")
+        status = np.char.decode(h5["gamma_status"][()], "utf-8") if "gamma_status" in h5 else None
+        bound = ModelBound(text("enclose"), text("uncertainty"), text("parameter"), h5["frequency_hz"][()],
+                           h5["gamma"][()], h5["model_frf"][()], data("gamma_lower"), status)
+    b = Baseline(prov, noise, bound, healthy, drift)
     if b.validated:
         for name in ("frequency_hz", "gamma", "model_frf"):
             if getattr(b, name) is None:
                 raise InputError(p, f"{where}/{name}", "missing dataset in a validated baseline")
-        n = len(b.frequency_hz)  # type: ignore[arg-type]
-        if b.gamma.shape != (n,):  # type: ignore[union-attr]
-            raise InputError(p, f"{where}/gamma",
-                             f"shape {b.gamma.shape} does not match frequency_hz ({n},)")  # type: ignore[union-attr]
+        assert bound is not None
+        n = len(bound.frequency_hz)
+        if bound.gamma.shape != (n,):
+            raise InputError(p, f"{where}/gamma", f"shape {bound.gamma.shape} does not match frequency_hz ({n},)")
         if b.enclose == "measured":
             for name in ("healthy_frf", "healthy_frf_var", "healthy_frf_dof"):
                 arr = getattr(b, name)

@@ -319,7 +319,7 @@ def fit_noise(
     cfg, rig_path, (mrun,) = workflow.load_rig_and_runs(sweep_path, rig, target, run)
     nb = workflow.fit_noise(mrun, method=method, confidence=confidence, manual_m=value)
     base = workflow.noise_baseline(cfg, mrun, nb)
-    base.extra["rig_path"] = str(Path(rig_path).resolve())  # later commands need no --rig
+    base.provenance.rig_path = str(Path(rig_path).resolve())  # later commands need no --rig
     write_baseline(base, target)
     conf = f", {nb.confidence:.0%} family-wise over {mrun.frequency_hz.size} points" if nb.confidence else ""
     err.print(f"noise bound V = {nb.value_m * 1e6:.4g} um ({nb.method}{conf}) from {sweep_path}")
@@ -395,9 +395,9 @@ def validate(
         with _progress(f"validating run {first.run_id} ({len(runs)} healthy sweeps, {first.frequency_hz.size} points)"):
             outcome = workflow.validate(cfg, runs, nb, enclose=enclose, fail_at=_fail_at(fail_at), update=update,
                                         learn_drift=learn_drift)
-        outcome.baseline.extra["rig_path"] = str(Path(rig_path).resolve())  # later commands need no --rig
+        outcome.baseline.provenance.rig_path = str(Path(rig_path).resolve())  # later commands need no --rig
         if reused_from and nb is noise:
-            outcome.baseline.extra["noise_fitted_on_sweep"] = reused_from
+            outcome.baseline.provenance.noise_fitted_on_sweep = reused_from
         outcomes.append(outcome)
         for line in (workflow.update_summary(outcome), workflow.learning_summary(outcome)):
             if line:
@@ -419,8 +419,8 @@ def validate(
         for p_ in files:
             err.print(f"wrote {p_}")
         docs.append(outcome.typed_report(nb, target).to_dict())
-        if "noise_fitted_on_sweep" in outcome.baseline.extra:  # a bound from another sweep, as asked
-            docs[-1]["noise_fitted_on_sweep"] = outcome.baseline.extra["noise_fitted_on_sweep"]
+        if outcome.baseline.provenance.noise_fitted_on_sweep:  # a bound from another sweep, as asked
+            docs[-1]["noise_fitted_on_sweep"] = outcome.baseline.provenance.noise_fitted_on_sweep
     write_baseline(outcomes[0].baseline, target, [o.baseline for o in outcomes[1:]])
     err.print(f"wrote {target}" + (f" ({len(outcomes)} runs: {', '.join(run_ids)})" if several else ""))
     if as_json:

@@ -121,7 +121,7 @@ def test_a_manual_noise_bound_survives_validate_force_and_a_foreign_fit_needs_a_
         == EXIT_OK
     import json
 
-    fitted_on = read_baseline(other / "baseline.h5").extra.get("noise_fitted_on_sweep")
+    fitted_on = read_baseline(other / "baseline.h5").provenance.noise_fitted_on_sweep
     assert fitted_on and json.loads(capsys.readouterr().out)["noise_fitted_on_sweep"] == fitted_on
 
 

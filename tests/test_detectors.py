@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from typing import ClassVar
 
 import numpy as np
@@ -81,7 +82,8 @@ def test_default_rules_and_refusals(open_crack) -> None:
     assert default_rule(rig, base) == "joint"
     with pytest.raises(InputError, match="--rule"):
         make_detector(rig, base, "no-such-rule")
-    system = Baseline(**{**base.__dict__, "enclose": "system"})
+    assert base.bound is not None
+    system = dataclasses.replace(base, bound=dataclasses.replace(base.bound, enclose="system"))
     assert default_rule(rig, system) == "system"
     with pytest.raises(InputError, match="needs a baseline validated with --enclose measured"):
         make_detector(rig, system, "joint")

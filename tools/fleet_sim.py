@@ -136,7 +136,7 @@ def make_fleet(out: Path, machines: int = 20, sweeps: int = 10, seed: int = 0, p
         runs = [workflow.load_run(p, rig) for p in hpaths]
         nb = workflow.fit_noise(runs[0])
         outcome = workflow.validate(rig, runs, nb, enclose="measured")
-        outcome.baseline.extra["rig_path"] = str((mdir / "rig.yaml").resolve())
+        outcome.baseline.provenance.rig_path = str((mdir / "rig.yaml").resolve())
         write_baseline(outcome.baseline, mdir / "baseline.h5")
         final_loss, share, offset = CRACKS.get(kind.removeprefix("crack-"), (0.0, 0.0, 0.0))
         onset = (max(1, round(share * sweeps)) - offset) * step_days

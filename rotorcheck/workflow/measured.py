@@ -4,7 +4,6 @@ frequency grids, resampling, and the FRF estimates (m/N) with their variances (m
 from __future__ import annotations
 
 import dataclasses
-import json
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -406,8 +405,7 @@ def pair_keys(run: MeasuredRun) -> list[list[str]]:
 
 def baseline_pairs(baseline: Any) -> list[list[str]] | None:
     """The channel pairs a baseline was validated on (None: made before channel pairs were stored)."""
-    text = baseline.extra.get("channel_pairs")
-    return None if text is None else [list(x) for x in json.loads(text)]
+    return baseline.healthy.channel_pairs
 
 
 def per_pair(x: np.ndarray, f: np.ndarray, n_pairs: int, run: MeasuredRun) -> np.ndarray:

@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from rotorcheck.baseline import Baseline, read_baseline
+from rotorcheck.baseline import Baseline, NoiseFit, Provenance, read_baseline
 from rotorcheck.config import RigConfig
 from rotorcheck.errors import InputError
 from rotorcheck.report.schema import NoiseReport
@@ -56,11 +56,17 @@ def fit_noise(
 def noise_baseline(rig: RigConfig, run: MeasuredRun, noise_bound: Any) -> Any:
     """The baseline after step 2 (stage 'noise'): the noise bound and where it came from."""
 
-    return Baseline(rig_id=rig.rig_id, rig_sha256=rig.sha256(), sweep_sha256=[run.sha256], run_id=run.run_id,
-                    speed_rpm=run.speed_rpm, noise_bound_m=noise_bound.value_m, noise_method=noise_bound.method,
-                    noise_confidence=float(noise_bound.confidence or 0.0), uncertainty=rig.uncertainty.structure,
-                    parameter=rig.uncertainty.parameter or "", stage="noise",
-                    noise_bound_per_point_m=noise_bound.details.get("per_point_m"))
+    return Baseline(Provenance(rig.rig_id, rig.sha256(), [run.sha256], run.run_id, run.speed_rpm),
+                    noise_fit(noise_bound, rig.uncertainty.structure, rig.uncertainty.parameter or ""))
+
+
+def noise_fit(noise_bound: NoiseBound, uncertainty: str, parameter: str, per_point_m: np.ndarray | None = None
+              ) -> NoiseFit:
+    """The baseline's noise part from a fitted bound (``per_point_m``: V per point when the caller has it;
+    else the bound's own per-point values, if any)."""
+    per = per_point_m if per_point_m is not None else noise_bound.details.get("per_point_m")
+    return NoiseFit(float(noise_bound.value_m), noise_bound.method, float(noise_bound.confidence or 0.0),
+                    None if per is None else np.asarray(per, dtype=float), uncertainty, parameter)
 
 
 def prior_noise(baseline_path: str | Path, rig: RigConfig, force: bool, sweep_sha256: str | None = None,

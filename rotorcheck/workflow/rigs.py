@@ -2,13 +2,12 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Any
 
-import h5py
 import numpy as np
 
+from rotorcheck.baseline import stored_rig
 from rotorcheck.config import RigConfig, load_config
 from rotorcheck.errors import InputError
 from rotorcheck.faults.compliance import with_crack_depth
@@ -40,14 +39,9 @@ def rig_for(rig_path: str | Path | None, rig_id: str, baseline_path: str | Path 
     bundled rig named ``rig_id``. A stored rig file that is gone is an error naming it."""
     if rig_path is not None:
         return Path(rig_path)
-    if baseline_path is not None and Path(baseline_path).exists():
-
-        try:
-            with h5py.File(baseline_path, "r") as b:
-                stored, base_id = b.attrs.get("x_rig_path"), b.attrs.get("rig_id")
-        except OSError:
-            stored = base_id = None  # not HDF5: the baseline's own reader says what is wrong
-        if stored is not None and str(base_id) == rig_id:
+    if baseline_path is not None:
+        base_id, stored = stored_rig(baseline_path)
+        if stored is not None and base_id == rig_id:
             if not Path(str(stored)).exists():
                 raise InputError(baseline_path, "/@x_rig_path", f"the rig file the baseline was made with ({stored}) "
                                  "is gone; pass --rig")
@@ -65,8 +59,7 @@ def updated_rig(rig: RigConfig, values: dict[str, float] | None) -> RigConfig:
 
 def baseline_updates(baseline: Any) -> dict[str, float] | None:
     """The updated parameter values stored in a baseline, if any."""
-    doc = baseline.extra.get("updated_parameters")
-    return {str(k): float(v) for k, v in json.loads(doc).items()} if doc else None
+    return baseline.drift.updated_parameters
 
 
 def damage_port_name(rig: RigConfig) -> str:

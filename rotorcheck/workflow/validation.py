@@ -2,14 +2,13 @@
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from rotorcheck.baseline import Baseline
+from rotorcheck.baseline import Baseline, DriftModel, HealthyData, ModelBound, Provenance
 from rotorcheck.config import RigConfig
 from rotorcheck.errors import InputError, check_choice
 from rotorcheck.nominal import nominal_model
@@ -26,7 +25,7 @@ from rotorcheck.workflow.measured import (
     pair_experiments,
     pair_keys,
 )
-from rotorcheck.workflow.noise import noise_values
+from rotorcheck.workflow.noise import noise_fit, noise_values
 from rotorcheck.workflow.rigs import updated_rig
 
 
@@ -126,31 +125,23 @@ def validate(
     if enclose == "measured":
         learning = learn_benign(model_rig, runs) if learn_drift else BenignLearning(KAPPA_NOMINAL)
     learned = learning.learned if learning is not None else None
-    base = Baseline(
-        rig_id=rig.rig_id, rig_sha256=rig.sha256(), sweep_sha256=[r.sha256 for r in runs],
-        run_id=first.run_id, speed_rpm=first.speed_rpm, noise_bound_m=float(noise_bound.value_m),
-        noise_method=noise_bound.method, noise_confidence=float(noise_bound.confidence or 0.0),
-        uncertainty=model.structure, parameter=model.parameter or "", enclose=enclose, stage="validated",
-        frequency_hz=first.frequency_hz, gamma=res.gamma, gamma_lower=res.gamma_lower,
-        gamma_status=np.asarray(res.status, dtype=str), model_frf=model.frf[:, None, None],
-        input_phasor=first.W[:, None], output_phasor=first.Zt[:, None],
-        healthy_frf=healthy.frf, healthy_frf_var=healthy.var, healthy_frf_dof=healthy.dof,
-        shaft_orders_removed=first.harmonics_removed,
-        noise_bound_per_point_m=None if isinstance(V, float) else np.asarray(V, dtype=float),
-        benign_directions=None if learned is None else learned.U,
-        benign_direction_bound=None if learned is None else learned.c_max,
-        benign_kappa=learning.kappa if learning is not None else None, n_healthy=len(runs),
-        benign_correction=learning.correction if learning is not None else None,
-    )
-    base.extra["channel_pairs"] = json.dumps(pair_keys(first))
     for r in runs[1:]:
         if pair_keys(r) != pair_keys(first):
             raise InputError(r.path, "/channels", f"channel pairs differ from {first.path}'s (healthy sweeps must "
                              "share their channels)")
-    if upd is not None:
-        base.extra["updated_parameters"] = json.dumps(upd.as_dict(), sort_keys=True)
-    if learning is not None and learning.model_share:
-        base.extra["benign_model_share"] = json.dumps(learning.model_share, sort_keys=True)
+    structure, parameter = model.structure, model.parameter or ""
+    base = Baseline(
+        Provenance(rig.rig_id, rig.sha256(), [r.sha256 for r in runs], first.run_id, first.speed_rpm),
+        noise_fit(noise_bound, structure, parameter, None if isinstance(V, float) else np.asarray(V, dtype=float)),
+        ModelBound(enclose, structure, parameter, first.frequency_hz, res.gamma, model.frf[:, None, None],
+                   res.gamma_lower, np.asarray(res.status, dtype=str)),
+        HealthyData(healthy.frf, healthy.var, healthy.dof, first.W[:, None], first.Zt[:, None],
+                    first.harmonics_removed, len(runs), pair_keys(first)),
+        DriftModel(learning.kappa if learning is not None else None, None if learned is None else learned.U,
+                   None if learned is None else learned.c_max,
+                   learning.correction if learning is not None else None, None if upd is None else upd.as_dict(),
+                   {k: list(v) for k, v in learning.model_share.items()}
+                   if learning is not None and learning.model_share else None))
     return ValidationOutcome(base, res, model, runs, rig, upd, learning)
 
 
