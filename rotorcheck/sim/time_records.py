@@ -285,3 +285,23 @@ def _parquet(path: str, cols: dict[str, np.ndarray], fs: float, t0: float) -> No
 
 _WRITERS = {"mat": _mat, "mat73": _mat73, "tdms": _tdms, "wav": _wav, "csv": _csv, "uff": _uff, "hdf5": _hdf5,
             "parquet": _parquet}
+
+
+def simulate_rig_record(config: Any, frequency_hz: Sequence[float] | np.ndarray, speed_rpm: float = 0.0,
+                        fault: str | None = None, seed: int = 0, spec: RecordSpec | None = None,
+                        settings: StepSettings | None = None, shaft_angle_rad: float = 0.0,
+                        n_harmonics: int = 8) -> SimulatedRecord:
+    """A time recording of a rig config (usually a truth rig) with the plant, disturbances, noise and
+    shaft angle of :func:`rotorcheck.sim.rig_sim.simulate_rig` (force at the actuator port, one probe
+    at the sensor port)."""
+    from rotorcheck.sim.rig_sim import at_shaft_angle, rig_plant, step_settings
+
+    f = np.asarray(frequency_hz, dtype=float)
+    rp = at_shaft_angle(rig_plant(config, speed_rpm, fault, n_harmonics, float(f.max())), speed_rpm,
+                        shaft_angle_rad)
+    st = settings if settings is not None else step_settings(config, keep_periods=False)
+    ports = config.io_ports("a simulated time record")
+    act, sen = ports.actuator, ports.sensor
+    sp = spec or RecordSpec(probe_names=(f"disp_s{sen.station}_{sen.direction}",))
+    return simulate_record(rp.plant, f, st, rp.disturbances, seed, sp, speed_rpm, shaft_angle_rad,
+                           (int(act.station), act.direction), [(int(sen.station), sen.direction)])
