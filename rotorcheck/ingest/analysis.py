@@ -38,7 +38,7 @@ from rotorcheck.ingest.keyphasor import Pulses, find_pulses, repair_pulses
 from rotorcheck.ingest.periodfit import fit_windows, period_design, window_starts
 from rotorcheck.ingest.record import TimeRecord
 from rotorcheck.ingest.steps import find_steps, force_crossings
-from rotorcheck.signal.lockin import average_periods, shaft_harmonic_fit
+from rotorcheck.signal.lockin import average_periods, shaft_harmonic_clean
 from rotorcheck.sweep.format import Channel, Run, Sweep, utc_now_iso
 
 __all__ = ["METHOD", "IngestResult", "StepPlan", "analyse", "clipped_periods", "plan_steps"]
@@ -162,6 +162,7 @@ class _StepOut:
     mean: np.ndarray
     var: np.ndarray
     n: int
+    dof: int
 
 
 def _analyse_step(seg: TimeRecord, plan: StepPlan, cmap: ChannelMap, scales: np.ndarray,
@@ -217,11 +218,12 @@ def _analyse_step(seg: TimeRecord, plan: StepPlan, cmap: ChannelMap, scales: np.
         theta = (pulses.angle(t_win[keep]) if pulses is not None else 2.0 * np.pi * shaft_hz * t_win[keep])
         grid = plan.t_first_s + keep / f
         phase = w * (t_win[keep] - grid)
-        mean, var, _ = shaft_harmonic_fit(per, f, shaft_hz, cmap.analysis.shaft_orders,
-                                          shaft_angle_rad=theta, window_phase_rad=phase)
+        per, mean, var, dof = shaft_harmonic_clean(per, f, shaft_hz, cmap.analysis.shaft_orders,
+                                                 shaft_angle_rad=theta, window_phase_rad=phase)
     else:
         mean, var, _ = average_periods(per)
-    return _StepOut(f, per, mean, var, int(keep.size))
+        dof = 2 * (keep.size - 1)
+    return _StepOut(f, per, mean, var, int(keep.size), int(dof))
 
 
 def _short(seg: TimeRecord, plan: StepPlan, cmap: ChannelMap, n: int, notes: list[str]) -> None:
@@ -288,19 +290,25 @@ def analyse(records: Sequence[TimeRecord], cmap: ChannelMap, sources: Sequence[t
     dup = np.flatnonzero(np.diff(freqs) <= 0)
     if dup.size:
         raise InputError(segments[0].path, "steps", f"two steps at {freqs[dup[0]]:.6g} Hz (frequencies must differ)")
+    fitted = shaft_hz > 0 and cmap.analysis.shaft_orders > 0
+    if fitted:
+        dof = min(s.dof for s in done)
+        notes.append(f"shaft harmonics 1X..{cmap.analysis.shaft_orders}X fitted out with the keyphasor angle: the "
+                     f"stored phasors and output_var are that fit's (real dof >= {dof}); per-period phasors not "
+                     "stored (a reader would fit the harmonics again)")
     if pulses[0] is not None:
         notes.append(f"speed {60 * shaft_hz:.6g} rpm from the keyphasor; largest drift within a step "
                      f"{100 * drift:.3g} % (max-min revolution over the median)")
-    return _result(done, freqs, cmap, 60.0 * shaft_hz, notes, segments, sources)
+    return _result(done, freqs, cmap, 60.0 * shaft_hz, notes, segments, sources, keep=not fitted)
 
 
 def _result(done: list[_StepOut], freqs: np.ndarray, cmap: ChannelMap, speed_rpm: float, notes: list[str],
-            segments: Sequence[TimeRecord], sources: Sequence[tuple[str, str]]) -> IngestResult:
+            segments: Sequence[TimeRecord], sources: Sequence[tuple[str, str]], keep: bool) -> IngestResult:
     n = np.array([s.n for s in done], dtype=np.int32)
     mean = np.stack([s.mean for s in done])
     var = np.stack([s.var for s in done])
     pp = None
-    if cmap.analysis.keep_periods:
+    if cmap.analysis.keep_periods and keep:
         pp = np.full((len(done), int(n.max()), mean.shape[1]), np.nan + 1j * np.nan)
         for j, s in enumerate(done):
             pp[j, : s.n] = s.per_period

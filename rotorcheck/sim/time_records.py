@@ -38,8 +38,8 @@ from rotorcheck.sim.simulator import (
     settle_counts,
 )
 
-__all__ = ["RECORD_FORMATS", "RecordSpec", "SimulatedRecord", "channel_map_dict", "simulate_record",
-           "write_record"]
+__all__ = ["RECORD_FORMATS", "RecordSpec", "SimulatedRecord", "channel_map_dict", "record_suffix",
+           "simulate_record", "simulate_rig_record", "write_record"]
 
 RECORD_FORMATS = ("mat", "mat73", "tdms", "wav", "csv", "uff", "hdf5", "parquet")
 _EXT = {"mat": ".mat", "mat73": ".mat", "tdms": ".tdms", "wav": ".wav", "csv": ".csv", "uff": ".uff",
@@ -180,6 +180,11 @@ def channel_map_dict(sim: SimulatedRecord, rig_id: str, fmt: str = "hdf5", with_
         doc["steps"] = [{"frequency_hz": f, "start_s": a, "end_s": b} for f, a, b in sim.steps]
     doc["analysis"] = {"settle_periods": sim.settle_periods, "settle_s": sim.settle_s, **analysis}
     return doc
+
+
+def record_suffix(fmt: str) -> str:
+    """The file extension of a record format (".mat" for both MATLAB versions)."""
+    return _EXT[fmt]
 
 
 def write_record(sim: SimulatedRecord | TimeRecord, path: str | os.PathLike[str], fmt: str | None = None) -> str:
