@@ -35,7 +35,7 @@ from rotorcheck import __version__
 from rotorcheck.errors import InputError
 from rotorcheck.ingest.channel_map import ChannelMap
 from rotorcheck.ingest.keyphasor import Pulses, find_pulses, repair_pulses
-from rotorcheck.ingest.periodfit import fit_windows, period_design, window_starts
+from rotorcheck.ingest.periodfit import fit_windows, period_design, remove_drift, window_starts
 from rotorcheck.ingest.record import TimeRecord
 from rotorcheck.ingest.steps import find_steps, force_crossings
 from rotorcheck.signal.lockin import average_periods, shaft_harmonic_clean
@@ -173,14 +173,15 @@ def _analyse_step(seg: TimeRecord, plan: StepPlan, cmap: ChannelMap, scales: np.
     des = period_design(f, fs)
     starts = window_starts(plan.t_first_s, plan.n_periods, f, seg.t0_s, fs)
     per_chunk = max(1, CHUNK_SAMPLES // des.length)
-    phs, resid, clip, amp = [], [], [], []
+    phs, dcs, resid, clip, amp = [], [], [], [], []
     min_run = max(3, math.ceil(0.02 * des.length))
     for a in range(0, plan.n_periods, per_chunk):
         s = starts[a : a + per_chunk]
         block = seg.read(names, int(s[0]), int(s[-1]) + des.length)
         off = s - s[0]
-        ph, res = fit_windows(block, off, des, residual_rows=1)
+        ph, dc, res = fit_windows(block, off, des, residual_rows=1)
         assert res is not None
+        dcs.append(dc)
         idx = off[:, None] + np.arange(des.length)[None, :]
         clip.append(clipped_periods(block[:, idx], rails, min_run))
         phs.append(ph)
@@ -188,6 +189,10 @@ def _analyse_step(seg: TimeRecord, plan: StepPlan, cmap: ChannelMap, scales: np.
         amp.append(np.abs(ph[0]))
     ph = np.concatenate(phs, axis=1)  # (ch, N) local frames
     bad = np.concatenate(clip, axis=1)
+    t_mid = seg.t0_s + (starts + 0.5 * (des.length - 1)) / fs
+    good = ~bad.any(axis=0)
+    if good.sum() >= 3:  # slow drift from the DC of the clean periods (see periodfit)
+        ph = remove_drift(ph, np.concatenate(dcs, axis=1)[:, good], t_mid[good], des, t_all=t_mid)
     res_f = np.concatenate(resid)
     amp_f = np.concatenate(amp)
     t_win = seg.t0_s + starts / fs
