@@ -81,7 +81,7 @@ def _settle(cmap: ChannelMap, f: float) -> int:
 
 def _last_full(seg: TimeRecord, t_first: float, f: float, length: int) -> int:
     """Periods from ``t_first`` whose whole window lies inside the segment."""
-    n = int(math.floor((seg.t_end_s - t_first) * f + 1e-6)) + 1
+    n = math.floor((seg.t_end_s - t_first) * f + 1e-6) + 1
     while n > 0 and int(window_starts(t_first, n, f, seg.t0_s, seg.fs_hz)[-1]) + length > seg.n_samples:
         n -= 1
     return max(n, 0)
@@ -106,8 +106,8 @@ def plan_steps(segments: Sequence[TimeRecord], cmap: ChannelMap, notes: list[str
                 continue
             seg = segments[inside[0]]
             t_first = row.start_s + _settle(cmap, f) / f
-            n = int(math.floor((row.end_s - t_first) * f + 1e-6))
-            length = int(math.floor(seg.fs_hz / f + 1e-9))
+            n = math.floor((row.end_s - t_first) * f + 1e-6)
+            length = math.floor(seg.fs_hz / f + 1e-9)
             n = min(n, _last_full(seg, t_first, f, length))
             plans.append(StepPlan(f, row.start_s, t_first, max(n, 0), inside[0], row.end_s))
         return plans
@@ -126,8 +126,8 @@ def plan_steps(segments: Sequence[TimeRecord], cmap: ChannelMap, notes: list[str
         for st in found:
             f = st.frequency_hz
             t_first = st.start_s + _settle(cmap, f) / f
-            n = int(math.floor((st.end_s - t_first) * f + 0.01))
-            length = int(math.floor(seg.fs_hz / f + 1e-9))
+            n = math.floor((st.end_s - t_first) * f + 0.01)
+            length = math.floor(seg.fs_hz / f + 1e-9)
             n = min(n, _last_full(seg, t_first, f, length))
             plans.append(StepPlan(f, st.start_s, t_first, max(n, 0), i, st.end_s))
         notes.append(f"{len(found)} steps found in the force of {seg.path}")

@@ -184,12 +184,12 @@ class ChannelMap(Strict):
 def parse_channel_map(data: Any, source: str | os.PathLike[str] = "<map>") -> ChannelMap:
     """Validate a mapping into a :class:`ChannelMap`; errors name ``source`` and the field."""
     if not isinstance(data, dict):
-        raise InputError(source, "", "the channel map must be a mapping of keys")
+        raise InputError(os.fspath(source), "", "the channel map must be a mapping of keys")
     try:
         cmap = ChannelMap.model_validate({**data, "source_path": os.fspath(source)})
     except ValidationError as exc:
         field, msg = _first_error(exc)
-        raise InputError(source, field, msg) from None
+        raise InputError(os.fspath(source), field, msg) from None
     return cmap
 
 

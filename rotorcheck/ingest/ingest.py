@@ -42,7 +42,7 @@ def ingest_files(paths: Sequence[str | os.PathLike[str]], channel_map: ChannelMa
     path) and write the sweep to ``out`` (when given) with its provenance attributes."""
     cmap = channel_map if isinstance(channel_map, ChannelMap) else load_channel_map(channel_map)
     if out is not None:
-        check_writable([out], force)
+        check_writable([os.fspath(out)], force)
     sources = [(os.fspath(p), file_sha256(p)) for p in paths if os.path.isfile(p)]
     segments = read_records(paths, cmap)
     with contextlib.ExitStack() as stack:

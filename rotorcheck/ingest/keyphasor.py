@@ -11,6 +11,7 @@ time (2 pi per revolution, 0 at a pulse).
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -131,4 +132,4 @@ def repair_pulses(times: np.ndarray, path: str, channel: str, max_repairs: float
 
 def _adjacent(bad: list[int], pairs: set[int]) -> bool:
     """Two irregular intervals next to each other that are not one double pulse's pair."""
-    return any(b - a == 1 and b not in pairs for a, b in zip(bad, bad[1:]))
+    return any(b - a == 1 and b not in pairs for a, b in itertools.pairwise(bad))

@@ -17,6 +17,7 @@ the first time value or UFF58's abscissa minimum, else 0 s.
 from __future__ import annotations
 
 import io
+import itertools
 import os
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -50,11 +51,11 @@ def detect_format(path: str | os.PathLike[str], fmt: str | None = None) -> str:
     """The format name of ``path`` (``fmt`` wins), else an InputError listing the known extensions."""
     if fmt is not None:
         if fmt not in FORMATS:
-            raise InputError(path, "format", f"unknown format {fmt!r} (known: {', '.join(FORMATS)})")
+            raise InputError(os.fspath(path), "format", f"unknown format {fmt!r} (known: {', '.join(FORMATS)})")
         return fmt
     ext = Path(path).suffix.lower()
     if ext not in _EXT:
-        raise InputError(path, "format", f"unknown extension {ext!r} (known: {', '.join(sorted(_EXT))})")
+        raise InputError(os.fspath(path), "format", f"unknown extension {ext!r} (known: {', '.join(sorted(_EXT))})")
     return _EXT[ext]
 
 
@@ -145,7 +146,7 @@ def _from_time(path: str, time: Column, cols: dict[str, Column], closers: list[C
             cuts.append(s + int(i) + 1)
     cuts.append(n)
     out = []
-    for a, b in zip(cuts, cuts[1:]):
+    for a, b in itertools.pairwise(cuts):
         t0 = float(np.asarray(time[a : a + 1])[0])
         t1 = float(np.asarray(time[b - 1 : b])[0])
         fs = (b - a - 1) / (t1 - t0) if b - a > 1 else 1.0 / dt

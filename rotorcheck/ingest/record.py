@@ -8,6 +8,7 @@ sweep written in several files) are joined in time order by :func:`concatenate`.
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Protocol
@@ -113,7 +114,7 @@ def concatenate(records: Sequence[TimeRecord], tol_samples: float = 0.5) -> list
         return []
     recs = sorted(records, key=lambda r: r.t0_s)
     segments: list[list[TimeRecord]] = [[recs[0]]]
-    for prev, cur in zip(recs, recs[1:]):
+    for prev, cur in itertools.pairwise(recs):
         if not np.isclose(prev.fs_hz, cur.fs_hz, rtol=1e-9, atol=0.0):
             raise InputError(cur.path, "sample rate", f"{cur.fs_hz:g} Hz differs from {prev.path}'s "
                                                       f"{prev.fs_hz:g} Hz (one sweep needs one sample rate)")

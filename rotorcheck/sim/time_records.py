@@ -239,7 +239,7 @@ def _wav(path: str, cols: dict[str, np.ndarray], fs: float, t0: float) -> None:
     if abs(fs - round(fs)) > 1e-9 or t0 != 0.0:
         raise ValueError("WAV needs an integer sample rate and a record starting at 0 s")
     data = np.stack(list(cols.values()), axis=1).astype(np.float32)
-    scipy.io.wavfile.write(path, int(round(fs)), data)
+    scipy.io.wavfile.write(path, round(fs), data)
 
 
 def _csv(path: str, cols: dict[str, np.ndarray], fs: float, t0: float, chunk: int = 1 << 16) -> None:

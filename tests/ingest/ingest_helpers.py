@@ -7,11 +7,9 @@ without noise, shaft harmonics removed by :func:`rotorcheck.signal.lockin.fit_sh
 
 from __future__ import annotations
 
-
 from typing import Any
 
 import numpy as np
-
 
 from rotorcheck.ingest import parse_channel_map
 from rotorcheck.ingest.channel_map import ChannelMap

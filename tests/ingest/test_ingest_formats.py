@@ -18,7 +18,6 @@ import scipy.stats
 from rotorcheck.ingest import ingest_files, parquet_available
 from rotorcheck.sim.time_records import record_suffix, write_record
 from rotorcheck.sweep import read_sweep
-
 from tests.ingest.ingest_helpers import FORCE_N, FREQS, cmap_of, small_record, truth
 
 FORMATS = ["mat", "mat73", "tdms", "wav", "csv", "uff", "hdf5",

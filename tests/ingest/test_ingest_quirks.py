@@ -64,7 +64,7 @@ def _probe_clipped(sim: SimulatedRecord, t0: float, t1: float) -> tuple[np.ndarr
 
 @pytest.mark.parametrize("rails", [False, True])
 def test_clipped_periods_dropped(sim: SimulatedRecord, rails: bool) -> None:
-    f, a, b = sim.steps[1]
+    f, a, _b = sim.steps[1]
     t_an = a + 8 / f  # after settling
     x, rail = _probe_clipped(sim, t_an + 3 / f, t_an + 7 / f)
     doc = channel_map_dict(sim, "crack_rig")
@@ -77,7 +77,7 @@ def test_clipped_periods_dropped(sim: SimulatedRecord, rails: bool) -> None:
 
 
 def test_clipping_refused(sim: SimulatedRecord, tmp_path: Path) -> None:
-    f, a, b = sim.steps[0]
+    _f, a, b = sim.steps[0]
     x, _ = _probe_clipped(sim, a, b)  # every period of the step
     rec = write_record(TimeRecord("x", sim.record.fs_hz, 0.0, {**sim.record.channels, "p6x": x}), tmp_path / "r.h5")
     with pytest.raises(InputError) as exc:
@@ -116,7 +116,8 @@ def test_keyphasor_not_isolated_refused(turning: SimulatedRecord) -> None:
 
 
 def test_keyphasor_without_pulses_refused(turning: SimulatedRecord) -> None:
-    flat = np.zeros(turning.record.n_samples) + 0.01 * np.random.default_rng(0).standard_normal(turning.record.n_samples)
+    n = turning.record.n_samples
+    flat = 0.01 * np.random.default_rng(0).standard_normal(n)
     with pytest.raises(InputError) as exc:
         analyse([_with(turning, keyphasor=flat)], cmap_of(turning))
     _refused(exc, "rec.h5", "'keyphasor'", "t = ", "no keyphasor pulses")
@@ -129,14 +130,14 @@ def _cut(sim: SimulatedRecord, t_end: float) -> TimeRecord:
 
 
 def test_step_cut_short_dropped(sim: SimulatedRecord) -> None:
-    f, a, b = sim.steps[-1]
+    f, a, _b = sim.steps[-1]
     run = analyse([_cut(sim, a + 12 / f)], cmap_of(sim)).sweep.runs["0rpm"]  # 4 periods after settling
     assert run.frequency.size == 2 and "warning: step at 123.4 Hz" in run.notes and "step dropped" in run.notes
     _ok(run)
 
 
 def test_step_cut_short_refused(sim: SimulatedRecord) -> None:
-    f, a, b = sim.steps[-1]
+    f, a, _b = sim.steps[-1]
     with pytest.raises(InputError) as exc:
         analyse([_cut(sim, a + 12 / f)], cmap_of(sim, short_step="refuse"))
     _refused(exc, "rec.h5", "t = ", "123.4 Hz", "min_periods")
@@ -145,15 +146,16 @@ def test_step_cut_short_refused(sim: SimulatedRecord) -> None:
 def _split(sim: SimulatedRecord, tmp_path: Path, t_split: float, gap_s: float = 0.0) -> list[str]:
     r = sim.record
     n = int((t_split - r.t0_s) * r.fs_hz)
-    k = int(round(gap_s * r.fs_hz))
+    k = round(gap_s * r.fs_hz)
     first = TimeRecord("a", r.fs_hz, r.t0_s, {c: np.asarray(v)[:n] for c, v in r.channels.items()})
-    second = TimeRecord("b", r.fs_hz, r.t0_s + (n + k) / r.fs_hz, {c: np.asarray(v)[n + k :] for c, v in r.channels.items()})
+    rest = {c: np.asarray(v)[n + k :] for c, v in r.channels.items()}
+    second = TimeRecord("b", r.fs_hz, r.t0_s + (n + k) / r.fs_hz, rest)
     # written in reverse order: the reader orders them by time
     return [write_record(second, tmp_path / "part2.h5"), write_record(first, tmp_path / "part1.h5")]
 
 
 def test_several_files_concatenated(sim: SimulatedRecord, tmp_path: Path) -> None:
-    f, a, b = sim.steps[1]
+    _f, a, b = sim.steps[1]
     files = _split(sim, tmp_path, 0.5 * (a + b))  # the cut inside a step
     run = ingest_files(files, cmap_of(sim), tmp_path / "out.h5").sweep.runs["0rpm"]
     whole = analyse([sim.record], cmap_of(sim)).sweep.runs["0rpm"]
@@ -163,7 +165,7 @@ def test_several_files_concatenated(sim: SimulatedRecord, tmp_path: Path) -> Non
 
 @pytest.mark.parametrize("with_steps", [True, False])
 def test_gap_inside_a_step_refused(sim: SimulatedRecord, tmp_path: Path, with_steps: bool) -> None:
-    f, a, b = sim.steps[1]
+    _f, a, b = sim.steps[1]
     files = _split(sim, tmp_path, 0.5 * (a + b), gap_s=0.05)
     with pytest.raises(InputError) as exc:
         ingest_files(files, cmap_of(sim, with_steps=with_steps), tmp_path / "out.h5")
@@ -172,7 +174,7 @@ def test_gap_inside_a_step_refused(sim: SimulatedRecord, tmp_path: Path, with_st
 
 
 def test_csv_time_gap_refused(sim: SimulatedRecord, tmp_path: Path) -> None:
-    f, a, b = sim.steps[0]
+    _f, a, b = sim.steps[0]
     rec = write_record(sim, tmp_path / "r.csv")
     lines = (tmp_path / "r.csv").read_text().splitlines(keepends=True)
     i0 = int(0.5 * (a + b) * sim.record.fs_hz)
