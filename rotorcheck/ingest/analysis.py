@@ -155,6 +155,23 @@ def clipped_periods(win: np.ndarray, rails: Sequence[tuple[float, float] | None]
     return out
 
 
+def _clipped(block: np.ndarray, off: np.ndarray, length: int, rails: Sequence[tuple[float, float] | None],
+             min_run: int) -> np.ndarray:
+    """:func:`clipped_periods` of the windows, gathered only for the channels that may clip (rails
+    reached, or the chunk's extreme value repeated ``min_run`` times)."""
+    out = np.zeros((block.shape[0], off.size), dtype=bool)
+    idx = off[:, None] + np.arange(length)[None, :]
+    for c in range(block.shape[0]):
+        x, r = block[c], rails[c] if c < len(rails) else None
+        if r is not None:
+            suspect = bool(x.min() <= r[0] or x.max() >= r[1])
+        else:
+            suspect = int(np.count_nonzero(x == x.max())) >= min_run or int(np.count_nonzero(x == x.min())) >= min_run
+        if suspect:
+            out[c] = clipped_periods(x[idx][None], [r], min_run)[0]
+    return out
+
+
 @dataclass
 class _StepOut:
     frequency_hz: float
@@ -182,8 +199,7 @@ def _analyse_step(seg: TimeRecord, plan: StepPlan, cmap: ChannelMap, scales: np.
         ph, dc, res = fit_windows(block, off, des, residual_rows=1)
         assert res is not None
         dcs.append(dc)
-        idx = off[:, None] + np.arange(des.length)[None, :]
-        clip.append(clipped_periods(block[:, idx], rails, min_run))
+        clip.append(_clipped(block, off, des.length, rails, min_run))
         phs.append(ph)
         resid.append(res[0])
         amp.append(np.abs(ph[0]))
@@ -199,7 +215,8 @@ def _analyse_step(seg: TimeRecord, plan: StepPlan, cmap: ChannelMap, scales: np.
     w = 2.0 * np.pi * f
     # a force that is not a sine: the fit residual against the fitted amplitude (RMS)
     ok = ~bad.any(axis=0)
-    dist = float(np.median(res_f[ok] / np.maximum(amp_f[ok] / np.sqrt(2.0), 1e-300))) if ok.any() else 0.0
+    chk = ok & np.isfinite(res_f)
+    dist = float(np.median(res_f[chk] / np.maximum(amp_f[chk] / np.sqrt(2.0), 1e-300))) if chk.any() else 0.0
     if dist > cmap.analysis.max_distortion:
         raise InputError(seg.path, f"channel {cmap.force.channel!r}",
                          f"t = {plan.t_first_s:.6f} s (step at {f:.6g} Hz): the force is not a sine (residual "

@@ -71,16 +71,18 @@ def fit_windows(block: np.ndarray, offsets: np.ndarray, des: PeriodDesign,
                 residual_rows: int = 0) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
     """Local phasors and DC values (channels, periods) of the windows starting at ``offsets`` (indices
     into ``block``, (channels, n)) and, for the first ``residual_rows`` channels, the RMS residual of
-    the fit per period (rows, periods); phasors in the windows' own frame, drift not yet removed
+    the fit (rows, periods; NaN except on up to 16 periods); phasors in the windows' own frame, drift not yet removed
     (:func:`remove_drift`)."""
     idx = offsets[:, None] + np.arange(des.length)[None, :]
     win = block[:, idx]  # (ch, P, L)
     coef = win @ des.pinv.T  # (ch, P, 3)
     ph = coef[..., 0] - 1j * coef[..., 1]
     res = None
-    if residual_rows:
-        r = win[:residual_rows] - coef[:residual_rows] @ des.design.T
-        res = np.sqrt(np.mean(r * r, axis=-1))
+    if residual_rows:  # on at most 16 periods spread over the chunk (a check, not an estimate)
+        sel = np.unique(np.linspace(0, offsets.size - 1, min(16, offsets.size)).astype(int))
+        r = win[:residual_rows, sel] - coef[:residual_rows, sel] @ des.design.T
+        res = np.full((residual_rows, offsets.size), np.nan)
+        res[:, sel] = np.sqrt(np.mean(r * r, axis=-1))
     return ph, coef[..., 2], res
 
 
@@ -95,7 +97,8 @@ def remove_drift(ph: np.ndarray, dc: np.ndarray, t_mid: np.ndarray, des: PeriodD
     t_eval = t_mid if t_all is None else t_all
     t0 = t_mid.mean()
     deg = 2 if n >= 6 else 1
-    coef = np.polynomial.polynomial.polyfit(t_mid - t0, dc.T, deg)  # (deg+1, ch)
+    van = np.vander(t_mid - t0, deg + 1, increasing=True)  # (P, deg+1)
+    coef = np.linalg.lstsq(van, dc.T, rcond=None)[0]  # (deg+1, ch)
     tc = t_eval - t0
     slope = coef[1][:, None] + (2.0 * coef[2][:, None] * tc[None, :] if deg == 2 else 0.0)  # (ch, P)
     leak = des.slope_leak[0] - 1j * des.slope_leak[1]

@@ -257,19 +257,26 @@ def shaft_harmonic_clean(
     if window_phase_rad is not None:
         shift = np.exp(-1j * np.asarray(window_phase_rad, dtype=np.float64))
         cols += [c * shift for c in cols[1:]]
-    # greedy Gram-Schmidt: keep a column only if it adds a direction (relative to its own norm)
+    # greedy Gram-Schmidt: keep a column only if it adds a direction (relative to its own norm); the
+    # diagonal of R (A = QR, columns in order) is each column's norm orthogonal to the ones before it
+    all_cols = np.stack(cols, axis=1)
+    r_diag = np.abs(np.diagonal(np.linalg.qr(all_cols, mode="r"))) if all_cols.shape[1] <= n else None
     kept: list[np.ndarray] = []
-    basis: list[np.ndarray] = []
-    for c in cols:
-        r = c.copy()
-        for q_ in basis:
-            r -= (q_.conj() @ r) * q_
-        nr = float(np.linalg.norm(r))
-        if nr > rtol * np.linalg.norm(c):
-            kept.append(c)
-            basis.append(r / nr)
-        if len(kept) >= n - 3:
-            break
+    if r_diag is not None:
+        norms = np.sqrt(np.sum(np.abs(all_cols) ** 2, axis=0))
+        kept = [c for c, ok in zip(cols, r_diag > rtol * norms) if ok][: max(n - 3, 1)]
+    else:  # more columns than periods: one by one
+        basis: list[np.ndarray] = []
+        for c in cols:
+            r = c.copy()
+            for q_ in basis:
+                r -= (q_.conj() @ r) * q_
+            nr = float(np.sqrt(np.vdot(r, r).real))
+            if nr > rtol * float(np.sqrt(np.vdot(c, c).real)):
+                kept.append(c)
+                basis.append(r / nr)
+            if len(kept) >= n - 3:
+                break
     q = len(kept)
     if q == 1 or n < q + 3:
         mean, var, _ = average_periods(x)
