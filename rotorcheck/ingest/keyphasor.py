@@ -11,8 +11,8 @@ time (2 pi per revolution, 0 at a pulse).
 
 from __future__ import annotations
 
-import itertools
 import functools
+import itertools
 from dataclasses import dataclass, field
 
 import numpy as np
