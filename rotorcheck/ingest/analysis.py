@@ -38,7 +38,7 @@ from rotorcheck.ingest.keyphasor import Pulses, find_pulses, repair_pulses
 from rotorcheck.ingest.periodfit import fit_windows, period_design, remove_drift, window_starts
 from rotorcheck.ingest.record import TimeRecord
 from rotorcheck.ingest.steps import find_steps, force_crossings
-from rotorcheck.signal.lockin import average_periods, shaft_harmonic_clean
+from rotorcheck.signal.lockin import average_periods, shaft_harmonic_fit
 from rotorcheck.sweep.format import Channel, Run, Sweep, utc_now_iso
 
 __all__ = ["METHOD", "IngestResult", "StepPlan", "analyse", "clipped_periods", "plan_steps"]
@@ -240,8 +240,8 @@ def _analyse_step(seg: TimeRecord, plan: StepPlan, cmap: ChannelMap, scales: np.
         theta = (pulses.angle(t_win[keep]) if pulses is not None else 2.0 * np.pi * shaft_hz * t_win[keep])
         grid = plan.t_first_s + keep / f
         phase = w * (t_win[keep] - grid)
-        per, mean, var, dof = shaft_harmonic_clean(per, f, shaft_hz, cmap.analysis.shaft_orders,
-                                                 shaft_angle_rad=theta, window_phase_rad=phase)
+        mean, var, dof = shaft_harmonic_fit(per, f, shaft_hz, cmap.analysis.shaft_orders,
+                                            shaft_angle_rad=theta, window_phase_rad=phase)
     else:
         mean, var, _ = average_periods(per)
         dof = 2 * (keep.size - 1)

@@ -28,7 +28,7 @@ from __future__ import annotations
 import json
 import os
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any, ClassVar, Literal
 
 import yaml
 from pydantic import Field, ValidationError, model_validator
@@ -44,21 +44,32 @@ __all__ = ["PROBE_UNITS", "AnalysisSettings", "ChannelMap", "ForceChannel", "Key
 PROBE_UNITS = {"m": 1.0, "mm": 1e-3, "um": 1e-6}
 
 
-class ForceChannel(Strict):
-    """The input channel: a force in N, or an actuator current in A with its gain (N/A)."""
+class _Recorded(Strict):
+    """A recorded channel at a model station (1-based) and direction; ``rails``: the recorder's range
+    (recorded units), samples at or beyond it are clipped (default: found as flat tops)."""
 
     channel: str = Field(min_length=1)
     station: int = Field(ge=1)
     direction: Literal["x", "y"]
-    unit: Literal["N", "A"] = "N"
-    gain_n_per_a: float | None = Field(default=None, gt=0)
     rails: tuple[float, float] | None = None
+    #: (unit, field, what): ``field`` is required when the channel is recorded in ``unit``
+    _requires: ClassVar[tuple[str, str, str]] = ("", "", "")
 
     @model_validator(mode="after")
-    def _gain(self) -> ForceChannel:
-        if self.unit == "A" and self.gain_n_per_a is None:
-            raise ValueError("gain_n_per_a: required when unit is A (actuator gain, N/A)")
+    def _required(self) -> _Recorded:
+        unit, name, what = self._requires
+        if unit and getattr(self, "unit", None) == unit and getattr(self, name) is None:
+            raise ValueError(f"{name}: required when unit is {unit} ({what})")
         return self
+
+
+class ForceChannel(_Recorded):
+    """The input channel: a force in N, or an actuator current in A with its gain (N/A)."""
+
+    unit: Literal["N", "A"] = "N"
+    gain_n_per_a: float | None = Field(default=None, gt=0)
+
+    _requires = ("A", "gain_n_per_a", "actuator gain, N/A")
 
     @property
     def scale(self) -> float:
@@ -66,21 +77,13 @@ class ForceChannel(Strict):
         return float(self.gain_n_per_a) if self.unit == "A" and self.gain_n_per_a is not None else 1.0
 
 
-class Probe(Strict):
+class Probe(_Recorded):
     """A displacement probe: recorded in V (with ``sensitivity_v_per_m``) or in m, mm or um."""
 
-    channel: str = Field(min_length=1)
-    station: int = Field(ge=1)
-    direction: Literal["x", "y"]
     unit: Literal["V", "m", "mm", "um"] = "m"
     sensitivity_v_per_m: float | None = Field(default=None, gt=0)
-    rails: tuple[float, float] | None = None
 
-    @model_validator(mode="after")
-    def _sens(self) -> Probe:
-        if self.unit == "V" and self.sensitivity_v_per_m is None:
-            raise ValueError("sensitivity_v_per_m: required when unit is V (probe sensitivity, V/m)")
-        return self
+    _requires = ("V", "sensitivity_v_per_m", "probe sensitivity, V/m")
 
     @property
     def scale(self) -> float:

@@ -31,7 +31,6 @@ __all__ = [
     "lockin_periods",
     "remove_shaft_harmonics",
     "samples_per_period",
-    "shaft_harmonic_clean",
     "shaft_harmonic_fit",
     "tone_lockin",
     "white_noise_phasor_var",
@@ -223,29 +222,12 @@ def shaft_harmonic_fit(
     j 2 pi f tau_p)``: a synchronous tone at ``k * shaft_hz`` leaks with that factor, a sideband
     ``f + k * shaft_hz`` without it (both coincide when ``tau_p`` is constant, and are then merged).
     """
-    cleaned_mean_var_dof = shaft_harmonic_clean(per_period, f_exc_hz, shaft_hz, orders, rtol, shaft_angle_rad,
-                                                window_phase_rad)
-    return cleaned_mean_var_dof[1:]
-
-
-def shaft_harmonic_clean(
-    per_period: np.ndarray,
-    f_exc_hz: float,
-    shaft_hz: float,
-    orders: int = 4,
-    rtol: float = 1e-6,
-    shaft_angle_rad: np.ndarray | None = None,
-    window_phase_rad: np.ndarray | None = None,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
-    """:func:`shaft_harmonic_fit` that also returns the per-period phasors with the fitted harmonics
-    subtracted, ``(cleaned (N, ...), mean, var, dof)``: ``cleaned.mean(0) == mean`` (the residual is
-    orthogonal to the constant column), so a sweep can store them beside the mean."""
     x = np.asarray(per_period, dtype=np.complex128)
     n = x.shape[0]
     flat = x.reshape(n, -1)
     if orders <= 0 or shaft_hz <= 0.0 or n < 5:
         mean, var, _ = average_periods(x)
-        return x, mean, var, 2 * (n - 1)
+        return mean, var, 2 * (n - 1)
     p = np.arange(n)
     cols = [np.ones(n, dtype=np.complex128)]
     for k in range(1, orders + 1):
@@ -280,7 +262,7 @@ def shaft_harmonic_clean(
     q = len(kept)
     if q == 1 or n < q + 3:
         mean, var, _ = average_periods(x)
-        return x, mean, var, 2 * (n - 1)
+        return mean, var, 2 * (n - 1)
     A = np.stack(kept, axis=1)  # (N, q)
     coef, *_ = np.linalg.lstsq(A, flat, rcond=None)
     resid = flat - A @ coef
@@ -291,8 +273,7 @@ def shaft_harmonic_clean(
     g00 = float(np.sum(np.abs(np.linalg.solve(R, np.eye(q))[0]) ** 2))
     mean = coef[0].reshape(x.shape[1:])
     var = (s2 * g00).reshape(x.shape[1:])
-    cleaned = (coef[0][None, :] + resid).reshape(x.shape)
-    return cleaned, mean, var, 2 * (n - q)
+    return mean, var, 2 * (n - q)
 
 
 def fit_shaft_harmonics(
