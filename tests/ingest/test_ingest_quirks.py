@@ -214,6 +214,9 @@ def test_truncated_tdms_exit_2(sim: SimulatedRecord, tmp_path: Path) -> None:
     cmap.write_text(yaml.safe_dump(channel_map_dict(sim, "crack_rig", "tdms")))
     rc = cli_main(["ingest", str(rec), str(tmp_path / "out.h5"), "--map", str(cmap)])
     assert rc == 2 and not (tmp_path / "out.h5").exists()
+    with pytest.raises(InputError) as exc:  # an input error naming the file, not an internal one
+        ingest_files([rec], cmap, tmp_path / "out.h5")
+    _refused(exc, str(rec), "truncated")
 
 
 def test_channel_map_errors_name_file_and_field(tmp_path: Path, sim: SimulatedRecord) -> None:
@@ -263,3 +266,21 @@ def test_offset_and_strong_drift_removed() -> None:
     # 3 V offset and 2 V/s drift on the probes (the signal is ~0.1-1 V): the phasors stay within noise
     sim = small_record(seed=9, probe_offset_v=3.0, probe_drift_v_per_s=2.0)
     _ok(analyse([sim.record], cmap_of(sim)).sweep.runs["0rpm"])
+
+
+def test_rig_file_and_csv_without_time_column(sim: SimulatedRecord, tmp_path: Path) -> None:
+    import yaml
+
+    from rotorcheck.resources import configs_dir
+
+    r = sim.record
+    (tmp_path / "r.csv").write_text(",".join(r.channels) + "\n" + "\n".join(
+        ",".join(f"{float(np.asarray(c)[i]):.10e}" for c in r.channels.values()) for i in range(r.n_samples)) + "\n")
+    doc = channel_map_dict(sim, "unused")
+    del doc["rig_id"]
+    doc["rig"] = str(configs_dir() / "crack_rig.yaml")
+    doc["sample_rate_hz"] = r.fs_hz
+    (tmp_path / "map.yaml").write_text(yaml.safe_dump(doc))
+    res = ingest_files([tmp_path / "r.csv"], tmp_path / "map.yaml", tmp_path / "out.h5")
+    assert res.sweep.rig_id == "crack_rig"
+    _ok(res.sweep.runs["0rpm"])
