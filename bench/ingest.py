@@ -2,7 +2,7 @@
 
 1. Samples per second ingested on one core: a 4-channel record (force, two probes, keyphasor at
    1000 rpm) at 25.6 kHz, 20 steps 30-600 Hz of about 1 s each, analysed in memory and from an HDF5
-   file, with the step table and with the steps found in the force (best of 3). Goal >= 20 million
+   file, with the step table and with the steps found in the force (best of 7). Goal >= 20 million
    samples/s/core.
 2. Memory: an HDF5 record larger than the memory budget (written step by step, never held whole)
    is ingested in a child process; its peak RSS (``resource.getrusage(RUSAGE_CHILDREN)``) against a
@@ -104,10 +104,10 @@ def throughput(tmp: Path) -> list[tuple[str, float, float]]:
         n = 4 * segs[0].n_samples
         mem = segs[0].__class__(segs[0].path, segs[0].fs_hz, segs[0].t0_s,
                                 {k: np.asarray(v[:]) for k, v in segs[0].channels.items()})
-        # from the file (h5py reads per step), and in memory (the reading excluded): best of 3
+        # from the file (h5py reads per step), and in memory (the reading excluded): best of 7
         for where, recs in (("HDF5 file", segs), ("in memory", [mem])):
             best = np.inf
-            for _ in range(3):
+            for _ in range(7):
                 t = time.perf_counter()
                 analyse(recs, cmap)
                 best = min(best, time.perf_counter() - t)
