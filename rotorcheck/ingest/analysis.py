@@ -113,9 +113,11 @@ def plan_steps(segments: Sequence[TimeRecord], cmap: ChannelMap, notes: list[str
         return plans
     prev_last: tuple[float, float] | None = None
     for i, seg in enumerate(segments):
-        found = find_steps(force_crossings(seg, cmap.force.channel), cmap.analysis.step_rtol)
+        ins = cmap.inputs
+        found = find_steps(force_crossings(seg, [c.channel for c in ins], [c.scale for c in ins]),
+                           cmap.analysis.step_rtol)
         if not found:
-            raise InputError(seg.path, f"channel {cmap.force.channel!r}",
+            raise InputError(seg.path, f"channel {ins[0].channel!r}",
                              f"t = {seg.t0_s:.6f}-{seg.t_end_s:.6f} s: no steady sine found in the force "
                              "(not a sine, or give a step table)")
         if prev_last is not None and abs(found[0].frequency_hz / prev_last[0] - 1) < cmap.analysis.step_rtol:
@@ -175,6 +177,7 @@ def _clipped(block: np.ndarray, off: np.ndarray, length: int, rails: Sequence[tu
 @dataclass
 class _StepOut:
     frequency_hz: float
+    t_ref_s: float
     per_period: np.ndarray  # (N, n_ch) scaled, t_ref frame
     mean: np.ndarray
     var: np.ndarray
@@ -184,8 +187,9 @@ class _StepOut:
 
 def _analyse_step(seg: TimeRecord, plan: StepPlan, cmap: ChannelMap, scales: np.ndarray,
                   pulses: Pulses | None, shaft_hz: float, notes: list[str]) -> _StepOut | None:
-    names = [cmap.force.channel, *(p.channel for p in cmap.probes)]
-    rails = [cmap.force.rails, *(p.rails for p in cmap.probes)]
+    ins = cmap.inputs
+    names = [*(c.channel for c in ins), *(p.channel for p in cmap.probes)]
+    rails = [*(c.rails for c in ins), *(p.rails for p in cmap.probes)]
     f, fs = plan.frequency_hz, seg.fs_hz
     des = period_design(f, fs)
     starts = window_starts(plan.t_first_s, plan.n_periods, f, seg.t0_s, fs)
@@ -196,21 +200,24 @@ def _analyse_step(seg: TimeRecord, plan: StepPlan, cmap: ChannelMap, scales: np.
         s = starts[a : a + per_chunk]
         block = seg.read(names, int(s[0]), int(s[-1]) + des.length)
         off = s - s[0]
-        ph, dc, res = fit_windows(block, off, des, residual_rows=1)
+        ph, dc, res = fit_windows(block, off, des, residual_rows=len(ins))
         assert res is not None
         dcs.append(dc)
         clip.append(_clipped(block, off, des.length, rails, min_run))
         phs.append(ph)
-        resid.append(res[0])
-        amp.append(np.abs(ph[0]))
+        resid.append(res)
+        amp.append(np.abs(ph[: len(ins)]))
     ph = np.concatenate(phs, axis=1)  # (ch, N) local frames
     bad = np.concatenate(clip, axis=1)
     t_mid = seg.t0_s + (starts + 0.5 * (des.length - 1)) / fs
     good = ~bad.any(axis=0)
     if good.sum() >= 3:  # slow drift from the DC of the clean periods (see periodfit)
         ph = remove_drift(ph, np.concatenate(dcs, axis=1)[:, good], t_mid[good], des, t_all=t_mid)
-    res_f = np.concatenate(resid)
-    amp_f = np.concatenate(amp)
+    # the driven input (largest force): its residual says whether the force is a sine
+    amp_all = np.concatenate(amp, axis=1) * np.abs(scales[: len(ins)])[:, None]
+    drv = int(np.argmax(np.median(amp_all, axis=1)))
+    res_f = np.concatenate(resid, axis=1)[drv]
+    amp_f = np.concatenate(amp, axis=1)[drv]
     t_win = seg.t0_s + starts / fs
     w = 2.0 * np.pi * f
     # a force that is not a sine: the fit residual against the fitted amplitude (RMS)
@@ -218,7 +225,7 @@ def _analyse_step(seg: TimeRecord, plan: StepPlan, cmap: ChannelMap, scales: np.
     chk = ok & np.isfinite(res_f)
     dist = float(np.median(res_f[chk] / np.maximum(amp_f[chk] / np.sqrt(2.0), 1e-300))) if chk.any() else 0.0
     if dist > cmap.analysis.max_distortion:
-        raise InputError(seg.path, f"channel {cmap.force.channel!r}",
+        raise InputError(seg.path, f"channel {ins[drv].channel!r}",
                          f"t = {plan.t_first_s:.6f} s (step at {f:.6g} Hz): the force is not a sine (residual "
                          f"{100 * dist:.3g} % of its RMS, limit {100 * cmap.analysis.max_distortion:g} %)")
     if bad.any():
@@ -245,7 +252,7 @@ def _analyse_step(seg: TimeRecord, plan: StepPlan, cmap: ChannelMap, scales: np.
     else:
         mean, var, _ = average_periods(per)
         dof = 2 * (keep.size - 1)
-    return _StepOut(f, per, mean, var, int(keep.size), int(dof))
+    return _StepOut(f, plan.t_ref_s, per, mean, var, int(keep.size), int(dof))
 
 
 def _short(seg: TimeRecord, plan: StepPlan, cmap: ChannelMap, n: int, notes: list[str]) -> None:
@@ -290,7 +297,7 @@ def analyse(records: Sequence[TimeRecord], cmap: ChannelMap, sources: Sequence[t
             seg.column(name)
     shaft_hz, pulses = _speed(segments, cmap, notes)
     plans = plan_steps(segments, cmap, notes)
-    scales = np.array([cmap.force.scale, *(p.scale for p in cmap.probes)])
+    scales = np.array([*(c.scale for c in cmap.inputs), *(p.scale for p in cmap.probes)])
     done: list[_StepOut] = []
     drift = 0.0
     for plan in plans:
@@ -307,11 +314,7 @@ def analyse(records: Sequence[TimeRecord], cmap: ChannelMap, sources: Sequence[t
                 drift = max(drift, p.drift(plan.t_first_s, plan.t_first_s + out.n / out.frequency_hz))
     if not done:
         raise InputError(segments[0].path if segments else None, "steps", "no step with enough periods to analyse")
-    done.sort(key=lambda s: s.frequency_hz)
-    freqs = np.array([s.frequency_hz for s in done])
-    dup = np.flatnonzero(np.diff(freqs) <= 0)
-    if dup.size:
-        raise InputError(segments[0].path, "steps", f"two steps at {freqs[dup[0]]:.6g} Hz (frequencies must differ)")
+    groups = _patterns(done, cmap, segments[0].path)
     fitted = shaft_hz > 0 and cmap.analysis.shaft_orders > 0
     if fitted:
         dof = min(s.dof for s in done)
@@ -321,26 +324,59 @@ def analyse(records: Sequence[TimeRecord], cmap: ChannelMap, sources: Sequence[t
     if pulses[0] is not None:
         notes.append(f"speed {60 * shaft_hz:.6g} rpm from the keyphasor; largest drift within a step "
                      f"{100 * drift:.3g} % (max-min revolution over the median)")
-    return _result(done, freqs, cmap, 60.0 * shaft_hz, notes, segments, sources, keep=not fitted)
+    return _result(groups, cmap, 60.0 * shaft_hz, notes, segments, sources, keep=not fitted)
 
 
-def _result(done: list[_StepOut], freqs: np.ndarray, cmap: ChannelMap, speed_rpm: float, notes: list[str],
+def _patterns(done: list[_StepOut], cmap: ChannelMap, path: str) -> list[list[_StepOut]]:
+    """Steps grouped by frequency (relative 1e-4 or a quarter of ``step_rtol``), each group in time
+    order: one step per frequency with one input; with several inputs the excitation patterns, the
+    same number at every frequency."""
+    done = sorted(done, key=lambda s: s.frequency_hz)
+    tol = min(1e-4, 0.25 * cmap.analysis.step_rtol)
+    groups: list[list[_StepOut]] = [[done[0]]]
+    for s in done[1:]:
+        if s.frequency_hz <= groups[-1][-1].frequency_hz * (1 + tol):
+            groups[-1].append(s)
+        else:
+            groups.append([s])
+    groups = [sorted(g, key=lambda s: s.t_ref_s) for g in groups]
+    n_in = len(cmap.inputs)
+    sizes = [len(g) for g in groups]
+    if n_in == 1 and max(sizes) > 1:
+        f = groups[sizes.index(max(sizes))][0].frequency_hz
+        raise InputError(path, "steps", f"two steps at {f:.6g} Hz (one input: frequencies must differ)")
+    if n_in > 1 and (min(sizes) != max(sizes) or min(sizes) < n_in):
+        k = int(np.argmin(sizes)) if min(sizes) < n_in else next(i for i, z in enumerate(sizes) if z != sizes[0])
+        raise InputError(path, "steps", f"{sizes[k]} excitation pattern(s) at {groups[k][0].frequency_hz:.6g} Hz, "
+                                        f"{max(sizes)} elsewhere: every frequency needs the same number, at least "
+                                        f"{n_in} (one per input)")
+    return groups
+
+
+def _result(groups: list[list[_StepOut]], cmap: ChannelMap, speed_rpm: float, notes: list[str],
             segments: Sequence[TimeRecord], sources: Sequence[tuple[str, str]], keep: bool) -> IngestResult:
-    n = np.array([s.n for s in done], dtype=np.int32)
-    mean = np.stack([s.mean for s in done])
-    var = np.stack([s.var for s in done])
+    n_in = len(cmap.inputs)
+    freqs = np.array([np.mean([s.frequency_hz for s in g]) for g in groups])
+    n = np.array([[s.n for s in g] for g in groups], dtype=np.int32)  # (f, n_exc)
+    mean = np.array([[s.mean for s in g] for g in groups])  # (f, n_exc, n_ch)
+    var = np.array([[s.var for s in g] for g in groups])
     pp = None
     if cmap.analysis.keep_periods and keep:
-        pp = np.full((len(done), int(n.max()), mean.shape[1]), np.nan + 1j * np.nan)
-        for j, s in enumerate(done):
-            pp[j, : s.n] = s.per_period
+        pp = np.full((*n.shape, int(n.max()), mean.shape[2]), np.nan + 1j * np.nan)
+        for j, g in enumerate(groups):
+            for e, s in enumerate(g):
+                pp[j, e, : s.n] = s.per_period
     fs = sorted({seg.fs_hz for seg in segments})
     head = (f"ingested from {len(sources) or len(segments)} file(s), {len(segments)} segment(s), fs "
-            f"{', '.join(f'{v:g}' for v in fs)} Hz; {len(done)} steps")
-    run = Run.from_phasors(cmap.run_id, speed_rpm, freqs, mean[:, :1], mean[:, 1:], var[:, 1:], n,
-                           period_phasor=pp, notes="; ".join([head, *notes]))
-    fc = cmap.force
-    channels = [Channel(fc.channel, "input", fc.station, fc.direction, "force", "N")]
+            f"{', '.join(f'{v:g}' for v in fs)} Hz; {n.size} steps")
+    text = "; ".join([head, *notes])
+    if n_in == 1:
+        run = Run.from_phasors(cmap.run_id, speed_rpm, freqs, mean[:, 0, :1], mean[:, 0, 1:], var[:, 0, 1:],
+                               n[:, 0], period_phasor=None if pp is None else pp[:, 0], notes=text)
+    else:
+        run = Run.from_patterns(cmap.run_id, speed_rpm, freqs, mean[..., :n_in], mean[..., n_in:], var[..., n_in:],
+                                n, input_var=var[..., :n_in], period_phasor=pp, notes=text)
+    channels = [Channel(c.channel, "input", c.station, c.direction, "force", "N") for c in cmap.inputs]
     channels += [Channel(p.channel, "output", p.station, p.direction, "displacement", "m") for p in cmap.probes]
     sweep = Sweep(rig_id=cmap.resolved_rig_id(), source="measured",
                   generator=f"rotorcheck {__version__} ingest ({', '.join(os.path.basename(p) for p, _ in sources)})",
@@ -350,7 +386,7 @@ def _result(done: list[_StepOut], freqs: np.ndarray, cmap: ChannelMap, speed_rpm
         "ingest_channel_map": cmap.to_json(),
         "ingest_settings": json.dumps({**cmap.analysis.model_dump(mode="json"), "method": METHOD}, sort_keys=True),
     }
-    summary = {"run_id": run.run_id, "rig_id": sweep.rig_id, "speed_rpm": speed_rpm, "n_steps": len(done),
+    summary = {"run_id": run.run_id, "rig_id": sweep.rig_id, "speed_rpm": speed_rpm, "n_steps": int(n.size),
                "f_min_hz": float(freqs[0]), "f_max_hz": float(freqs[-1]), "n_periods_min": int(n.min()),
                "n_periods_max": int(n.max()), "notes": notes, "sources": [p for p, _ in sources]}
     return IngestResult(sweep, attrs, summary, notes)

@@ -7,6 +7,7 @@ Example::
     speed_rpm: 1000              # nominal; required when there is no keyphasor (0: not spinning)
     sample_rate_hz: 25600        # only for files that state none (CSV without a time column)
     force:                       # the input: a force (N) or an actuator current (A) times its gain
+                                 # (several inputs driven in patterns: forces: [ {...}, {...} ])
       channel: F
       station: 8
       direction: x
@@ -139,7 +140,8 @@ class ChannelMap(Strict):
     sample_rate_hz: float | None = Field(default=None, gt=0)
     group: str | None = None
     format: Literal["mat", "tdms", "wav", "csv", "parquet", "uff", "hdf5"] | None = None
-    force: ForceChannel
+    force: ForceChannel | None = None
+    forces: list[ForceChannel] | None = Field(default=None, min_length=1)
     probes: list[Probe] = Field(min_length=1)
     keyphasor: Keyphasor | None = None
     steps: list[StepRow] | None = None
@@ -150,11 +152,11 @@ class ChannelMap(Strict):
     def _check(self) -> ChannelMap:
         if self.rig_id is None and self.rig is None:
             raise ValueError("rig_id: required (or rig: the rig file)")
+        if (self.force is None) == (self.forces is None):
+            raise ValueError("force: give force (one input) or forces (several, driven in patterns), not both")
         if self.keyphasor is None and self.speed_rpm is None:
             raise ValueError("speed_rpm: required when there is no keyphasor (0 for a shaft at rest)")
-        names = [self.force.channel, *(p.channel for p in self.probes)]
-        if self.keyphasor is not None:
-            names.append(self.keyphasor.channel)
+        names = self.channel_names()
         dup = sorted({n for n in names if names.count(n) > 1})
         if dup:
             raise ValueError(f"probes: channel(s) {', '.join(dup)} used twice")
@@ -164,9 +166,14 @@ class ChannelMap(Strict):
                     raise ValueError(f"steps: step at {b.frequency_hz:g} Hz starts before the previous one ends")
         return self
 
+    @property
+    def inputs(self) -> list[ForceChannel]:
+        """The force channel(s), in the sweep's input order."""
+        return list(self.forces) if self.forces is not None else [self.force] if self.force is not None else []
+
     def channel_names(self) -> list[str]:
-        """Force, probes, then the keyphasor: the channels the analysis reads."""
-        names = [self.force.channel, *(p.channel for p in self.probes)]
+        """Forces, probes, then the keyphasor: the channels the analysis reads."""
+        names = [*(c.channel for c in self.inputs), *(p.channel for p in self.probes)]
         return names + ([self.keyphasor.channel] if self.keyphasor is not None else [])
 
     def resolved_rig_id(self) -> str:
