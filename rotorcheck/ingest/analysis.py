@@ -114,8 +114,9 @@ def plan_steps(segments: Sequence[TimeRecord], cmap: ChannelMap, notes: list[str
     prev_last: tuple[float, float] | None = None
     for i, seg in enumerate(segments):
         ins = cmap.inputs
-        found = find_steps(force_crossings(seg, [c.channel for c in ins], [c.scale for c in ins]),
-                           cmap.analysis.step_rtol)
+        # each input on its own: its steps are the patterns that drive it (one input at a time)
+        found = sorted((st for c in ins for st in find_steps(force_crossings(seg, c.channel),
+                                                              cmap.analysis.step_rtol)), key=lambda st: st.start_s)
         if not found:
             raise InputError(seg.path, f"channel {ins[0].channel!r}",
                              f"t = {seg.t0_s:.6f}-{seg.t_end_s:.6f} s: no steady sine found in the force "
@@ -158,9 +159,10 @@ def clipped_periods(win: np.ndarray, rails: Sequence[tuple[float, float] | None]
 
 
 def _clipped(block: np.ndarray, off: np.ndarray, length: int, rails: Sequence[tuple[float, float] | None],
-             min_run: int) -> np.ndarray:
+             min_run: int, n_inputs: int) -> np.ndarray:
     """:func:`clipped_periods` of the windows, gathered only for the channels that may clip (rails
-    reached, or the chunk's extreme value repeated ``min_run`` times)."""
+    reached, or the chunk's extreme value repeated ``min_run`` times); a constant input channel (the
+    first ``n_inputs`` rows) is an undriven actuator, a constant probe a saturated one."""
     out = np.zeros((block.shape[0], off.size), dtype=bool)
     idx = off[:, None] + np.arange(length)[None, :]
     for c in range(block.shape[0]):
@@ -168,7 +170,9 @@ def _clipped(block: np.ndarray, off: np.ndarray, length: int, rails: Sequence[tu
         if r is not None:
             suspect = bool(x.min() <= r[0] or x.max() >= r[1])
         else:
-            suspect = int(np.count_nonzero(x == x.max())) >= min_run or int(np.count_nonzero(x == x.min())) >= min_run
+            hi, lo = x.max(), x.min()
+            suspect = (c >= n_inputs if hi == lo else
+                       int(np.count_nonzero(x == hi)) >= min_run or int(np.count_nonzero(x == lo)) >= min_run)
         if suspect:
             out[c] = clipped_periods(x[idx][None], [r], min_run)[0]
     return out
@@ -203,7 +207,7 @@ def _analyse_step(seg: TimeRecord, plan: StepPlan, cmap: ChannelMap, scales: np.
         ph, dc, res = fit_windows(block, off, des, residual_rows=len(ins))
         assert res is not None
         dcs.append(dc)
-        clip.append(_clipped(block, off, des.length, rails, min_run))
+        clip.append(_clipped(block, off, des.length, rails, min_run, len(ins)))
         phs.append(ph)
         resid.append(res)
         amp.append(np.abs(ph[: len(ins)]))

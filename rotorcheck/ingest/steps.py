@@ -9,7 +9,6 @@ times against the cycle count (Hz), its phase reference the first crossing (s).
 
 from __future__ import annotations
 
-from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -33,16 +32,14 @@ class FoundStep:
     n_cycles: int
 
 
-def force_crossings(rec: TimeRecord, channels: Sequence[str], scales: Sequence[float] | None = None,
-                    block: int = 1 << 20) -> np.ndarray:
-    """Rising zero-crossing times (s, absolute) of the force (several inputs driven one at a time:
-    their sum, each times its scale to N), read block by block."""
+def force_crossings(rec: TimeRecord, channel: str, block: int = 1 << 20) -> np.ndarray:
+    """Rising zero-crossing times (s, absolute) of a force channel, read block by block (while the
+    channel is not driven its noise stays inside the hysteresis: no crossings)."""
     out = []
     armed = True
-    w = np.ones(len(channels)) if scales is None else np.asarray(scales, dtype=np.float64)
     for s in range(0, rec.n_samples, block):
         lo = max(0, s - 1)  # one sample overlap: the pair across the block boundary is this block's
-        x = w @ rec.read(list(channels), lo, s + block)
+        x = rec.read([channel], lo, s + block)[0]
         if x.size < 2:
             break
         sub = x[:: max(1, x.size // 65536)]  # level statistics from <= 64 k samples

@@ -16,6 +16,7 @@ installed) and :func:`channel_map_dict` (the matching channel map, with the exac
 
 from __future__ import annotations
 
+import dataclasses
 import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -68,18 +69,20 @@ class RecordSpec:
 
 @dataclass
 class SimulatedRecord:
-    """The record (channels in recorded units), the step table (Hz, s, s), the speed (rpm) and the
-    probes' (station, direction) and the force's."""
+    """The record (channels in recorded units), the step table (Hz, s, s; one row per point, the
+    patterns of a frequency in turn), the speed (rpm), the inputs' and the probes' (station, direction),
+    the periods per frequency and the settling, the force channels' names."""
 
     record: TimeRecord
     steps: list[tuple[float, float, float]]
     speed_rpm: float
-    force_port: tuple[int, str]
+    force_ports: list[tuple[int, str]]
     probe_ports: list[tuple[int, str]]
     spec: RecordSpec
     n_periods: np.ndarray = field(default_factory=lambda: np.empty(0, np.int64))
     settle_periods: int = 16
     settle_s: float = 0.0
+    force_names: list[str] = field(default_factory=list)
 
 
 def _keyphasor(t: np.ndarray, speed_rpm: float, theta0: float, spec: RecordSpec) -> np.ndarray:
@@ -94,60 +97,71 @@ def _keyphasor(t: np.ndarray, speed_rpm: float, theta0: float, spec: RecordSpec)
     return spec.kp_high_v * np.minimum(up, down)
 
 
-def simulate_record(plant: Plant, frequency_hz: Sequence[float] | np.ndarray, settings: StepSettings,
-                    disturbances: Sequence[Tone] = (), rng: np.random.Generator | int | None = 0,
-                    spec: RecordSpec | None = None, speed_rpm: float = 0.0, shaft_angle_rad: float = 0.0,
-                    force_port: tuple[int, str] = (1, "x"),
+def simulate_record(plant: Plant | Sequence[Plant], frequency_hz: Sequence[float] | np.ndarray,
+                    settings: StepSettings, disturbances: Sequence[Tone] = (),
+                    rng: np.random.Generator | int | None = 0, spec: RecordSpec | None = None,
+                    speed_rpm: float = 0.0, shaft_angle_rad: float = 0.0,
+                    force_port: tuple[int, str] | Sequence[tuple[int, str]] = (1, "x"),
                     probe_ports: Sequence[tuple[int, str]] = ((2, "x"),)) -> SimulatedRecord:
     """A stepped-sine recording of ``plant`` on the phasor path's timeline (see the module docstring).
 
-    ``disturbances`` and ``shaft_angle_rad`` as :func:`rotorcheck.sim.rig_sim.at_shaft_angle` turned
-    them (the tones already carry the start angle; it only places the keyphasor pulses). Noise: per
-    sample, ``settings.output_noise_std`` (m) and ``settings.input_noise_std`` (N).
+    Several plants (one per input, as :func:`rotorcheck.sim.simulator.simulate_fast_patterns`): at
+    each frequency the inputs are driven one at a time, each point with its own settling, on the same
+    frequency-major timeline; ``force_port`` then lists the inputs' ports and the force channels are
+    ``<force_name>0``, ``<force_name>1``, ... ``disturbances`` and ``shaft_angle_rad`` as
+    :func:`rotorcheck.sim.rig_sim.at_shaft_angle` turned them (the tones already carry the start angle;
+    it only places the keyphasor pulses). Noise: per sample, ``settings.output_noise_std`` (m) and
+    ``settings.input_noise_std`` (N, on the driven input).
     """
     sp = spec or RecordSpec()
     gen = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
+    plants = [plant] if isinstance(plant, Plant) else list(plant)
+    ports: list[tuple[int, str]] = ([force_port] if isinstance(force_port[0], int)  # type: ignore[list-item]
+                                    else [(int(p[0]), str(p[1])) for p in force_port])  # type: ignore[index]
+    ne = len(plants)
+    if len(ports) != ne:
+        raise ValueError(f"{len(ports)} force ports for {ne} plants (one per input)")
     f = _freqs(frequency_hz)
     n = _n_periods(settings, f.size)
-    t0 = point_start_times(f, settings)
-    settle = settle_counts(f, settings)
-    ends = t0 + (settle + n) / f
-    n_out = plant.n_out
+    f_pts, n_pts = np.repeat(f, ne), np.repeat(n, ne)
+    t0 = point_start_times(f_pts, dataclasses.replace(settings, n_periods=[int(v) for v in n_pts]))
+    ends = t0 + (settle_counts(f_pts, settings) + n_pts) / f_pts
+    n_out = plants[0].n_out
     names = list(sp.probe_names) or [f"probe{k}" for k in range(n_out)]
     if len(names) != n_out:
         raise ValueError(f"{len(names)} probe names for {n_out} outputs")
     n_samp = int(np.ceil((ends[-1] - settings.t_start_s) * sp.fs_hz))
     t = settings.t_start_s + np.arange(n_samp) / sp.fs_hz
-    u = np.zeros(n_samp)
+    u = np.zeros((ne, n_samp))
     y = np.zeros((n_out, n_samp))
     d_freq, d_amp = disturbance_arrays(disturbances, n_out)
-    for j, fj in enumerate(f):
-        a, b = np.searchsorted(t, [t0[j], ends[j]])
-        if j + 1 < f.size:  # dwell after the point: only the disturbances
-            b2 = np.searchsorted(t, t0[j + 1])
-        else:
-            b2 = n_samp
-        force = _force(settings.force_amplitude, fj)
-        tau = t[a:b] - t0[j]
-        u[a:b] = np.real(force * np.exp(2j * np.pi * fj * tau))
-        freqs, amps = local_tones(plant, fj, force, t0[j], d_freq, d_amp)
+    for q, fq in enumerate(f_pts):
+        e = q % ne
+        a, b = np.searchsorted(t, [t0[q], ends[q]])
+        b2 = np.searchsorted(t, t0[q + 1]) if q + 1 < f_pts.size else n_samp  # dwell: disturbances only
+        force = _force(settings.force_amplitude, fq)
+        tau = t[a:b] - t0[q]
+        u[e, a:b] = np.real(force * np.exp(2j * np.pi * fq * tau))
+        freqs, amps = local_tones(plants[e], fq, force, t0[q], d_freq, d_amp)
         y[:, a:b] = np.real(amps.T @ np.exp(2j * np.pi * np.outer(freqs, tau)))
         if b2 > b and d_freq.size:
             y[:, b:b2] = np.real(d_amp.T @ np.exp(2j * np.pi * np.outer(d_freq, t[b:b2])))
-    in_std = float(settings.input_noise_std)
+        if settings.input_noise_std:
+            u[e, a:b] += float(settings.input_noise_std) * gen.standard_normal(b - a)
     out_std = np.broadcast_to(np.asarray(settings.output_noise_std, dtype=np.float64), (n_out,))
-    u = u + in_std * gen.standard_normal(n_samp)
     y = y + out_std[:, None] * gen.standard_normal((n_out, n_samp))
     chans: dict[str, Any] = {}
-    chans[sp.force_name] = u / sp.gain_n_per_a if sp.force_unit == "A" else u
+    force_names = [sp.force_name] if ne == 1 else [f"{sp.force_name}{e}" for e in range(ne)]
+    for e, name in enumerate(force_names):
+        chans[name] = u[e] / sp.gain_n_per_a if sp.force_unit == "A" else u[e]
     for k, name in enumerate(names):
         chans[name] = y[k] * sp.sensitivity_v_per_m + sp.probe_offset_v + sp.probe_drift_v_per_s * t
     if speed_rpm != 0.0:
         chans[sp.kp_name] = _keyphasor(t, speed_rpm, shaft_angle_rad, sp)
     rec = TimeRecord("<simulated>", sp.fs_hz, settings.t_start_s, chans)
-    steps = [(float(fj), float(a), float(b)) for fj, a, b in zip(f, t0, ends)]
-    return SimulatedRecord(rec, steps, speed_rpm, force_port, list(probe_ports), sp, n, settings.settle_periods,
-                           settings.settle_s)
+    steps = [(float(fq), float(a), float(b)) for fq, a, b in zip(f_pts, t0, ends)]
+    return SimulatedRecord(rec, steps, speed_rpm, ports, list(probe_ports), sp, n, settings.settle_periods,
+                           settings.settle_s, force_names)
 
 
 def channel_map_dict(sim: SimulatedRecord, rig_id: str, fmt: str = "hdf5", with_steps: bool = True,
@@ -158,15 +172,17 @@ def channel_map_dict(sim: SimulatedRecord, rig_id: str, fmt: str = "hdf5", with_
     sp = sim.spec
     names = list(sim.record.channels)
     label = (lambda n: str(names.index(n))) if fmt == "wav" else (lambda n: n)
-    force: dict[str, Any] = {"channel": label(sp.force_name), "station": sim.force_port[0],
-                             "direction": sim.force_port[1], "unit": sp.force_unit}
-    if sp.force_unit == "A":
-        force["gain_n_per_a"] = sp.gain_n_per_a
-    probe_names = [n for n in names if n not in (sp.force_name, sp.kp_name)]
+    forces: list[dict[str, Any]] = []
+    for name, port in zip(sim.force_names, sim.force_ports):
+        fc: dict[str, Any] = {"channel": label(name), "station": port[0], "direction": port[1], "unit": sp.force_unit}
+        if sp.force_unit == "A":
+            fc["gain_n_per_a"] = sp.gain_n_per_a
+        forces.append(fc)
+    probe_names = [n for n in names if n not in (*sim.force_names, sp.kp_name)]
     doc: dict[str, Any] = {
         "rig_id": rig_id,
         "run_id": run_id or f"{sim.speed_rpm:g}rpm",
-        "force": force,
+        **({"force": forces[0]} if len(forces) == 1 else {"forces": forces}),
         "probes": [{"channel": label(n), "station": p[0], "direction": p[1], "unit": "V",
                     "sensitivity_v_per_m": sp.sensitivity_v_per_m} for n, p in zip(probe_names, sim.probe_ports)],
     }
