@@ -94,22 +94,26 @@ def plan_steps(segments: Sequence[TimeRecord], cmap: ChannelMap, notes: list[str
         for row in cmap.steps:
             f = row.frequency_hz
             inside = [i for i, s in enumerate(segments) if s.t0_s <= row.start_s < s.t_end_s]
-            later = [s for s in segments if s.t0_s > row.start_s and s.t0_s < row.end_s]
-            if later or not inside:
-                if later:
-                    seg0 = segments[inside[0]] if inside else None
-                    gap_at = seg0.t_end_s if seg0 is not None else row.start_s
-                    raise InputError(later[0].path, f"t = {gap_at:.6f} s",
-                                     f"the step at {f:g} Hz ({row.start_s:g}-{row.end_s:g} s) spans a gap in time "
-                                     f"(next samples at {later[0].t0_s:.6f} s): refusing to analyse across it")
+            later = [i for i, s in enumerate(segments) if row.start_s < s.t0_s < row.end_s]
+            before = [s for s in segments if s.t_end_s <= row.start_s]
+            if later and (inside or before):  # samples stop and resume within the step
+                gap_at = segments[inside[0]].t_end_s if inside else before[-1].t_end_s
+                nxt = segments[later[0]]
+                raise InputError(nxt.path, f"t = {gap_at:.6f} s",
+                                 f"the step at {f:g} Hz ({row.start_s:g}-{row.end_s:g} s) spans a gap in time "
+                                 f"(next samples at {nxt.t0_s:.6f} s): refusing to analyse across it")
+            if not inside and not later:  # the step lies outside the record
                 plans.append(StepPlan(f, row.start_s, row.start_s, 0, -1, row.end_s))
                 continue
-            seg = segments[inside[0]]
+            k = inside[0] if inside else later[0]  # the record may start inside the step
+            seg = segments[k]
             t_first = row.start_s + _settle(cmap, f) / f
+            if t_first < seg.t0_s:  # whole periods of the step's grid inside the record
+                t_first += math.ceil((seg.t0_s - t_first) * f - 1e-9) / f
             n = math.floor((row.end_s - t_first) * f + 1e-6)
             length = math.floor(seg.fs_hz / f + 1e-9)
             n = min(n, _last_full(seg, t_first, f, length))
-            plans.append(StepPlan(f, row.start_s, t_first, max(n, 0), inside[0], row.end_s))
+            plans.append(StepPlan(f, row.start_s, t_first, max(n, 0), k, row.end_s))
         return plans
     prev_last: tuple[float, float] | None = None
     for i, seg in enumerate(segments):
