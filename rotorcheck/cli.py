@@ -641,8 +641,8 @@ def locate(
 
 @app.command()
 def ingest(
-    files: Annotated[list[Path], typer.Argument(help="Time records of one sweep (.mat .tdms .wav .csv .parquet .uff "
-                                                     ".h5), then the sweep file to write (.h5).")],
+    files: Annotated[list[Path], typer.Argument(metavar="RECORD... OUT.h5", help=(
+        "Time records of one sweep (.mat .tdms .wav .csv .parquet .uff .h5), then the sweep file to write."))],
     channel_map: Annotated[Path, typer.Option("--map", help="Channel map YAML (docs/ingest.md).")],
     force: ForceOpt = False,
     as_json: JsonOpt = False,
