@@ -16,9 +16,10 @@ import pytest
 import scipy.stats
 
 from rotorcheck.ingest import ingest_files, parquet_available
+from rotorcheck.sim.simulator import lti_plant, simulate_fast
 from rotorcheck.sim.time_records import record_suffix, write_record
 from rotorcheck.sweep import read_sweep
-from tests.ingest.ingest_helpers import FORCE_N, FREQS, cmap_of, small_record, truth
+from tests.ingest.ingest_helpers import FREQS, cmap_of, frf, settings, small_record, truth
 
 FORMATS = ["mat", "mat73", "tdms", "wav", "csv", "uff", "hdf5",
            pytest.param("parquet", marks=pytest.mark.skipif(not parquet_available(),
@@ -38,10 +39,13 @@ def test_format_round_trip(tmp_path: Path, sim, fmt: str) -> None:
     sweep = read_sweep(out)
     run = sweep.runs["0rpm"]
     assert np.array_equal(run.frequency, FREQS)
-    assert np.array_equal(run.n_periods, sim.n_periods)  # the simulator's periods exactly
+    # the simulator's own phasor path, noiseless: the reference phasors and periods
+    path = simulate_fast(lti_plant(frf, 2), FREQS, settings(32, noise=0.0))
+    np.testing.assert_allclose(path.output_phasor, truth(), rtol=1e-12)  # (it is the plant's FRF x force)
+    assert np.array_equal(run.n_periods, path.n_periods)
     tol = 1e-6 if fmt == "wav" else 1e-9  # WAV stores float32
-    np.testing.assert_allclose(run.input_phasor[:, 0], FORCE_N, rtol=tol)
-    z = np.abs(run.output_phasor - truth()) ** 2 / run.output_var
+    np.testing.assert_allclose(run.input_phasor[:, 0], path.input_phasor[:, 0], rtol=tol)
+    z = np.abs(run.output_phasor - path.output_phasor) ** 2 / run.output_var
     limit = scipy.stats.f.ppf(1 - 1e-3 / z.size, 2, 2 * (sim.n_periods[0] - 1))
     assert np.all(z < limit), z
     # the variance is the noise's: 4 sigma^2 / L per period, / N for the mean (L = floor(fs/f))
