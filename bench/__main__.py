@@ -7,7 +7,7 @@ import sys
 import time
 
 BENCHES = ("bench.bench_fe", "bench.bench_engine", "bench.bench_validation", "bench.bench_crack",
-           "bench.bench_pipeline", "bench.bench_mixed_mu")
+           "bench.bench_pipeline", "bench.bench_mixed_mu", "bench.ingest")
 
 
 def main() -> int:

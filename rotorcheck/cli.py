@@ -580,6 +580,31 @@ def locate(
 
 
 @app.command()
+def ingest(
+    files: Annotated[list[Path], typer.Argument(metavar="RECORD... OUT.h5", help=(
+        "Time records of one sweep (.mat .tdms .wav .csv .parquet .uff .h5), then the sweep file to write."))],
+    channel_map: Annotated[Path, typer.Option("--map", help="Channel map YAML (docs/ingest.md).")],
+    force: ForceOpt = False,
+    as_json: JsonOpt = False,
+) -> int:
+    """Stepped-sine time records (force or current, probes, keyphasor) -> a sweep file (docs/ingest.md)."""
+    from rotorcheck.ingest import ingest_files
+
+    if len(files) < 2:
+        raise InputError(None, "RECORD... OUT.h5", "give at least one time record and the sweep file to write")
+    *records, output = files
+    res = ingest_files(records, channel_map, output, force=force)
+    s = res.summary
+    for note in res.notes:
+        err.print(f"  {escape(note)}")
+    err.print(f"wrote {output}: run {s['run_id']} at {s['speed_rpm']:.6g} rpm, {s['n_steps']} steps "
+              f"{s['f_min_hz']:.6g}-{s['f_max_hz']:.6g} Hz, {s['n_periods_min']}-{s['n_periods_max']} periods")
+    if as_json:
+        _emit_json({"file": str(output), **s})
+    return EXIT_OK
+
+
+@app.command()
 def simulate(
     output: Annotated[Path, typer.Argument(help="Sweep file to write (HDF5).")],
     rig: Annotated[Path | None, typer.Option("--rig", help="Truth rig (default configs/crack_rig_truth.yaml).")] = None,

@@ -23,6 +23,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("rotorcheck.fe", "rotorcheck.signal", "rotorcheck.robust"),  # numerics: FE, signal processing, robust
     ("rotorcheck.ross_import",),  # a ROSS rotor file as a rig document (its shear coefficient from fe)
     ("rotorcheck.faults", "rotorcheck.sweep"),
+    ("rotorcheck.ingest",),  # time records in (issue 33): writes sweeps, below the simulators
     ("rotorcheck.sim",),  # simulators: above fe, faults and sweep
     ("rotorcheck.nominal",),
     ("rotorcheck.signatures",),  # crack and benign change shapes by re-solving the model

@@ -187,6 +187,8 @@ def shaft_harmonic_fit(
     shaft_hz: float,
     orders: int = 4,
     rtol: float = 1e-6,
+    shaft_angle_rad: np.ndarray | None = None,
+    window_phase_rad: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, int]:
     r"""Mean phasor with the shaft-speed harmonics removed, the variance of that mean and its dof.
 
@@ -211,6 +213,14 @@ def shaft_harmonic_fit(
     variance estimate (``|mean - X|^2 / var ~ F(2, dof)``). With ``orders = 0``, ``shaft_hz = 0``
     or too few periods (``N < q + 3`` after dropping) the plain mean is returned with ``dof =
     2 (N - 1)`` (:func:`average_periods`).
+
+    Measured shaft angle (a keyphasor; periods not on one uniform grid): ``shaft_angle_rad`` (N,)
+    the shaft angle at each period's start replaces ``2 pi shaft_hz p / f`` (so ``z_k^p`` becomes
+    ``exp(j k theta_p)``: a drifting speed or dropped periods are followed exactly). When the periods'
+    analysis windows start off the excitation's period grid by ``tau_p`` (a sample clock not locked
+    to ``f``), ``window_phase_rad`` (N,) ``= 2 pi f tau_p`` adds the columns ``exp(+-j k theta_p -
+    j 2 pi f tau_p)``: a synchronous tone at ``k * shaft_hz`` leaks with that factor, a sideband
+    ``f + k * shaft_hz`` without it (both coincide when ``tau_p`` is constant, and are then merged).
     """
     x = np.asarray(per_period, dtype=np.complex128)
     n = x.shape[0]
@@ -221,21 +231,34 @@ def shaft_harmonic_fit(
     p = np.arange(n)
     cols = [np.ones(n, dtype=np.complex128)]
     for k in range(1, orders + 1):
-        z = np.exp(2j * np.pi * k * shaft_hz / f_exc_hz)
-        cols += [z**p, np.conj(z) ** p]
-    # greedy Gram-Schmidt: keep a column only if it adds a direction (relative to its own norm)
+        if shaft_angle_rad is None:
+            zp = np.exp(2j * np.pi * k * shaft_hz / f_exc_hz) ** p
+        else:
+            zp = np.exp(1j * k * np.asarray(shaft_angle_rad, dtype=np.float64))
+        cols += [zp, np.conj(zp)]
+    if window_phase_rad is not None:
+        shift = np.exp(-1j * np.asarray(window_phase_rad, dtype=np.float64))
+        cols += [c * shift for c in cols[1:]]
+    # greedy Gram-Schmidt: keep a column only if it adds a direction (relative to its own norm); the
+    # diagonal of R (A = QR, columns in order) is each column's norm orthogonal to the ones before it
+    all_cols = np.stack(cols, axis=1)
+    r_diag = np.abs(np.diagonal(np.linalg.qr(all_cols, mode="r"))) if all_cols.shape[1] <= n else None
     kept: list[np.ndarray] = []
-    basis: list[np.ndarray] = []
-    for c in cols:
-        r = c.copy()
-        for q_ in basis:
-            r -= (q_.conj() @ r) * q_
-        nr = float(np.linalg.norm(r))
-        if nr > rtol * np.linalg.norm(c):
-            kept.append(c)
-            basis.append(r / nr)
-        if len(kept) >= n - 3:
-            break
+    if r_diag is not None:
+        norms = np.sqrt(np.sum(np.abs(all_cols) ** 2, axis=0))
+        kept = [c for c, ok in zip(cols, r_diag > rtol * norms) if ok][: max(n - 3, 1)]
+    else:  # more columns than periods: one by one
+        basis: list[np.ndarray] = []
+        for c in cols:
+            r = c.copy()
+            for q_ in basis:
+                r -= (q_.conj() @ r) * q_
+            nr = float(np.sqrt(np.vdot(r, r).real))
+            if nr > rtol * float(np.sqrt(np.vdot(c, c).real)):
+                kept.append(c)
+                basis.append(r / nr)
+            if len(kept) >= n - 3:
+                break
     q = len(kept)
     if q == 1 or n < q + 3:
         mean, var, _ = average_periods(x)

@@ -54,6 +54,8 @@ __all__ = [
     "SteppedSineResult",
     "TimeRecord",
     "Tone",
+    "disturbance_arrays",
+    "local_tones",
     "lti_plant",
     "matrix_plant",
     "point_start_times",
@@ -413,7 +415,7 @@ def simulate_fast(
         st.output_noise_std, st.output_phasor_noise_std, m, plant.n_out, "output noise"
     )
     var_in = _phasor_noise_var(st.input_noise_std, st.input_phasor_noise_std, m, 1, "input noise")
-    d_freq, d_amp = _disturbance_arrays(disturbances, plant.n_out)
+    d_freq, d_amp = disturbance_arrays(disturbances, plant.n_out)
     per_in: list[np.ndarray] = []
     per_out: list[np.ndarray] = []
     for j, fj in enumerate(f):
@@ -424,7 +426,8 @@ def simulate_fast(
     return _assemble(f, t0, n, per_in, per_out, st.keep_periods)
 
 
-def _disturbance_arrays(disturbances: Sequence[Tone], n_out: int) -> tuple[np.ndarray, np.ndarray]:
+def disturbance_arrays(disturbances: Sequence[Tone], n_out: int) -> tuple[np.ndarray, np.ndarray]:
+    """Disturbance tone frequencies (Hz) and amplitudes (tones, n_out) m as arrays."""
     d_freq = np.array([d.freq_hz for d in disturbances], dtype=np.float64)
     d_amp = (
         np.array([np.asarray(d.amplitude, complex).reshape(n_out) for d in disturbances])
@@ -432,6 +435,21 @@ def _disturbance_arrays(disturbances: Sequence[Tone], n_out: int) -> tuple[np.nd
         else np.zeros((0, n_out), complex)
     )
     return d_freq, d_amp
+
+
+def local_tones(plant: Plant, fj: float, force: complex, t0j: float, d_freq: np.ndarray,
+                d_amp: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The output tones of point ``j`` in its local time ``tau = t - t0j``: frequencies (Hz) and
+    amplitudes (tones, n_out) m, the plant's tones scaled by ``force`` then the disturbance tones
+    (``d_freq``, ``d_amp`` as :func:`disturbance_arrays` gives them)."""
+    w = 2.0 * np.pi * fj
+    tf, ta = plant.tones(fj)
+    tf = np.asarray(tf, dtype=np.float64).reshape(-1)
+    ta = np.asarray(ta, dtype=np.complex128).reshape(tf.size, plant.n_out)
+    # absolute-time amplitudes -> local frame tau = t - t0 (see module docstring)
+    amp_plant = force * ta * np.exp(1j * (2.0 * np.pi * tf - w) * t0j)[:, None]
+    amp_dist = d_amp * np.exp(1j * 2.0 * np.pi * d_freq * t0j)[:, None]
+    return np.concatenate([tf, d_freq]), np.concatenate([amp_plant, amp_dist], axis=0)
 
 
 def _point(
@@ -450,15 +468,7 @@ def _point(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Per-period input (n_j, 1) and output (n_j, n_out) phasors of one point: the plant's tones
     scaled by ``force``, the disturbance tones, then input noise and output noise drawn in that order."""
-    w = 2.0 * np.pi * fj
-    tf, ta = plant.tones(fj)
-    tf = np.asarray(tf, dtype=np.float64).reshape(-1)
-    ta = np.asarray(ta, dtype=np.complex128).reshape(tf.size, plant.n_out)
-    # absolute-time amplitudes -> local frame tau = t - t0 (see module docstring)
-    amp_plant = force * ta * np.exp(1j * (2.0 * np.pi * tf - w) * t0j)[:, None]
-    amp_dist = d_amp * np.exp(1j * 2.0 * np.pi * d_freq * t0j)[:, None]
-    freqs = np.concatenate([tf, d_freq])
-    amps = np.concatenate([amp_plant, amp_dist], axis=0)
+    freqs, amps = local_tones(plant, fj, force, t0j, d_freq, d_amp)
     tau0 = settle_j / fj
     out = tone_lockin(freqs, amps, fj, tau0, n_j, m)
     inp = np.full((n_j, 1), force, dtype=np.complex128)
@@ -560,7 +570,7 @@ def simulate_fast_patterns(
     m = st.samples_per_period
     var_out = _phasor_noise_var(st.output_noise_std, st.output_phasor_noise_std, m, n_out, "output noise")
     var_in = _phasor_noise_var(st.input_noise_std, st.input_phasor_noise_std, m, 1, "input noise")
-    d_freq, d_amp = _disturbance_arrays(disturbances, n_out)
+    d_freq, d_amp = disturbance_arrays(disturbances, n_out)
     nf = f.size
     p_max = int(n.max())
     mi = np.zeros((nf, ne, n_in), complex)

@@ -23,6 +23,7 @@ xarray read as complex. The reader ignores the labels.
 from __future__ import annotations
 
 import os
+from collections.abc import Mapping
 from typing import Any
 
 import h5py
@@ -411,8 +412,12 @@ def _label_for_netcdf(h5: h5py.File, version: int) -> None:
                 ds.attrs["units"] = DATASET_UNITS[name]
 
 
-def write_sweep(sweep: Sweep, path: str | os.PathLike[str], force: bool = False) -> None:
+def write_sweep(sweep: Sweep, path: str | os.PathLike[str], force: bool = False,
+                extra_attrs: Mapping[str, str] | None = None) -> None:
     """Validate and write ``sweep`` atomically (temp file in the same folder, fsync, rename).
+
+    ``extra_attrs``: more root attributes (text, e.g. an importer's provenance as JSON); they may not
+    replace the contract's own.
 
     Deterministic: the content depends only on ``sweep`` (``created_utc`` comes from the caller),
     no object timestamps are stored, so two writes of the same sweep are byte-identical.
@@ -432,6 +437,10 @@ def write_sweep(sweep: Sweep, path: str | os.PathLike[str], force: bool = False)
             h5.attrs["phasor_convention"] = PHASOR_CONVENTION
             h5.attrs["source"] = sweep.source
             h5.attrs["generator"] = sweep.generator
+            for key, value in (extra_attrs or {}).items():
+                if key in h5.attrs:
+                    raise ValueError(f"extra attribute {key!r} would replace the contract's own")
+                h5.attrs[key] = value
             ch = _new_group(h5, "channels")
             for fld in CHANNEL_FIELDS:
                 vals = [getattr(c, fld) for c in sweep.channels]
