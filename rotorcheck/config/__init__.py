@@ -18,11 +18,18 @@ Unknown keys are rejected. Errors name the file and the field by path, e.g.
 
 from rotorcheck.config.analysis import Analysis, Measurement
 from rotorcheck.config.base import ConfigError, Strict
-from rotorcheck.config.benign import BENIGN_FORMS, BENIGN_PARAMETERS, BENIGN_PATH_ROOTS, BenignName, BenignRange
+from rotorcheck.config.benign import (
+    BENIGN_FORMS,
+    BENIGN_KIND,
+    BENIGN_PARAMETERS,
+    BENIGN_PATH_ROOTS,
+    BenignName,
+    BenignRange,
+)
 from rotorcheck.config.damping import DampingModel, ModalDamping, NoDamping, RayleighDamping
 from rotorcheck.config.errors import field_path, first_error
 from rotorcheck.config.faults import Crack, Fault, Misalignment, SpringChange, UnbalanceMass
-from rotorcheck.config.loading import MAX_RIG_BYTES, json_schema, load_config, parse_config
+from rotorcheck.config.loading import MAX_RIG_BYTES, StrictLoader, json_schema, load_config, parse_config
 from rotorcheck.config.lumped import LumpedMass, LumpedSpring
 from rotorcheck.config.ports import DamagePort, Port, Ports, Uncertainty
 from rotorcheck.config.quantities import (
@@ -49,6 +56,7 @@ from rotorcheck.config.supports import BEARING_TERMS, Bearing, SpeedTable, Stati
 __all__ = [
     "BEARING_TERMS",
     "BENIGN_FORMS",
+    "BENIGN_KIND",
     "BENIGN_PARAMETERS",
     "BENIGN_PATH_ROOTS",
     "MAX_RIG_BYTES",
@@ -95,6 +103,7 @@ __all__ = [
     "StationSpring",
     "Stiffness",
     "Strict",
+    "StrictLoader",
     "TaperedSection",
     "Unbalance",
     "UnbalanceMass",

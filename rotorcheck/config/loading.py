@@ -39,7 +39,7 @@ def parse_config(data: Any, source: str | Path = "<config>") -> RigConfig:
 MAX_RIG_BYTES = 2_000_000
 
 
-class _StrictLoader(yaml.SafeLoader):
+class StrictLoader(yaml.SafeLoader):
     """Safe YAML with two YAML 1.1 surprises refused: a key given twice in one mapping (the later one
     silently won) and an integer with a leading zero (``010`` was read as octal 8)."""
 
@@ -62,7 +62,7 @@ class _StrictLoader(yaml.SafeLoader):
         return int(super().construct_yaml_int(node))
 
 
-_StrictLoader.add_constructor("tag:yaml.org,2002:int", _StrictLoader.construct_yaml_int)
+StrictLoader.add_constructor("tag:yaml.org,2002:int", StrictLoader.construct_yaml_int)
 
 
 def _non_finite(data: Any, path: str = "") -> str | None:
@@ -89,7 +89,7 @@ def load_config(path: str | Path) -> RigConfig:
     p = Path(path)
     text = read_bounded_text(p, MAX_RIG_BYTES, "rig file", ConfigError)
     try:
-        data = yaml.load(text, Loader=_StrictLoader)  # a SafeLoader subclass
+        data = yaml.load(text, Loader=StrictLoader)  # a SafeLoader subclass
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f"line {mark.line + 1}, column {mark.column + 1}: " if mark else ""

@@ -34,7 +34,7 @@ from typing import Any, ClassVar, Literal
 import yaml
 from pydantic import Field, ValidationError, model_validator
 
-from rotorcheck.config import MAX_RIG_BYTES, Strict, _first_error, _StrictLoader, load_config
+from rotorcheck.config import MAX_RIG_BYTES, Strict, StrictLoader, first_error, load_config
 from rotorcheck.errors import InputError
 from rotorcheck.fileio import read_bounded_text
 
@@ -198,7 +198,7 @@ def parse_channel_map(data: Any, source: str | os.PathLike[str] = "<map>") -> Ch
     try:
         cmap = ChannelMap.model_validate({**data, "source_path": os.fspath(source)})
     except ValidationError as exc:
-        field, msg = _first_error(exc)
+        field, msg = first_error(exc)
         raise InputError(os.fspath(source), field, msg) from None
     return cmap
 
@@ -210,7 +210,7 @@ def load_channel_map(path: str | os.PathLike[str]) -> ChannelMap:
         raise InputError(p, "", "no such channel map")
     text = read_bounded_text(p, MAX_RIG_BYTES, "channel map", InputError)
     try:
-        data = yaml.load(text, Loader=_StrictLoader)
+        data = yaml.load(text, Loader=StrictLoader)
     except yaml.YAMLError as exc:
         raise InputError(p, "", f"malformed YAML: {exc}") from None
     return parse_channel_map(data, p)
