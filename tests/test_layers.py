@@ -27,6 +27,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("rotorcheck.sim",),  # simulators: above fe, faults and sweep
     ("rotorcheck.nominal",),
     ("rotorcheck.signatures",),  # crack and benign change shapes by re-solving the model
+    ("rotorcheck.rig",),  # a rig's assembled model at one speed as one object
     ("rotorcheck.updating",),  # model updating on the benign parameters
     ("rotorcheck.location",),  # candidate elements with certified severity intervals
     ("rotorcheck.detectability",),  # what a rig, its sensors and noise can detect, per element
