@@ -506,7 +506,8 @@ def _print_outcome(outcome: Any, report: dict[str, Any], prefix: str = "") -> No
     err.print(f"{report['n_fault_points']} of {report['n_points']} points are fault points"
               + (f" (sweep p-value {report['p_value']:.3g}, {report['confidence']:.0%} family-wise)"
                  if "p_value" in report else ""))
-    for line in (workflow.joint_summary(outcome), workflow.anchored_summary(outcome)):
+    damage = v.verdict == "damage"  # a healthy verdict shows no finding: no element, no damage estimate
+    for line in (workflow.joint_summary(outcome), workflow.anchored_summary(outcome) if damage else ""):
         if line:
             err.print(line)
     if outcome.location is not None:

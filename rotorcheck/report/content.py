@@ -24,7 +24,10 @@ def damage_columns(report: dict[str, Any]) -> tuple[np.ndarray, np.ndarray, np.n
 
 def headline_damage(report: dict[str, Any]) -> list[str]:
     """The headline damage figure: the anchored D_u (the estimate free of the nominal model's error) over
-    the fault points (or the band) with its bound; the nominal-E22 one only where no anchored one exists."""
+    the fault points (or the band) with its bound; the nominal-E22 one only where no anchored one exists. A
+    verdict other than damage has no finding to headline (the numbers stay in report.json)."""
+    if report.get("verdict") != "damage":
+        return []
     fault = np.asarray(report["fault"], dtype=bool)
     sel = fault if np.any(fault) else np.ones_like(fault)
     where = f"median over the {int(np.sum(sel))} fault points" if np.any(fault) else "median over the band"

@@ -155,7 +155,7 @@ def _key_numbers(report: dict[str, Any]) -> list[tuple[str, str]]:
         rows.append(("joint statistic T", f"{_num(report['joint_statistic'])} against threshold "
                                           f"{_num(report['joint_threshold'])} (p = {p}, "
                                           f"false alarm {report['false_alarm']:g} per sweep)"))
-    if report.get("best_element") is not None:
+    if report.get("best_element") is not None and report.get("verdict") == "damage":  # healthy: no finding
         lo, hi = report["stiffness_loss_interval"]
         loss = 100 * report["stiffness_loss"]
         rows.append(("best candidate element", f"element {report['best_element']}: stiffness loss "

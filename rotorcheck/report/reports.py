@@ -115,7 +115,12 @@ def render_markdown(report: dict[str, Any], plots: list[str]) -> str:
                      f"{_ranges(list(f[status == s]), step)}")
     if bad:
         lines.append("")
-    lines += _what_changed(report, f, fault, d)
+    if report["verdict"] == "damage":
+        lines += _what_changed(report, f, fault, d)
+    else:  # a healthy (or undecided) verdict shows no finding
+        lines += ["## What changed", "", "No finding: the verdict does not support a damage. The damage dynamics "
+                  "estimated anyway stay in report.json (damage_dynamics_*), as estimates of a change that is not "
+                  "there.", ""]
     for n in report.get("notes", []):
         lines.append(f"- note: {n}")
     if plots:
@@ -141,7 +146,7 @@ def _joint_section(report: dict[str, Any]) -> list[str]:
              f"{report['false_alarm']:g} (p = {report['joint_p_value']:.3g}); model-error fraction kappa = "
              f"{report['benign_model_error']:g}; {report['learned_benign_directions']} benign directions learned "
              "from healthy sweeps.", ""]
-    if report.get("best_element") is not None:
+    if report.get("best_element") is not None and report.get("verdict") == "damage":  # healthy: no finding
         lo, hi = report["stiffness_loss_interval"]
         lines += [f"Best candidate: element {report['best_element']}, stiffness loss "
                   f"{100 * report['stiffness_loss']:.3g} % [{100 * lo:.3g}, {100 * hi:.3g}] (95 %, linearized).", ""]
