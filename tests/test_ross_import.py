@@ -470,3 +470,33 @@ def test_natural_frequencies_match_ross(reference: dict[str, Any], key: str, nam
     ours = 2 * np.pi * m.frequency_hz
     assert ours.size == wd.size == 8
     assert np.abs(ours / wd - 1).max() <= tol
+
+
+# --------------------------------------------------------------------------------------------
+# 6. issue 32: the model of ROSS's tests/data/rotor.toml (saved again by ROSS 2.3.0 as compressor.toml)
+
+
+def test_compressor_model_critical_speed_search_does_not_raise(compressor: RossImport, reference: dict[str, Any]
+                                                                ) -> None:
+    """``rotorcheck model`` on ROSS's rotor.toml raised "f(a) and f(b) must have different signs": at
+    1000-1250 rpm a branch of the 41-speed grid changes sides of the 1X and 2X lines but the mode of
+    best MAC at the interval's ends does not (branches swap). Now: no exception, the interval is
+    reported, the modes come back (against ROSS 2.3.0), and every critical speed found is one by its
+    definition (a forward mode at that speed with f = order x speed, from modes() afresh)."""
+    from rotorcheck.fe.assembly import build_system
+    from rotorcheck.fe.modal import campbell, model_summary, modes
+
+    config = parse_config(compressor.rig)
+    system = build_system(config)
+    speeds = np.linspace(0.0, config.analysis.campbell_max_rpm, 41)
+    for order in (1, 2):
+        camp = campbell(system, speeds, config.analysis.n_modes, order=order)
+        assert any("between 1000 and 1250 rpm" in n and "no critical speed reported" in n for n in camp.notes)
+        for rpm in camp.critical_speeds_rpm:
+            md = modes(system, rpm, max_hz=1.5 * order * rpm / 60.0)
+            fwd = md.frequency_hz[np.asarray(md.whirl) == "forward"]
+            assert np.min(np.abs(fwd / (order * rpm / 60.0) - 1.0)) < 1e-6
+    summary = model_summary(config, 6000.0, system)
+    wd = 2 * np.pi * np.array([m["frequency_hz"] for m in summary["modes"]])
+    assert np.abs(wd / np.asarray(reference["compressor_6000rpm"]["wd"][: wd.size]) - 1).max() <= 1e-8
+    assert all(isinstance(w, str) for w in summary["warnings"])

@@ -47,9 +47,13 @@ from rotorcheck.lazy import lazy_module
 if TYPE_CHECKING:
     import scipy.linalg as sla
     import scipy.optimize as sopt
+    import scipy.sparse as sp
+    import scipy.sparse.linalg as spla
 else:  # loaded at first use: importing the FE package stays cheap
     sla = lazy_module("scipy.linalg")
     sopt = lazy_module("scipy.optimize")
+    sp = lazy_module("scipy.sparse")
+    spla = lazy_module("scipy.sparse.linalg")
 
 TWO_PI = 2.0 * np.pi
 PLANAR_TOL = 1e-3
@@ -198,10 +202,64 @@ def _reduced_matrices(system: MechanicalSystem, speed_rpm: float, band_hz: float
     return hit[1]
 
 
+#: eigenvalues within this relative distance are refined together (one subspace)
+_CLUSTER_TOL = 1e-4
+#: inverse-iteration steps of :func:`_refine` (each gains about ``|lambda - sigma| / gap``)
+_REFINE_STEPS = 3
+
+
+def _refine(M: np.ndarray, D: np.ndarray, K: np.ndarray, lam: np.ndarray, vec: np.ndarray) -> tuple[np.ndarray, ...]:
+    """Eigenpairs ``(lam, shapes (n, p))`` of ``T(l) = l^2 M + l D + K`` refined on the full matrices.
+
+    A state-matrix eigensolution carries round-off of order ``eps ||A||`` (``||A|| ~ w_max^2``: 1e-9
+    relative and worse at the low modes of a fine mesh), a Ritz basis its truncation (1e-6 on an
+    anisotropic 340-DOF rotor). Each cluster of eigenvalues (relative spacing below
+    :data:`_CLUSTER_TOL`: a degenerate or split pair) is refined as one subspace: ``_REFINE_STEPS``
+    steps of inverse iteration, right ``Q <- T(s)^-1 T'(s) Q`` and left ``P <- T(s)^-H T'(s)^H P``, at
+    the cluster's mean ``s``, then the two-sided projection ``P^H T(l) Q c = 0`` (its eigenvalues
+    nearest ``s``), whose error is the product of the right and left subspaces' errors.
+    """
+    n = M.shape[0]
+    out_lam, out_vec = lam.astype(complex), np.array(vec[:n], dtype=complex)
+    sparse = n > N_FULL
+    if sparse:
+        Ms, Ds, Ks = (sp.csc_matrix(A) for A in (M, D, K))
+    i = 0
+    while i < lam.size:
+        j = i + 1
+        while j < lam.size and abs(lam[j] - lam[j - 1]) <= _CLUSTER_TOL * abs(lam[j - 1]):
+            j += 1
+        s = complex(np.mean(lam[i:j]))
+        Tp = 2.0 * s * M + D
+        if sparse:
+            lu = spla.splu((s * s * Ms + s * Ds + Ks).astype(complex).tocsc())
+            solve = lambda b, h=False, lu=lu: lu.solve(b, trans="H" if h else "N")  # noqa: E731
+        else:
+            fac = sla.lu_factor(s * s * M + s * D + K)
+            solve = lambda b, h=False, fac=fac: sla.lu_solve(fac, b, trans=2 if h else 0)  # noqa: E731
+        Q = out_vec[:, i:j]
+        P = Q.conj()
+        for _ in range(_REFINE_STEPS):
+            Q = np.linalg.qr(solve(Tp @ Q))[0]
+            P = np.linalg.qr(solve(Tp.conj().T @ P, True))[0]
+        Ph = P.conj().T
+        m, d, k = Ph @ M @ Q, Ph @ D @ Q, Ph @ K @ Q
+        z = np.zeros_like(m)
+        eye = np.eye(m.shape[0])
+        mu, c = sla.eig(np.block([[z, eye], [-k, -d]]), np.block([[eye, z], [z, m]]))
+        near = np.argsort(np.abs(mu - s))[: j - i]
+        near = near[np.argsort(mu[near].imag, kind="stable")]
+        out_lam[i:j] = mu[near]
+        out_vec[:, i:j] = Q @ c[: m.shape[0], near]
+        i = j
+    return out_lam, out_vec
+
+
 def _state_modes(
     system: MechanicalSystem, speed_rpm: float, n_modes: int | None, max_hz: float | None
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Eigenvalues (p,) and state-space eigenvectors (2n, p) with Im(lambda) > 0, ascending."""
+    """Eigenvalues (p,) and displacement eigenvectors (n, p) with Im(lambda) > 0, ascending, refined on the
+    full matrices (:func:`_refine`); the lowest ``n_modes`` only when given without ``max_hz``."""
     n = system.n_dof
     omega = speed_rpm * RPM_TO_RAD_S
     band = None
@@ -221,6 +279,13 @@ def _state_modes(
     scale = max(np.abs(lam).max(), 1.0) if lam.size else 1.0
     keep = lam.imag > 1e-9 * scale
     lam, vec = lam[keep], vec[:, keep]
+    order = np.argsort(lam.imag, kind="stable")
+    lam, vec = lam[order], vec[:, order]
+    if n_modes is not None and max_hz is None:
+        lam, vec = lam[:n_modes], vec[:, :n_modes]
+    M, C, G, K = system.matrices(speed_rpm)
+    with one_blas_thread():
+        lam, vec = _refine(M, C + omega * G, K, lam, vec)
     order = np.argsort(lam.imag, kind="stable")
     return lam[order], vec[:, order]
 
@@ -284,6 +349,7 @@ class CampbellResult:
     critical_speeds_rpm: tuple[float, ...] = ()
     critical_branch: tuple[int, ...] = ()
     order: int = 1
+    notes: tuple[str, ...] = ()  # what the critical speed search could not settle (see _branch_crossings)
 
     @property
     def whirl(self) -> np.ndarray:
@@ -387,9 +453,10 @@ def campbell(
     f = lam.imag / TWO_PI
     zeta = -lam.real / np.abs(lam)
     crit: list[tuple[float, int]] = []
+    notes: list[str] = []
     if criticals and system.kind == "rotor":
         for j, b in enumerate(sel):
-            for rpm in _branch_crossings(system, speeds, f[:, b], ratio[:, b], refs, b, order, window):
+            for rpm in _branch_crossings(system, speeds, f[:, b], ratio[:, b], refs, b, order, window, notes):
                 # a mode damped beyond 1/sqrt(2) has no resonance peak: its crossing is no critical speed
                 if np.interp(rpm, speeds, zeta[:, b]) < NO_PEAK_DAMPING:
                     crit.append((rpm, j))
@@ -403,7 +470,13 @@ def campbell(
         critical_speeds_rpm=tuple(c[0] for c in crit),
         critical_branch=tuple(c[1] for c in crit),
         order=order,
+        notes=tuple(notes),
     )
+
+
+#: a grid interval whose ends do not bracket the crossing once the branch is followed by MAC is scanned
+#: at this many sub-intervals for a sign change before the crossing is reported as not found
+_SCAN_STEPS = 8
 
 
 def _branch_crossings(
@@ -415,35 +488,68 @@ def _branch_crossings(
     b: int,
     order: int,
     window: float | None = None,
+    notes: list[str] | None = None,
 ) -> list[float]:
     """Root-found speeds (rpm) where forward branch ``b`` crosses ``order`` x running speed
-    (``window``: the modes searched at each trial speed, None for all)."""
+    (``window``: the modes searched at each trial speed, None for all).
+
+    At a trial speed the branch is the mode of largest MAC with the shape at the previous speed. A
+    sign change on the Campbell grid whose ends do not bracket a root when the branch is followed
+    that way (the optimal assignment of the whole grid and the best MAC of one mode can differ where
+    branches swap) is scanned at :data:`_SCAN_STEPS` sub-intervals, following the mode from step to
+    step; without a sign change there the crossing is not reported and ``notes`` gets a sentence.
+    """
     g = f - order * speeds / 60.0
     out = []
+
+    def follow(rpm: float, ref: np.ndarray) -> tuple[float, np.ndarray]:
+        md = modes(system, rpm, max_hz=window)
+        j = int(np.argmax(mac(ref, md.shapes)[0]))
+        return float(md.frequency_hz[j] - order * rpm / 60.0), md.shapes[:, j : j + 1]
+
     for k in np.nonzero(np.sign(g[:-1]) * np.sign(g[1:]) <= 0)[0]:
         if not (ratio[k] > PLANAR_TOL or ratio[k + 1] > PLANAR_TOL):
             continue
         if g[k] == 0.0:
             out.append(float(speeds[k]))
             continue
-        ref = refs[k][:, b : b + 1]
+        lo, hi, ref = float(speeds[k]), float(speeds[k + 1]), refs[k][:, b : b + 1]
+        g_lo, _ = follow(lo, ref)
+        g_hi, _ = follow(hi, ref)
+        if np.sign(g_lo) * np.sign(g_hi) > 0:  # scan: follow the mode step by step
+            bracket = None
+            x_prev, g_prev, ref_prev = lo, g_lo, ref
+            for x in np.linspace(lo, hi, _SCAN_STEPS + 1)[1:]:
+                g_x, shape = follow(float(x), ref_prev)
+                if np.sign(g_prev) * np.sign(g_x) <= 0:
+                    bracket = (x_prev, float(x), ref_prev)
+                    break
+                x_prev, g_prev, ref_prev = float(x), g_x, shape
+            if bracket is None:
+                if notes is not None:
+                    notes.append(
+                        f"order-{order} critical speed search: a forward branch ({f[k]:.4g} Hz at {lo:g} rpm) "
+                        f"changes sides of the {order}X line between {lo:g} and {hi:g} rpm on the Campbell grid, "
+                        f"but not when its mode is followed at {_SCAN_STEPS} finer speeds (branches swap there): "
+                        "no critical speed reported in that interval")
+                continue
+            lo, hi, ref = bracket
 
         def h(rpm: float, ref: np.ndarray = ref) -> float:
-            md = modes(system, rpm, max_hz=window)
-            j = int(np.argmax(mac(ref, md.shapes)[0]))
-            return float(md.frequency_hz[j] - order * rpm / 60.0)
+            return follow(rpm, ref)[0]
 
-        out.append(float(sopt.brentq(h, speeds[k], speeds[k + 1], xtol=1e-6, rtol=1e-12)))
+        out.append(float(sopt.brentq(h, lo, hi, xtol=1e-6, rtol=1e-12)))
     return out
 
 
 def critical_speeds(
-    system: MechanicalSystem, max_rpm: float, order: int = 1, n_grid: int = 41
+    system: MechanicalSystem, max_rpm: float, order: int = 1, n_grid: int = 41, notes: list[str] | None = None
 ) -> list[float]:
     """Forward critical speeds (rpm) up to ``max_rpm``: forward branches crossing order x speed.
 
     Branches are tracked on a grid of ``n_grid`` speeds; every sign change of
-    ``f(rpm) - order rpm / 60`` on a forward branch is root-found with Brent's method.
+    ``f(rpm) - order rpm / 60`` on a forward branch is root-found with Brent's method (a sign change
+    that following the mode does not confirm is left out, with a sentence in ``notes``).
     """
     if system.kind != "rotor":
         return []
@@ -452,6 +558,8 @@ def critical_speeds(
     if system.n_dof > N_FULL:  # a forward branch crossing order x speed starts below that line
         band = max(1.1 * order * float(max_rpm) / 60.0, _band_hz(system, 0.0, 2, None))
     camp = campbell(system, speeds, n_modes=system.n_dof, order=order, max_hz=band)
+    if notes is not None:
+        notes.extend(camp.notes)
     return sorted(camp.critical_speeds_rpm)
 
 
@@ -515,7 +623,7 @@ def model_summary(
         "warnings": config.notes() + static_stiffness_warnings(sys_, [0.0, float(speed_rpm)]),
     }
     if sys_.kind == "rotor":
-        out["critical_speeds_rpm"] = critical_speeds(sys_, config.analysis.campbell_max_rpm)
+        out["critical_speeds_rpm"] = critical_speeds(sys_, config.analysis.campbell_max_rpm, notes=out["warnings"])
         dofs = 4 * np.asarray(sys_.station_node)
         out["mode_shapes"] = {
             "station_positions_m": [float(z) for z in sys_.station_positions],
