@@ -754,9 +754,6 @@ class RigConfig(Strict):
             resolve_benign(self)
         if self.uncertainty.structure == "parametric" and self.uncertainty.parameter:
             self._check_uncertainty_parameter(self.uncertainty.parameter)
-        if "n_modes" in self.analysis.model_fields_set and self.analysis.n_modes > self.n_dof:
-            raise ValueError(f"analysis.n_modes: {self.analysis.n_modes} modes asked; the model has {self.n_dof} "
-                             "degrees of freedom")
         if self.kind == "rotor" and any(abs(z) > 1e4 for z in self.stations):
             raise ValueError("stations: positions beyond 10 km: not a rotor (give metres, or units such as '160 mm')")
         return self
@@ -901,8 +898,13 @@ class RigConfig(Strict):
                              f"(known: {', '.join(names) or 'none'})")
 
     def notes(self) -> list[str]:
-        """What the loader accepted but a user should know (inconsistent material constants)."""
-        return [n for k, m in self.materials.items() if (n := m.consistency_note(k)) is not None]
+        """What the loader accepted but a user should know (inconsistent material constants; more modes
+        asked than the model has degrees of freedom: clamped)."""
+        out = [n for k, m in self.materials.items() if (n := m.consistency_note(k)) is not None]
+        if "n_modes" in self.analysis.model_fields_set and self.analysis.n_modes > self.n_dof:
+            out.append(f"analysis.n_modes: {self.analysis.n_modes} modes asked, but the model has {self.n_dof} degrees "
+                       f"of freedom: at most {self.n_dof} modes are reported")
+        return out
 
     @property
     def n_dof(self) -> int:

@@ -610,7 +610,7 @@ def model_summary(
     station, x and y, real and imaginary parts).
     """
     sys_ = system if system is not None else build_system(config)
-    n = config.analysis.n_modes
+    n = min(config.analysis.n_modes, sys_.n_dof)  # more asked than the model has: clamped (config.notes says so)
     md = modes(sys_, speed_rpm, n_modes=n)
     rest = natural_frequencies_at_rest(sys_, n)
     entries = mode_table(md)

@@ -68,3 +68,28 @@ def test_modes_match_the_full_first_order_eigenproblem(make, rpms) -> None:  # t
             lam = modes(system, rpm, n_modes=n_modes).eigenvalues
             assert lam.size == n_modes
             assert np.max(np.abs(lam / ref[:n_modes] - 1.0)) <= 1e-10, (rpm, n_modes)
+
+
+def test_model_clamps_n_modes_to_the_degrees_of_freedom(tmp_path: Path) -> None:
+    """A rig asking for 14 modes of a 12-DOF model was refused; now ``model`` reports all 12 (the count
+    and the frequencies of the full first-order eigenproblem) and says so in its warnings."""
+    from rotorcheck.workflow import model_report
+
+    rig = {
+        "rig_id": "three_nodes", "materials": {"steel": {"density": 7810, "youngs_modulus": 211e9, "poisson": 0.3}},
+        "stations": [0.0, 0.25, 0.5],
+        "shaft": [{"start": 1, "end": 2, "material": "steel", "outer_diameter": 0.05},
+                  {"start": 2, "end": 3, "material": "steel", "outer_diameter": 0.05}],
+        "bearings": [{"station": 1, "kxx": 1e6, "kyy": 0.8e6, "cxx": 50.0}, {"station": 3, "kxx": 1e6, "kyy": 0.8e6}],
+        "analysis": {"n_modes": 14, "speeds_rpm": [0.0], "campbell_max_rpm": 1000.0},
+    }
+    path = tmp_path / "rig.yaml"
+    path.write_text(yaml.safe_dump(rig))
+    summary = model_report(path)["summary"]
+    assert any("14 modes asked, but the model has 12 degrees of freedom" in w for w in summary["warnings"])
+    system = build_system(parse_config(rig))
+    M, C, _, K = system.matrices(0.0)
+    ref = _full_first_order_eigenvalues(M, C, K)
+    assert system.n_dof == 12 and ref.size == 12 and len(summary["modes"]) == 12
+    f = np.array([m["frequency_hz"] for m in summary["modes"]])
+    assert np.max(np.abs(f / (ref.imag / (2 * np.pi)) - 1.0)) <= 1e-10
