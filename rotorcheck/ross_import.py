@@ -35,6 +35,7 @@ Axial and torsional terms are dropped: rotorcheck's model is lateral only.
 from __future__ import annotations
 
 import importlib
+import itertools
 import math
 import re
 import sys
@@ -593,6 +594,9 @@ def import_ross(path: str | Path, rig_id: str | None = None, speed_points: int =
             parameters = _Table(source, "parameters", value)
             continue
         cls, sep, tag = name.partition("_")
+        if sep and not isinstance(value, dict):
+            raise InputError(source, _key(name), f"must be a table (a ROSS element \"<ElementClass>_<tag>\" is "
+                             f"one), not {_kind(value)}: this import does not drop it unread")
         if not isinstance(value, dict) or not sep:
             notes.append(f"{_key(name)}: not a ROSS element table (expected \"<ElementClass>_<tag>\"); ignored.")
             continue
@@ -640,6 +644,12 @@ def import_ross(path: str | Path, rig_id: str | None = None, speed_points: int =
                              "rotorcheck rig cannot represent: replace it by a shaft element in ROSS and save again")
     n_spans = len(span_ns)
     first = {n: next(s for s in shafts if s.n == n) for n in span_ns}
+    for a, b in itertools.pairwise(span_ns):
+        if b == a + 2:  # ROSS's CoAxialRotor numbers the next shaft's first node one after the last one's end
+            raise InputError(source, first[b].table.field("n"),
+                             f"shaft element numbers jump from {a} to {b}: node {a + 1} ends one shaft and node {b} "
+                             "starts another, as ROSS numbers the shafts of a CoAxialRotor; coaxial (two-shaft) "
+                             "rotors are not supported by rotorcheck (one shaft per rig)")
     stations = [0.0]
     for n in span_ns:
         stations.append(stations[-1] + first[n].L)

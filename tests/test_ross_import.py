@@ -500,3 +500,34 @@ def test_compressor_model_critical_speed_search_does_not_raise(compressor: RossI
     wd = 2 * np.pi * np.array([m["frequency_hz"] for m in summary["modes"]])
     assert np.abs(wd / np.asarray(reference["compressor_6000rpm"]["wd"][: wd.size]) - 1).max() <= 1e-8
     assert all(isinstance(w, str) for w in summary["warnings"])
+
+
+def test_a_coaxial_rotor_is_refused_naming_the_file_and_field(tmp_path: Path) -> None:
+    """ROSS's CoAxialRotor numbers its second shaft's first node one after the first shaft's last node
+    (elements n = 0..2 end at node 3, the next shaft starts at node 4 with element n = 4). The import
+    joined the two shafts into one (or, with a bearing on the first shaft's end node as in ROSS's
+    CoAxialRotor example, said "node 10 is no node of the shaft"); now it refuses the rotor as coaxial."""
+    text = (DATA / "rotor_example.toml").read_text()
+    for k in (5, 4, 3):  # the last three elements become a second shaft, nodes 4..7
+        old = f'["ShaftElement_Shaft Element {k}"]\nL = 0.25\nidl = 0.0\nodl = 0.05\nidr = 0.0\nodr = 0.05\nn = {k}\n'
+        assert old in text
+        text = text.replace(old, old.replace(f"n = {k}\n", f"n = {k + 1}\n"))
+    text = text.replace("n = 6\n", "n = 7\n")  # bearing 1 at the end of the second shaft
+    p = tmp_path / "coaxial.toml"
+    p.write_text(text)
+    with pytest.raises(InputError) as exc:
+        import_ross(p)
+    assert exc.value.file == str(p)
+    assert exc.value.field == '"ShaftElement_Shaft Element 3".n'
+    assert "coaxial" in exc.value.message and "not supported" in exc.value.message
+
+
+def test_a_non_table_element_key_is_refused(tmp_path: Path) -> None:
+    """``ShaftElement_x = 3`` at the top level was dropped without a word."""
+    p = tmp_path / "rotor.toml"
+    text = (DATA / "rotor_example.toml").read_text()
+    p.write_text(text.replace("[parameters]", "ShaftElement_x = 3\n\n[parameters]"))
+    with pytest.raises(InputError) as exc:
+        import_ross(p)
+    assert exc.value.file == str(p) and exc.value.field == "ShaftElement_x"
+    assert "must be a table" in exc.value.message and "a number" in exc.value.message
