@@ -26,8 +26,10 @@ Mapping (ROSS 2.3.0's file format and analysis, ``ross/rotor_assembly.py``, ``sh
   quadratic ``interp1d`` for 2 or 3), at ``speed_points`` evenly spaced speeds plus the saved ones.
   ROSS's "frequency" of a bearing coefficient is the rotor speed (rad/s). Grounded bearings and seals
   on one node are summed into one entry (the rig allows one per station);
-* damping: ROSS's proportional damping of the rotor without bearings becomes ``damping: {kind:
-  rayleigh, scope: rotor}`` where that is exact.
+* damping: ROSS's rotor-level proportional damping (``parameters.alpha``, ``beta``: M and K of the
+  rotor without bearings, discs and point masses included) becomes ``damping: {kind: rayleigh,
+  scope: rotor}``; its element damping (``ShaftElement`` ``alpha``, ``beta``, the same on every
+  element) becomes ``scope: shaft_elements`` (discs and point masses undamped, as in ROSS).
 
 Axial and torsional terms are dropped: rotorcheck's model is lateral only.
 """
@@ -863,16 +865,15 @@ def import_ross(path: str | Path, rig_id: str | None = None, speed_points: int =
         if any(global_ab):
             notes.append(f"{_listing(damped)}: element proportional damping (alpha, beta) left out, as ROSS ignores it "
                          "when the rotor has global proportional damping.")
-        elif (len(elemental) == 1 and len(damped) == len(shafts) and min(elemental[0]) >= 0
-              and (elemental[0][0] == 0 or not (disc_entries or pm_entries))):
-            # sum of alpha M_e + beta K_e over the shaft elements = Rayleigh damping of the rotor without
-            # bearings (discs and point masses carry no stiffness; with alpha = 0 or none of them, exact)
-            damping = {"kind": "rayleigh", "alpha": elemental[0][0], "beta": elemental[0][1], "scope": "rotor"}
+        elif len(elemental) == 1 and min(elemental[0]) >= 0:
+            # the same alpha, beta on every element: sum of alpha M_e + beta K_e over the shaft elements
+            damping = {"kind": "rayleigh", "alpha": elemental[0][0], "beta": elemental[0][1],
+                       "scope": "shaft_elements"}
         else:
-            values = _listing([f"alpha = {a:g}, beta = {b:g}" for a, b in elemental if a or b], 3)
-            notes.append(f"{_listing(damped)}: element proportional damping ({values}) left out: rotorcheck has "
-                         "Rayleigh damping of the whole rotor only, which matches per-element values only when they "
-                         "are all equal (with alpha = 0, or no discs and point masses).")
+            values = _listing([f"alpha = {a:g}, beta = {b:g}" for a, b in elemental], 3)
+            notes.append(f"{_listing(damped)}: element proportional damping ({values}) left out: rotorcheck's "
+                         "Rayleigh damping of scope shaft_elements takes one alpha >= 0 and one beta >= 0 for every "
+                         "shaft element.")
 
     # ---- lateral only
     axial_terms = []
