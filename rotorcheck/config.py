@@ -260,7 +260,9 @@ class PointMass(Strict):
 
 
 class SpeedTable(Strict):
-    """A coefficient tabulated against speed, linearly interpolated (held constant outside)."""
+    """A coefficient tabulated against speed, linearly interpolated; outside the table held constant
+    (``hold``) or extrapolated linearly from the end segments (``linear``), as its bearing's ``extrapolate``
+    says."""
 
     speed_rpm: list[SpeedRpm] = Field(min_length=1)
     values: list[float] = Field(min_length=1)
@@ -273,10 +275,15 @@ class SpeedTable(Strict):
             raise ValueError("speed_rpm must be strictly increasing")
         return self
 
-    def at(self, speed_rpm: float) -> float:
+    def at(self, speed_rpm: float, extrapolate: str = "hold") -> float:
+        """The coefficient at ``speed_rpm``; ``extrapolate``: ``"hold"`` or ``"linear"`` outside the table."""
         import numpy as np
 
-        return float(np.interp(speed_rpm, self.speed_rpm, self.values))
+        x, y = self.speed_rpm, self.values
+        if extrapolate == "linear" and len(x) > 1 and not (x[0] <= speed_rpm <= x[-1]):
+            i = 0 if speed_rpm < x[0] else len(x) - 2
+            return float(y[i] + (y[i + 1] - y[i]) * (speed_rpm - x[i]) / (x[i + 1] - x[i]))
+        return float(np.interp(speed_rpm, x, y))
 
 
 #: a bearing's lateral coefficients (stiffness, damping, mass; x, y and cross terms)
@@ -308,6 +315,9 @@ class Bearing(Strict):
     myy: Mass | SpeedTable = 0.0
     mxy: Mass | SpeedTable = 0.0
     myx: Mass | SpeedTable = 0.0
+    extrapolate: Literal["hold", "linear"] = Field(
+        default="hold", description="speed tables outside their speeds: hold the end value (default) or extrapolate "
+        "the end segment linearly (as ROSS extrapolates its interpolants; damping and mass may then turn negative)")
 
     @model_validator(mode="after")
     def _signs(self) -> Bearing:
@@ -325,7 +335,7 @@ class Bearing(Strict):
         out = {}
         for name in BEARING_TERMS:
             v = getattr(self, name)
-            out[name] = v.at(speed_rpm) if isinstance(v, SpeedTable) else float(v)
+            out[name] = v.at(speed_rpm, self.extrapolate) if isinstance(v, SpeedTable) else float(v)
         return out
 
 
@@ -908,9 +918,21 @@ class RigConfig(Strict):
                              f"(known: {', '.join(names) or 'none'})")
 
     def notes(self) -> list[str]:
-        """What the loader accepted but a user should know (inconsistent material constants; more modes
-        asked than the model has degrees of freedom: clamped)."""
+        """What the loader accepted but a user should know (inconsistent material constants; bearing speed
+        tables that do not cover the analysed speeds, and how they are extended; more modes asked than
+        the model has degrees of freedom: clamped)."""
         out = [n for k, m in self.materials.items() if (n := m.consistency_note(k)) is not None]
+        top = max(self.analysis.campbell_max_rpm, *self.analysis.speeds_rpm)
+        for i, b in enumerate(self.bearings):
+            tables = [t for t in (getattr(b, k) for k in BEARING_TERMS) if isinstance(t, SpeedTable)]
+            if not tables:
+                continue
+            lo, hi = max(t.speed_rpm[0] for t in tables), min(t.speed_rpm[-1] for t in tables)  # all cover
+            if lo > 0.0 or hi < top:
+                how = ("held at their end values (extrapolate: hold)" if b.extrapolate == "hold" else
+                       "extrapolated linearly from their end segments (extrapolate: linear)")
+                out.append(f"bearings[{i}] ({b.name}): speed tables cover {lo:g}-{hi:g} rpm, the analysis "
+                           f"0-{top:g} rpm; outside their speeds the coefficients are {how}")
         if "n_modes" in self.analysis.model_fields_set and self.analysis.n_modes > self.n_dof:
             out.append(f"analysis.n_modes: {self.analysis.n_modes} modes asked, but the model has {self.n_dof} degrees "
                        f"of freedom: at most {self.n_dof} modes are reported")
@@ -984,7 +1006,7 @@ _LATER_KEYS: dict[str, dict[str, Any]] = {
               "shear_method": None, "shear_coefficient": None, "shear": None, "rotary_inertia": None,
               "gyroscopic": None},
     "discs": {"material": None, "width": None, "outer_diameter": None, "inner_diameter": None},
-    "bearings": {"n_link": None, "mxx": 0.0, "myy": 0.0, "mxy": 0.0, "myx": 0.0},
+    "bearings": {"n_link": None, "mxx": 0.0, "myy": 0.0, "mxy": 0.0, "myx": 0.0, "extrapolate": "hold"},
     "damping": {"scope": "system"},
 }
 

@@ -24,7 +24,8 @@ Mapping (ROSS 2.3.0's file format and analysis, ``ross/rotor_assembly.py``, ``sh
   from the interpolant ROSS builds from the saved lists (a cubic smoothing spline,
   ``scipy.interpolate.UnivariateSpline`` with its default smoothing, for 4 or more speeds; linear or
   quadratic ``interp1d`` for 2 or 3), at ``speed_points`` evenly spaced speeds plus the saved ones.
-  ROSS's "frequency" of a bearing coefficient is the rotor speed (rad/s). Grounded bearings and seals
+  ROSS's "frequency" of a bearing coefficient is the rotor speed (rad/s); outside the saved speeds
+  ROSS extrapolates, the rig's entry does so linearly (``extrapolate: linear``). Grounded bearings and seals
   on one node are summed into one entry (the rig allows one per station);
 * damping: ROSS's rotor-level proportional damping (``parameters.alpha``, ``beta``: M and K of the
   rotor without bearings, discs and point masses included) becomes ``damping: {kind: rayleigh,
@@ -526,9 +527,14 @@ def _bearing_entry(
             sentence += f", which departs from the saved values by up to {smooth:.1e} of a coefficient's largest value"
         if len(members) > 1:
             sentence += ", each member's extrapolated over the combined range before summing"
+        exact = all(b.interpolants[k][1] in ("linear", "constant") for b in members for k in speed_keys)
         sentence += (f"; linear in between (within {worst:.1e} of ROSS's curve, relative to a coefficient's largest "
-                     "value) and held constant outside the range, where ROSS extrapolates")
+                     "value) and, as ROSS extrapolates its interpolants outside the saved speeds, extrapolated "
+                     "linearly from the end segments there (extrapolate: linear"
+                     + (", exactly ROSS's linear interpolant)" if exact else
+                        "; ROSS's spline or quadratic extrapolates with its curvature, so far outside they part)"))
         notes.append(sentence + ".")
+        entry["extrapolate"] = "linear"
     return entry, notes
 
 

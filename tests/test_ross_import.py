@@ -486,7 +486,9 @@ def test_compressor_model_critical_speed_search_does_not_raise(compressor: RossI
     from rotorcheck.fe.assembly import build_system
     from rotorcheck.fe.modal import campbell, model_summary, modes
 
-    config = parse_config(compressor.rig)
+    # the bearing tables held outside their speeds, as the import wrote them before extrapolate: linear
+    held = [{**b, "extrapolate": "hold"} if "extrapolate" in b else b for b in compressor.rig["bearings"]]
+    config = parse_config({**compressor.rig, "bearings": held})
     system = build_system(config)
     speeds = np.linspace(0.0, config.analysis.campbell_max_rpm, 41)
     for order in (1, 2):
@@ -576,3 +578,60 @@ def test_element_damping_with_alpha_is_carried_receptance_against_direct_assembl
             Z = K - w**2 * M + 1j * w * (C_shaft + rpm * np.pi / 30 * Gm)
             ref = np.linalg.solve(Z, np.eye(n)[:, o])[o]
             assert abs(hk / ref - 1) <= 1e-8, (rpm, fk)
+
+
+def test_speed_tables_extrapolate_as_ross_outside_the_saved_speeds(tmp_path: Path) -> None:
+    """Issue 32: tables were held constant outside their speeds where ROSS extrapolates. A 2-speed
+    bearing is ROSS's ``interp1d(frequency, values, kind=1, fill_value="extrapolate")`` (rebuilt here
+    with scipy): the imported rig (``extrapolate: linear``) gives its values at 0 and 3x the top speed
+    to round-off (held, the default: kxx 2x ROSS's at rest and 57 % below it at 1200 rad/s), and
+    ``model`` says how the tables are extended."""
+    from scipy.interpolate import interp1d
+
+    from rotorcheck.fe.modal import model_summary
+
+    text = (DATA / "rotor_example.toml").read_text()
+    block = text[text.index('["BearingElement_Bearing 0"]'):text.index('["BearingElement_Bearing 1"]')]
+    freq = [200.0, 400.0]  # rad/s
+    values = {"kxx": [1.0e6, 1.5e6], "kyy": [0.8e6, 1.4e6], "cxx": [100.0, 300.0]}
+    new = block.replace("kxx = [ 1000000.0,]", "kxx = [ 1000000.0, 1500000.0,]")
+    new = new.replace("kyy = [ 800000.0,]", "kyy = [ 800000.0, 1400000.0,]")
+    new = new.replace("cxx = [ 0,]", "cxx = [ 100.0, 300.0,]")
+    new = new.replace("n = 0\n", "n = 0\nfrequency = [ 200.0, 400.0,]\n")
+    p = tmp_path / "rotor.toml"
+    p.write_text(text.replace(block, new))
+    result = import_ross(p)
+    entry = next(b for b in result.rig["bearings"] if b["station"] == 1)
+    assert entry["extrapolate"] == "linear"
+    config = parse_config(result.rig)
+    bearing = next(b for b in config.bearings if b.station == 1)
+    for speed in (0.0, 100.0, 300.0, 1200.0):  # rad/s: below, inside, above the saved speeds
+        co = bearing.coefficients(speed * RAD_S_TO_RPM)
+        for key, vals in values.items():
+            ross = float(interp1d(freq, vals, kind=1, fill_value="extrapolate")(speed))
+            assert co[key] == pytest.approx(ross, rel=1e-12, abs=1e-9), (key, speed)
+    unset = [{k: v for k, v in b.items() if k != "extrapolate"} for b in result.rig["bearings"]]
+    held = parse_config({**result.rig, "bearings": unset})  # the default: hold
+    assert next(b for b in held.bearings if b.station == 1).coefficients(0.0)["kxx"] == 1.0e6
+    assert next(b for b in held.bearings if b.station == 1).coefficients(1200.0 * RAD_S_TO_RPM)["kxx"] == 1.5e6
+    assert any("linearly" in s and "extrapolat" in s for s in result.not_carried)
+    warnings = model_summary(config, 0.0)["warnings"]
+    assert any("bearings[0]" in w and "extrapolate: linear" in w for w in warnings)
+    warnings = model_summary(held, 0.0)["warnings"]
+    assert any("bearings[0]" in w and "extrapolate: hold" in w for w in warnings)
+
+
+def test_compressor_at_rest_with_extrapolated_tables_is_close_to_ross(compressor: RossImport,
+                                                                      reference: dict[str, Any]) -> None:
+    """The compressor's bearing tables start at 3000 rpm (seals at 2000 rpm); at rest ROSS extrapolates
+    its splines. Held at the 3000 rpm values the model had a spurious 2.5 rad/s mode and its lowest
+    four modes 100 %, 1.3 %, 54 % and 0.06 % off ROSS 2.3.0's; extrapolated linearly (what the import
+    writes) they are within 0.6 % (a line is not ROSS's cubic, so not closer)."""
+    from rotorcheck.fe.assembly import build_system
+    from rotorcheck.fe.modal import modes
+
+    ross = np.asarray(reference["compressor_0rpm"]["wd"][:4])
+    md = modes(build_system(parse_config(compressor.rig)), 0.0, max_hz=1.05 * ross[-1] / (2 * np.pi))
+    wd = 2 * np.pi * md.frequency_hz
+    assert wd.size == 4
+    assert np.abs(wd / ross - 1).max() < 0.006
