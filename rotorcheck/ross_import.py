@@ -919,7 +919,8 @@ def import_ross(path: str | Path, rig_id: str | None = None, speed_points: int =
         rig["tapered_element"] = "greenhill"  # ROSS's tapered element (one mid-section shear parameter)
         notes.append("tapered elements use ROSS's formulation (tapered_element: greenhill, Greenhill et al. 1985) "
                      "so the frequencies reproduce ROSS's; rotorcheck's default (exact) is the exact static "
-                     "stiffness of the tapered beam and converges faster under refinement.")
+                     "stiffness of the tapered beam, whose modes converge faster under refinement from 8 elements "
+                     "per taper on (at 4 elements only its first mode is closer).")
     if not rig_shear:
         rig["shear"] = False
         if not any(e.get("shear") for e in shaft_entries):
