@@ -322,7 +322,12 @@ def natural_frequencies_at_rest(system: MechanicalSystem, n_modes: int | None = 
     if n_modes is not None and system.n_dof > N_FULL:
         return _undamped(system, 0.0, 0.0, n_modes)[:n_modes]
     M, _, _, K = system.matrices(0.0)
-    w, _ = undamped_modes(M, K)
+    Ks = 0.5 * (K + K.T)
+    try:  # 1 / w^2 from (M, K_s): the low modes to round-off of 1 / w_min^2, not of ||K|| (rigid supports)
+        mu = sla.eigh(M, Ks, eigvals_only=True)
+        w = np.sort(1.0 / np.sqrt(mu)) if mu.min() > 0 else undamped_modes(M, K)[0]
+    except np.linalg.LinAlgError:  # K_s not positive definite (no support, negative stiffness)
+        w, _ = undamped_modes(M, K)
     return w / TWO_PI if n_modes is None else w[:n_modes] / TWO_PI
 
 

@@ -81,3 +81,23 @@ def test_tapered_formulations_convergence_table(converged: np.ndarray) -> None:
         assert np.all(np.abs(err[(n, "exact")]) * 6 < np.abs(err[(n, "greenhill")]))
     assert abs(err[(4, "exact")][0]) * 100 < abs(err[(4, "greenhill")][0])
     assert RigConfig.model_fields["tapered_element"].default == "exact"
+
+
+def test_undamped_frequencies_at_rest_on_rigid_supports() -> None:
+    """``model``'s ``undamped_frequencies_at_rest_hz`` of the 4-element cone on 1e20 N/m supports came
+    from ``eigh(K, M)``, whose round-off scales with ``||K||``: its first pair was split (238.76 and
+    250.78 Hz) and 3.5 % low. Now from ``(M, K)`` (``1 / w^2``): the pairs degenerate and equal to the
+    cone pinned exactly (the support translations removed; the 1e20 N/m springs differ from a pin by
+    ~1e-11)."""
+    import scipy.linalg as sla
+
+    from rotorcheck.fe.modal import natural_frequencies_at_rest
+
+    system = build_system(_cone(4, "exact"))
+    f = natural_frequencies_at_rest(system, 6)
+    M, _, _, K = system.matrices(0.0)
+    pinned = [system.dof(st, d) for st in (1, 5) for d in ("x", "y")]
+    free = np.setdiff1d(np.arange(M.shape[0]), pinned)
+    ref = np.sqrt(sla.eigh(K[np.ix_(free, free)], M[np.ix_(free, free)], eigvals_only=True)[:6]) / (2 * np.pi)
+    np.testing.assert_allclose(f, ref, rtol=1e-9)
+    np.testing.assert_allclose(f[0::2], f[1::2], rtol=1e-9)
