@@ -527,11 +527,11 @@ def _bearing_entry(
             sentence += f", which departs from the saved values by up to {smooth:.1e} of a coefficient's largest value"
         if len(members) > 1:
             sentence += ", each member's extrapolated over the combined range before summing"
-        exact = all(b.interpolants[k][1] in ("linear", "constant") for b in members for k in speed_keys)
+        all_linear = all(b.interpolants[k][1] in ("linear", "constant") for b in members for k in speed_keys)
         sentence += (f"; linear in between (within {worst:.1e} of ROSS's curve, relative to a coefficient's largest "
                      "value) and, as ROSS extrapolates its interpolants outside the saved speeds, extrapolated "
                      "linearly from the end segments there (extrapolate: linear"
-                     + (", exactly ROSS's linear interpolant)" if exact else
+                     + (", exactly ROSS's linear interpolant)" if all_linear else
                         "; ROSS's spline or quadratic extrapolates with its curvature, so far outside they part)"))
         notes.append(sentence + ".")
         entry["extrapolate"] = "linear"
@@ -652,12 +652,12 @@ def import_ross(path: str | Path, rig_id: str | None = None, speed_points: int =
                              "rotorcheck rig cannot represent: replace it by a shaft element in ROSS and save again")
     n_spans = len(span_ns)
     first = {n: next(s for s in shafts if s.n == n) for n in span_ns}
-    for a, b in itertools.pairwise(span_ns):
-        if b == a + 2:  # ROSS's CoAxialRotor numbers the next shaft's first node one after the last one's end
-            raise InputError(source, first[b].table.field("n"),
-                             f"shaft element numbers jump from {a} to {b}: node {a + 1} ends one shaft and node {b} "
-                             "starts another, as ROSS numbers the shafts of a CoAxialRotor; coaxial (two-shaft) "
-                             "rotors are not supported by rotorcheck (one shaft per rig)")
+    for left, right in itertools.pairwise(span_ns):
+        if right == left + 2:  # ROSS's CoAxialRotor numbers the next shaft's first node one after the last one's end
+            raise InputError(source, first[right].table.field("n"),
+                             f"shaft element numbers jump from {left} to {right}: node {left + 1} ends one shaft and "
+                             f"node {right} starts another, as ROSS numbers the shafts of a CoAxialRotor; coaxial "
+                             "(two-shaft) rotors are not supported by rotorcheck (one shaft per rig)")
     stations = [0.0]
     for n in span_ns:
         stations.append(stations[-1] + first[n].L)
