@@ -56,7 +56,7 @@ def _compressor() -> MechanicalSystem:
 
 @pytest.mark.parametrize(("make", "rpms"), [
     (lambda: _overhung(1), (0.0, 9000.0)),  # 32 DOF: dense state matrix
-    (lambda: _overhung(12), (0.0, 3000.0, 9000.0)),  # 340 DOF: Ritz basis
+    (lambda: _overhung(12), (0.0, 9000.0)),  # 340 DOF: Ritz basis
     (_compressor, (6000.0,)),  # 224 DOF, cross-coupled seals
 ], ids=["overhung_32dof", "overhung_340dof", "ross_compressor"])
 def test_modes_match_the_full_first_order_eigenproblem(make, rpms) -> None:  # type: ignore[no-untyped-def]
@@ -64,7 +64,7 @@ def test_modes_match_the_full_first_order_eigenproblem(make, rpms) -> None:  # t
     for rpm in rpms:
         M, C, G, K = system.matrices(rpm)
         ref = _full_first_order_eigenvalues(M, C + rpm * RPM * G, K)
-        for n_modes in (1, 2, 6, 12):
+        for n_modes in (1, 6, 12):
             lam = modes(system, rpm, n_modes=n_modes).eigenvalues
             assert lam.size == n_modes
             assert np.max(np.abs(lam / ref[:n_modes] - 1.0)) <= 1e-10, (rpm, n_modes)
