@@ -24,10 +24,13 @@ Mapping (ROSS 2.3.0's file format and analysis, ``ross/rotor_assembly.py``, ``sh
   from the interpolant ROSS builds from the saved lists (a cubic smoothing spline,
   ``scipy.interpolate.UnivariateSpline`` with its default smoothing, for 4 or more speeds; linear or
   quadratic ``interp1d`` for 2 or 3), at ``speed_points`` evenly spaced speeds plus the saved ones.
-  ROSS's "frequency" of a bearing coefficient is the rotor speed (rad/s). Grounded bearings and seals
+  ROSS's "frequency" of a bearing coefficient is the rotor speed (rad/s); outside the saved speeds
+  ROSS extrapolates, the rig's entry does so linearly (``extrapolate: linear``). Grounded bearings and seals
   on one node are summed into one entry (the rig allows one per station);
-* damping: ROSS's proportional damping of the rotor without bearings becomes ``damping: {kind:
-  rayleigh, scope: rotor}`` where that is exact.
+* damping: ROSS's rotor-level proportional damping (``parameters.alpha``, ``beta``: M and K of the
+  rotor without bearings, discs and point masses included) becomes ``damping: {kind: rayleigh,
+  scope: rotor}``; its element damping (``ShaftElement`` ``alpha``, ``beta``, the same on every
+  element) becomes ``scope: shaft_elements`` (discs and point masses undamped, as in ROSS).
 
 Axial and torsional terms are dropped: rotorcheck's model is lateral only.
 """
@@ -35,6 +38,7 @@ Axial and torsional terms are dropped: rotorcheck's model is lateral only.
 from __future__ import annotations
 
 import importlib
+import itertools
 import math
 import re
 import sys
@@ -523,9 +527,14 @@ def _bearing_entry(
             sentence += f", which departs from the saved values by up to {smooth:.1e} of a coefficient's largest value"
         if len(members) > 1:
             sentence += ", each member's extrapolated over the combined range before summing"
+        all_linear = all(b.interpolants[k][1] in ("linear", "constant") for b in members for k in speed_keys)
         sentence += (f"; linear in between (within {worst:.1e} of ROSS's curve, relative to a coefficient's largest "
-                     "value) and held constant outside the range, where ROSS extrapolates")
+                     "value) and, as ROSS extrapolates its interpolants outside the saved speeds, extrapolated "
+                     "linearly from the end segments there (extrapolate: linear"
+                     + (", exactly ROSS's linear interpolant)" if all_linear else
+                        "; ROSS's spline or quadratic extrapolates with its curvature, so far outside they part)"))
         notes.append(sentence + ".")
+        entry["extrapolate"] = "linear"
     return entry, notes
 
 
@@ -593,6 +602,9 @@ def import_ross(path: str | Path, rig_id: str | None = None, speed_points: int =
             parameters = _Table(source, "parameters", value)
             continue
         cls, sep, tag = name.partition("_")
+        if sep and not isinstance(value, dict):
+            raise InputError(source, _key(name), f"must be a table (a ROSS element \"<ElementClass>_<tag>\" is "
+                             f"one), not {_kind(value)}: this import does not drop it unread")
         if not isinstance(value, dict) or not sep:
             notes.append(f"{_key(name)}: not a ROSS element table (expected \"<ElementClass>_<tag>\"); ignored.")
             continue
@@ -640,6 +652,12 @@ def import_ross(path: str | Path, rig_id: str | None = None, speed_points: int =
                              "rotorcheck rig cannot represent: replace it by a shaft element in ROSS and save again")
     n_spans = len(span_ns)
     first = {n: next(s for s in shafts if s.n == n) for n in span_ns}
+    for left, right in itertools.pairwise(span_ns):
+        if right == left + 2:  # ROSS's CoAxialRotor numbers the next shaft's first node one after the last one's end
+            raise InputError(source, first[right].table.field("n"),
+                             f"shaft element numbers jump from {left} to {right}: node {left + 1} ends one shaft and "
+                             f"node {right} starts another, as ROSS numbers the shafts of a CoAxialRotor; coaxial "
+                             "(two-shaft) rotors are not supported by rotorcheck (one shaft per rig)")
     stations = [0.0]
     for n in span_ns:
         stations.append(stations[-1] + first[n].L)
@@ -853,16 +871,15 @@ def import_ross(path: str | Path, rig_id: str | None = None, speed_points: int =
         if any(global_ab):
             notes.append(f"{_listing(damped)}: element proportional damping (alpha, beta) left out, as ROSS ignores it "
                          "when the rotor has global proportional damping.")
-        elif (len(elemental) == 1 and len(damped) == len(shafts) and min(elemental[0]) >= 0
-              and (elemental[0][0] == 0 or not (disc_entries or pm_entries))):
-            # sum of alpha M_e + beta K_e over the shaft elements = Rayleigh damping of the rotor without
-            # bearings (discs and point masses carry no stiffness; with alpha = 0 or none of them, exact)
-            damping = {"kind": "rayleigh", "alpha": elemental[0][0], "beta": elemental[0][1], "scope": "rotor"}
+        elif len(elemental) == 1 and min(elemental[0]) >= 0:
+            # the same alpha, beta on every element: sum of alpha M_e + beta K_e over the shaft elements
+            damping = {"kind": "rayleigh", "alpha": elemental[0][0], "beta": elemental[0][1],
+                       "scope": "shaft_elements"}
         else:
-            values = _listing([f"alpha = {a:g}, beta = {b:g}" for a, b in elemental if a or b], 3)
-            notes.append(f"{_listing(damped)}: element proportional damping ({values}) left out: rotorcheck has "
-                         "Rayleigh damping of the whole rotor only, which matches per-element values only when they "
-                         "are all equal (with alpha = 0, or no discs and point masses).")
+            values = _listing([f"alpha = {a:g}, beta = {b:g}" for a, b in elemental], 3)
+            notes.append(f"{_listing(damped)}: element proportional damping ({values}) left out: rotorcheck's "
+                         "Rayleigh damping of scope shaft_elements takes one alpha >= 0 and one beta >= 0 for every "
+                         "shaft element.")
 
     # ---- lateral only
     axial_terms = []
@@ -902,7 +919,8 @@ def import_ross(path: str | Path, rig_id: str | None = None, speed_points: int =
         rig["tapered_element"] = "greenhill"  # ROSS's tapered element (one mid-section shear parameter)
         notes.append("tapered elements use ROSS's formulation (tapered_element: greenhill, Greenhill et al. 1985) "
                      "so the frequencies reproduce ROSS's; rotorcheck's default (exact) is the exact static "
-                     "stiffness of the tapered beam and converges faster under refinement.")
+                     "stiffness of the tapered beam, whose modes converge faster under refinement from 8 elements "
+                     "per taper on (at 4 elements only its first mode is closer).")
     if not rig_shear:
         rig["shear"] = False
         if not any(e.get("shear") for e in shaft_entries):

@@ -24,13 +24,23 @@ class ModalDamping(Strict):
 
 
 class RayleighDamping(Strict):
-    """C = alpha M + beta K; ``scope: rotor`` takes M and K of the rotor alone (shaft, discs, point
-    masses; as ROSS's global ``alpha``, ``beta``), ``system`` (default) with bearings and springs."""
+    """C = alpha M + beta K, with M and K of the ``scope``:
+
+    * ``system`` (default): the assembled model at each speed: shaft elements (with their axial-force
+      and torque stiffness), discs, point masses, station springs and bearings (bearing stiffness and
+      mass coefficients at that speed); K by its symmetric part;
+    * ``rotor``: the rotor without springs and bearings: M of the shaft elements, discs and point
+      masses, K of the shaft elements (symmetric part); as ROSS's rotor-level ``alpha``, ``beta``;
+    * ``shaft_elements``: the shaft elements only (every layer), ``alpha M_e + beta K_e`` summed over
+      them, K_e with its axial-force and torque parts as they are: discs and point masses get no
+      damping; as ROSS's per-element ``ShaftElement(alpha=, beta=)`` with the same values on every
+      element.
+    """
 
     kind: Literal["rayleigh"] = "rayleigh"
     alpha: float = Field(ge=0, description="1/s")
     beta: float = Field(ge=0, description="s")
-    scope: Literal["system", "rotor"] = "system"
+    scope: Literal["system", "rotor", "shaft_elements"] = "system"
 
 
 class NoDamping(Strict):

@@ -17,7 +17,7 @@ from rotorcheck.config.lumped import LumpedMass, LumpedSpring
 from rotorcheck.config.ports import DamagePort, Ports, Uncertainty
 from rotorcheck.config.quantities import Length, Ratio
 from rotorcheck.config.shaft import Disc, Material, PointMass, ShaftElement, ShearMethod
-from rotorcheck.config.supports import Bearing, StationSpring
+from rotorcheck.config.supports import BEARING_TERMS, Bearing, SpeedTable, StationSpring
 
 
 class RigConfig(Strict):
@@ -69,9 +69,6 @@ class RigConfig(Strict):
             self._check_lumped()
         if self.uncertainty.structure == "parametric" and self.uncertainty.parameter:
             self._check_uncertainty_parameter(self.uncertainty.parameter)
-        if "n_modes" in self.analysis.model_fields_set and self.analysis.n_modes > self.n_dof:
-            raise ValueError(f"analysis.n_modes: {self.analysis.n_modes} modes asked; the model has {self.n_dof} "
-                             "degrees of freedom")
         if self.kind == "rotor" and any(abs(z) > 1e4 for z in self.stations):
             raise ValueError("stations: positions beyond 10 km: not a rotor (give metres, or units such as '160 mm')")
         return self
@@ -216,8 +213,25 @@ class RigConfig(Strict):
                              f"(known: {', '.join(names) or 'none'})")
 
     def notes(self) -> list[str]:
-        """What the loader accepted but a user should know (inconsistent material constants)."""
-        return [n for k, m in self.materials.items() if (n := m.consistency_note(k)) is not None]
+        """What the loader accepted but a user should know (inconsistent material constants; bearing speed
+        tables that do not cover the analysed speeds, and how they are extended; more modes asked than
+        the model has degrees of freedom: clamped)."""
+        out = [n for k, m in self.materials.items() if (n := m.consistency_note(k)) is not None]
+        top = max(self.analysis.campbell_max_rpm, *self.analysis.speeds_rpm)
+        for i, b in enumerate(self.bearings):
+            tables = [t for t in (getattr(b, k) for k in BEARING_TERMS) if isinstance(t, SpeedTable)]
+            if not tables:
+                continue
+            lo, hi = max(t.speed_rpm[0] for t in tables), min(t.speed_rpm[-1] for t in tables)  # all cover
+            if lo > 0.0 or hi < top:
+                how = ("held at their end values (extrapolate: hold)" if b.extrapolate == "hold" else
+                       "extrapolated linearly from their end segments (extrapolate: linear)")
+                out.append(f"bearings[{i}] ({b.name}): speed tables cover {lo:g}-{hi:g} rpm, the analysis "
+                           f"0-{top:g} rpm; outside their speeds the coefficients are {how}")
+        if "n_modes" in self.analysis.model_fields_set and self.analysis.n_modes > self.n_dof:
+            out.append(f"analysis.n_modes: {self.analysis.n_modes} modes asked, but the model has {self.n_dof} degrees "
+                       f"of freedom: at most {self.n_dof} modes are reported")
+        return out
 
     @property
     def n_dof(self) -> int:
@@ -287,7 +301,7 @@ _LATER_KEYS: dict[str, dict[str, Any]] = {
               "shear_method": None, "shear_coefficient": None, "shear": None, "rotary_inertia": None,
               "gyroscopic": None},
     "discs": {"material": None, "width": None, "outer_diameter": None, "inner_diameter": None},
-    "bearings": {"n_link": None, "mxx": 0.0, "myy": 0.0, "mxy": 0.0, "myx": 0.0},
+    "bearings": {"n_link": None, "mxx": 0.0, "myy": 0.0, "mxy": 0.0, "myx": 0.0, "extrapolate": "hold"},
     "damping": {"scope": "system"},
 }
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Literal
+
 from pydantic import Field, model_validator
 
 from rotorcheck.config.base import Strict
@@ -9,7 +11,9 @@ from rotorcheck.config.quantities import Damping, Mass, SpeedRpm, Stiffness
 
 
 class SpeedTable(Strict):
-    """A coefficient tabulated against speed, linearly interpolated (held constant outside)."""
+    """A coefficient tabulated against speed, linearly interpolated; outside the table held constant
+    (``hold``) or extrapolated linearly from the end segments (``linear``), as its bearing's ``extrapolate``
+    says."""
 
     speed_rpm: list[SpeedRpm] = Field(min_length=1)
     values: list[float] = Field(min_length=1)
@@ -22,10 +26,15 @@ class SpeedTable(Strict):
             raise ValueError("speed_rpm must be strictly increasing")
         return self
 
-    def at(self, speed_rpm: float) -> float:
+    def at(self, speed_rpm: float, extrapolate: str = "hold") -> float:
+        """The coefficient at ``speed_rpm``; ``extrapolate``: ``"hold"`` or ``"linear"`` outside the table."""
         import numpy as np
 
-        return float(np.interp(speed_rpm, self.speed_rpm, self.values))
+        x, y = self.speed_rpm, self.values
+        if extrapolate == "linear" and len(x) > 1 and not (x[0] <= speed_rpm <= x[-1]):
+            i = 0 if speed_rpm < x[0] else len(x) - 2
+            return float(y[i] + (y[i + 1] - y[i]) * (speed_rpm - x[i]) / (x[i + 1] - x[i]))
+        return float(np.interp(speed_rpm, x, y))
 
 
 #: a bearing's lateral coefficients (stiffness, damping, mass; x, y and cross terms)
@@ -57,6 +66,9 @@ class Bearing(Strict):
     myy: Mass | SpeedTable = 0.0
     mxy: Mass | SpeedTable = 0.0
     myx: Mass | SpeedTable = 0.0
+    extrapolate: Literal["hold", "linear"] = Field(
+        default="hold", description="speed tables outside their speeds: hold the end value (default) or extrapolate "
+        "the end segment linearly (as ROSS extrapolates its interpolants; damping and mass may then turn negative)")
 
     @model_validator(mode="after")
     def _signs(self) -> Bearing:
@@ -74,7 +86,7 @@ class Bearing(Strict):
         out = {}
         for name in BEARING_TERMS:
             v = getattr(self, name)
-            out[name] = v.at(speed_rpm) if isinstance(v, SpeedTable) else float(v)
+            out[name] = v.at(speed_rpm, self.extrapolate) if isinstance(v, SpeedTable) else float(v)
         return out
 
 

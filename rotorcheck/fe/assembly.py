@@ -195,7 +195,10 @@ def build_rotor(config: RigConfig, modulus_factors: Mapping[int, float] | None =
         return np.array([rotor_dof(station_node, positions.size, n_sup, station, d) for d in ("x", "y")])
 
     M, G, K0 = assemble_beams(infos + layers, n_dof)
-    C0 = np.zeros_like(M)
+    damping = config.damping
+    # Rayleigh damping of scope "shaft_elements": sum of alpha M_e + beta K_e over the shaft elements
+    C0 = (rayleigh_damping_matrix(M, K0, damping.alpha, damping.beta, symmetric=False)
+          if isinstance(damping, RayleighDamping) and damping.scope == "shaft_elements" else np.zeros_like(M))
     features: list[tuple[str, str, int]] = []
     for d in config.discs:
         m, ip, it = d.inertias(config.materials)
@@ -209,7 +212,6 @@ def build_rotor(config: RigConfig, modulus_factors: Mapping[int, float] | None =
         ix = xy(pm.station)
         M[ix, ix] += pm.masses
         features.append(("point_mass", pm.name, pm.station))
-    damping = config.damping
     # Rayleigh damping of scope "rotor": from M and K without springs and bearings, the same at every speed
     rayleigh_rotor = (rayleigh_damping_matrix(M, K0, damping.alpha, damping.beta)
                       if isinstance(damping, RayleighDamping) and damping.scope == "rotor" else None)
@@ -251,7 +253,7 @@ def build_rotor(config: RigConfig, modulus_factors: Mapping[int, float] | None =
                     A[np.ix_(link, a)] -= blk
         if isinstance(damping, ModalDamping):
             C = Cb + modal_damping_matrix(Mb, K, damping.ratios, planes)
-        elif isinstance(damping, RayleighDamping):
+        elif isinstance(damping, RayleighDamping) and damping.scope != "shaft_elements":  # that one is in C0
             C = Cb + (rayleigh_rotor if rayleigh_rotor is not None
                       else rayleigh_damping_matrix(Mb, K, damping.alpha, damping.beta))
         else:

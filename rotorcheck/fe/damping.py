@@ -87,6 +87,9 @@ def modal_damping_matrix(
     return _modal_block(M, K, ratio_per_mode(ratios, n)[pair_rank])
 
 
-def rayleigh_damping_matrix(M: np.ndarray, K: np.ndarray, alpha: float, beta: float) -> np.ndarray:
-    """C = alpha M + beta K_s (alpha 1/s, beta s; K_s the symmetric part of K)."""
-    return alpha * M + beta * 0.5 * (K + K.T)
+def rayleigh_damping_matrix(
+    M: np.ndarray, K: np.ndarray, alpha: float, beta: float, symmetric: bool = True
+) -> np.ndarray:
+    """C = alpha M + beta K_s (alpha 1/s, beta s; K_s the symmetric part of K, or K itself when not
+    ``symmetric``)."""
+    return alpha * M + beta * (0.5 * (K + K.T) if symmetric else K)

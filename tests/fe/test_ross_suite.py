@@ -233,3 +233,38 @@ def test_rayleigh_damping_rotor_matches_ross_frequency_response() -> None:
     sys2 = build_system(parse_config(d))
     H2 = receptance(sys2, np.array([w[4] / (2 * np.pi)]), w[4] / RPM, o, o, method="direct")[0, 0, 0]
     assert abs(abs(H2) / amp[4] - 1) > 30 * 3e-7  # 2e-5: the bearings add beta k = 0.17 N s/m
+
+
+#: ross/tests/test_rotor_assembly.py test_modal_6dof (rotor_6dof: rotor_example whose six shaft
+#: elements carry alpha = 1 1/s, beta = 1e-5 s): its lateral modes 2-5 (mode 1, 47.62 rad/s, is axial)
+ROSS_6DOF_WN = [91.79647, 96.28891, 274.56591, 296.5005]
+ROSS_6DOF_WD = [91.79656, 96.289, 274.56607, 296.50068]
+
+
+def _shaft_element_damped(scope: str) -> RigConfig:
+    d = _base()
+    d["damping"] = {"kind": "rayleigh", "alpha": 1.0, "beta": 1e-5, "scope": scope}
+    return parse_config(d)
+
+
+def test_shaft_element_rayleigh_damping_matches_ross_modal_6dof() -> None:
+    """ROSS's element damping (``ShaftElement(alpha=1, beta=1e-5)``: ``alpha M_e + beta K_e`` of each shaft
+    element, discs undamped) is ``scope: shaft_elements``. ROSS prints 5 decimals (asserts 2): its two
+    lists are our ``Im(lambda)`` and ``|lambda|`` to every printed digit with that scope, and the log
+    dec ``2 pi zeta / sqrt(1 - zeta^2)`` of the first mode, 0.00883, lies in the interval the printed
+    digits allow. ``scope: rotor`` (ROSS's rotor-level alpha, beta: the discs damped by alpha M too)
+    gives a log dec of 0.0358 and misses ROSS's frequencies by 1.4e-3 rad/s."""
+    md = modes(build_system(_shaft_element_damped("shaft_elements")), 0.0, n_modes=4)
+    np.testing.assert_allclose(2 * np.pi * md.frequency_hz, ROSS_6DOF_WN, rtol=0, atol=5.5e-6)
+    np.testing.assert_allclose(2 * np.pi * md.natural_frequency_hz, ROSS_6DOF_WD, rtol=0, atol=5.5e-6)
+    zeta = md.damping_ratio[0]
+    log_dec = 2 * np.pi * zeta / np.sqrt(1 - zeta**2)
+    h = 0.5e-5  # half a unit of ROSS's last printed digit
+    r_lo, r_hi = (ROSS_6DOF_WN[0] - h) / (ROSS_6DOF_WD[0] + h), (ROSS_6DOF_WN[0] + h) / (ROSS_6DOF_WD[0] - h)
+    bounds = [2 * np.pi * np.sqrt(1 - r**2) / r for r in (r_hi, r_lo)]
+    assert bounds[0] < log_dec < bounds[1]
+    assert log_dec == pytest.approx(0.00883, abs=5e-6)
+    rotor = modes(build_system(_shaft_element_damped("rotor")), 0.0, n_modes=4)
+    zr = rotor.damping_ratio[0]
+    assert 2 * np.pi * zr / np.sqrt(1 - zr**2) == pytest.approx(0.0358, abs=5e-5)
+    assert abs(2 * np.pi * rotor.frequency_hz[0] - ROSS_6DOF_WN[0]) > 1e-3
