@@ -21,6 +21,7 @@ from rich.markup import escape
 from rich.table import Table
 
 from rotorcheck.errors import InputError, UserInputError
+from rotorcheck.report.schema import DetectionReport
 
 EXIT_OK, EXIT_DAMAGE, EXIT_INPUT, EXIT_INCONCLUSIVE = 0, 1, 2, 3
 #: frequency points of a simulated sweep when neither --points nor the rig's analysis.n_points sets them
@@ -476,7 +477,8 @@ def detect(
     summary: list[dict[str, Any]] = []
     for d, (base, mrun), outcome in zip(dirs, pairs, check.outcomes):
         with _progress("writing reports and plots"):
-            report = outcome.report()
+            report = outcome.typed_report()
+            report.baseline = str(base_path)
             plot_files = workflow.detection_plots(outcome, d, at, formats, base_path, frf_unit) if plots else []
             files = write_reports(report, d, plot_files, base_path)
         _print_outcome(outcome, report, prefix=f"run {mrun.run_id} ({mrun.speed_rpm:g} rpm): " if several else "")
@@ -484,10 +486,10 @@ def detect(
             for p_ in [*map(str, files), *plot_files]:
                 err.print(f"wrote {p_}")
             if as_json:
-                _emit_json(report)
+                _emit_json(report.to_dict())
             return outcome.exit_code
         summary.append({"run_id": mrun.run_id, "speed_rpm": mrun.speed_rpm, "baseline_run_id": base.run_id,
-                        "verdict": report["verdict"], "verdict_reason": report["verdict_reason"],
+                        "verdict": report.verdict, "verdict_reason": report.verdict_reason,
                         "report": str(d / "report.json")})
     doc = {"sweep": str(sweep), "verdict": check.verdict, "verdict_rule": workflow.FILE_RULE, "runs": summary}
     atomic_write_text(out / "report.json", render_json(doc))
@@ -497,15 +499,15 @@ def detect(
     return check.exit_code
 
 
-def _print_outcome(outcome: Any, report: dict[str, Any], prefix: str = "") -> None:
+def _print_outcome(outcome: Any, report: DetectionReport, prefix: str = "") -> None:
     from rotorcheck import workflow
 
     v = outcome.verdict
     colour = {"damage": "bold red", "healthy": "bold green", "inconclusive": "bold yellow"}[v.verdict]
     err.print(f"{prefix}[{colour}]{v.verdict.upper()}[/]: {v.reason}")
-    err.print(f"{report['n_fault_points']} of {report['n_points']} points are fault points"
-              + (f" (sweep p-value {report['p_value']:.3g}, {report['confidence']:.0%} family-wise)"
-                 if "p_value" in report else ""))
+    err.print(f"{report.n_fault_points} of {report.n_points} points are fault points"
+              + (f" (sweep p-value {report.p_value:.3g}, {report.confidence:.0%} family-wise)"
+                 if report.p_value is not None and report.confidence is not None else ""))
     damage = v.verdict == "damage"  # a healthy verdict shows no finding: no element, no damage estimate
     for line in (workflow.joint_summary(outcome), workflow.anchored_summary(outcome) if damage else ""):
         if line:

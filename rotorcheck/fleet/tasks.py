@@ -26,6 +26,7 @@ from typing import Any
 
 from rotorcheck.errors import UserInputError
 from rotorcheck.fileio import atomic_write_text, publish_dir, temp_dir_beside
+from rotorcheck.report.schema import DetectionReport
 
 DONE = "DONE"
 ROW_FILE = "row.json"
@@ -136,7 +137,7 @@ def low_band(frequency_hz: Any, healthy_frf: Any, low_band_hz: float | None) -> 
     return mask
 
 
-def stiffness_figure(report: dict[str, Any], mask: Any) -> dict[str, Any]:
+def stiffness_figure(report: DetectionReport, mask: Any) -> dict[str, Any]:
     """The low-frequency stiffness change at the damage port: the mean of the anchored Re D_u over the low
     band's points (N/m, positive: a stiffness loss), its standard error from the points' scatter
     (sample std / sqrt(n), N/m) and the medians of the anchored bound on |D_u| there (N/m)."""
@@ -145,15 +146,15 @@ def stiffness_figure(report: dict[str, Any], mask: Any) -> dict[str, Any]:
     out: dict[str, Any] = {"du_low_re_n_per_m": None, "du_low_se_n_per_m": None, "du_low_points": 0,
                            "du_low_band_max_hz": None, "du_low_bound_min_abs_n_per_m": None,
                            "du_low_bound_max_abs_n_per_m": None}
-    if "damage_dynamics_anchored_re" not in report:
+    if report.damage_dynamics_anchored_re is None:
         return out
-    f = np.asarray(report["frequency_hz"], dtype=float)[mask]
-    re = np.asarray(report["damage_dynamics_anchored_re"], dtype=float)[mask]
+    f = np.asarray(report.frequency_hz, dtype=float)[mask]
+    re = np.asarray(report.damage_dynamics_anchored_re, dtype=float)[mask]
     ok = np.isfinite(re)
     if np.count_nonzero(ok) < 2:
         return out
-    lo = np.asarray(report["damage_anchored_bound_min_abs"], dtype=float)[mask][ok]
-    hi = np.asarray(report["damage_anchored_bound_max_abs"], dtype=float)[mask][ok]
+    lo = np.asarray(report.damage_anchored_bound_min_abs, dtype=float)[mask][ok]
+    hi = np.asarray(report.damage_anchored_bound_max_abs, dtype=float)[mask][ok]
     n = int(np.count_nonzero(ok))
     out.update(du_low_re_n_per_m=float(np.mean(re[ok])), du_low_se_n_per_m=float(np.std(re[ok], ddof=1) / np.sqrt(n)),
                du_low_points=n, du_low_band_max_hz=float(np.max(f[ok])),
@@ -177,20 +178,22 @@ def _row_head(task: SweepTask) -> dict[str, Any]:
             "settings": asdict(task.settings)}
 
 
-def summary_row(task: SweepTask, report: dict[str, Any], mask: Any) -> dict[str, Any]:
+def summary_row(task: SweepTask, report: DetectionReport, mask: Any) -> dict[str, Any]:
     """The summary's figures of one detection report (plain JSON types)."""
-    interval = report.get("stiffness_loss_interval") or [None, None]
+    interval: list[float | None] = [None, None]
+    if report.stiffness_loss_interval:
+        interval = [*report.stiffness_loss_interval]
     row: dict[str, Any] = {
-        **_row_head(task), "verdict": report["verdict"], "verdict_reason": report["verdict_reason"], "error": "",
-        "n_fault_points": int(report["n_fault_points"]), "n_points": int(report["n_points"]),
-        "speed_rpm": float(report["speed_rpm"]), "joint_statistic": _num(report.get("joint_statistic")),
-        "joint_threshold": _num(report.get("joint_threshold")), "joint_p_value": _num(report.get("joint_p_value")),
+        **_row_head(task), "verdict": report.verdict, "verdict_reason": report.verdict_reason, "error": "",
+        "n_fault_points": int(report.n_fault_points), "n_points": int(report.n_points),
+        "speed_rpm": float(report.speed_rpm), "joint_statistic": _num(report.joint_statistic),
+        "joint_threshold": _num(report.joint_threshold), "joint_p_value": _num(report.joint_p_value),
         **stiffness_figure(report, mask),
         "benign_parameters": [{"name": b["name"], "estimate": _num(b["estimate"]), "unit": b["unit"],
                                "interval": [_num(b["interval"][0]), _num(b["interval"][1])],
                                "at_range_edge": bool(b.get("at_range_edge", False))}
-                              for b in report.get("benign_parameters") or []],
-        "joint_best_element": report.get("best_element"), "stiffness_loss": _num(report.get("stiffness_loss")),
+                              for b in report.benign_parameters or []],
+        "joint_best_element": report.best_element, "stiffness_loss": _num(report.stiffness_loss),
         "stiffness_loss_lo": _num(interval[0]), "stiffness_loss_hi": _num(interval[1]),
         "location_best_element": None, "location_summary": "",  # filled from the locate stage's result
     }
@@ -217,7 +220,7 @@ def _inputs(task: SweepTask) -> tuple[Any, Any, Any, Any]:
     return cfg, rig_file, base, run
 
 
-def _detect(task: SweepTask) -> tuple[dict[str, Any], dict[str, Any] | None]:
+def _detect(task: SweepTask) -> tuple[dict[str, Any], DetectionReport | None]:
     """(row, report) of the sweep against its machine's baseline: the library's
     :func:`rotorcheck.workflow.detect_pairs`, as ``rotorcheck detect``."""
     from rotorcheck import workflow
@@ -228,9 +231,9 @@ def _detect(task: SweepTask) -> tuple[dict[str, Any], dict[str, Any] | None]:
         s = task.settings
         check = workflow.detect_pairs(cfg, rig_file, task.sweep, task.baseline, [(base, mrun)],
                                       settings=workflow.DetectorSettings(s.confidence, s.false_alarm))
-        report = check.outcomes[0].report()
+        report = check.outcomes[0].typed_report()
     healthy = base.healthy_frf if base.healthy_frf is not None else mrun.frf
-    report["baseline"] = task.baseline
+    report.baseline = task.baseline
     return summary_row(task, report, low_band(mrun.frequency_hz, healthy, s.low_band_hz)), report
 
 

@@ -3,32 +3,32 @@ the damage estimate to read and the headline damage figure, from a report docume
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 
+from rotorcheck.report.schema import DetectionReport
 
-def damage_columns(report: dict[str, Any]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, str]:
+
+def damage_columns(report: DetectionReport) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, str]:
     """The damage estimate to read (f,): ``(re, im, min_abs, max_abs, kind)`` in N/m, the anchored D_u and its
     bound where the report has it, else the nominal-E22 one; ``kind`` says which."""
-    if "damage_dynamics_anchored_re" in report:
+    if report.damage_dynamics_anchored_re is not None:
         keys = ("damage_dynamics_anchored_re", "damage_dynamics_anchored_im", "damage_anchored_bound_min_abs",
                 "damage_anchored_bound_max_abs")
         kind = "anchored at the healthy data"
     else:
         keys = ("damage_dynamics_re", "damage_dynamics_im", "damage_bound_min_abs", "damage_bound_max_abs")
         kind = "nominal E22 (eq. 3.11; carries the model error)"
-    re, im, lo, hi = (np.asarray(report[k], dtype=float) for k in keys)
+    re, im, lo, hi = (np.asarray(getattr(report, k), dtype=float) for k in keys)
     return re, im, lo, hi, kind
 
 
-def headline_damage(report: dict[str, Any]) -> list[str]:
+def headline_damage(report: DetectionReport) -> list[str]:
     """The headline damage figure: the anchored D_u (the estimate free of the nominal model's error) over
     the fault points (or the band) with its bound; the nominal-E22 one only where no anchored one exists. A
     verdict other than damage has no finding to headline (the numbers stay in report.json)."""
-    if report.get("verdict") != "damage":
+    if report.verdict != "damage":
         return []
-    fault = np.asarray(report["fault"], dtype=bool)
+    fault = np.asarray(report.fault, dtype=bool)
     sel = fault if np.any(fault) else np.ones_like(fault)
     where = f"median over the {int(np.sum(sel))} fault points" if np.any(fault) else "median over the band"
     re_all, _, lo_all, hi_all, kind = damage_columns(report)
@@ -36,6 +36,6 @@ def headline_damage(report: dict[str, Any]) -> list[str]:
     if re.size == 0 or not np.any(np.isfinite(re)):
         return []
     significant = int(np.count_nonzero(lo > 0))
-    return [f"Damage dynamics at {report['damage_port']} ({kind}), {where}: Re D_u = {np.nanmedian(re):.4g} N/m "
+    return [f"Damage dynamics at {report.damage_port} ({kind}), {where}: Re D_u = {np.nanmedian(re):.4g} N/m "
             f"(positive: a stiffness loss); |D_u| within [{np.nanmedian(lo):.4g}, {np.nanmedian(hi):.4g}] N/m "
             f"(medians of the bound); the bound excludes 0 at {significant} of {re.size} points.", ""]

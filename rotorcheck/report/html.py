@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 
 from rotorcheck.report.content import damage_columns, headline_damage
+from rotorcheck.report.schema import DetectionReport
 
 VERDICT_COLOUR = {"damage": "#b00020", "healthy": "#1b7a2f", "inconclusive": "#a66a00", "located": "#b00020",
                   "nothing to locate": "#1b7a2f"}
@@ -141,35 +142,36 @@ def _p(p: Any) -> str:
     return "< 1e-15" if v < 1e-15 else format(v, ".3g")
 
 
-def _key_numbers(report: dict[str, Any]) -> list[tuple[str, str]]:
-    rows = [("fault points", f"{report['n_fault_points']} of {report['n_points']}"),
-            ("band", f"{_num(report['band_hz'][0], 'g')}-{_num(report['band_hz'][1], 'g')} Hz"),
-            ("speed", f"{_num(report['speed_rpm'], 'g')} rpm"),
-            ("noise bound (baseline)", f"{_num(report['noise_bound_m'] * 1e6)} um ({report['noise_method']})"),
-            ("baseline", f"uncertainty {report['uncertainty']}, enclose {report['enclose']}")]
-    if "p_value" in report:
-        rows.append(("sweep p-value (per-point test)", f"{_p(report['p_value'])} at "
-                                                        f"{report['confidence']:.0%} family-wise confidence"))
-    if "joint_statistic" in report:
-        p = _p(report["joint_p_value"])
-        rows.append(("joint statistic T", f"{_num(report['joint_statistic'])} against threshold "
-                                          f"{_num(report['joint_threshold'])} (p = {p}, "
-                                          f"false alarm {report['false_alarm']:g} per sweep)"))
-    if report.get("best_element") is not None and report.get("verdict") == "damage":  # healthy: no finding
-        lo, hi = report["stiffness_loss_interval"]
-        loss = 100 * report["stiffness_loss"]
-        rows.append(("best candidate element", f"element {report['best_element']}: stiffness loss "
+def _key_numbers(report: DetectionReport) -> list[tuple[str, str]]:
+    rows = [("fault points", f"{report.n_fault_points} of {report.n_points}"),
+            ("band", f"{_num(report.band_hz[0], 'g')}-{_num(report.band_hz[1], 'g')} Hz"),
+            ("speed", f"{_num(report.speed_rpm, 'g')} rpm"),
+            ("noise bound (baseline)", f"{_num(report.noise_bound_m * 1e6)} um ({report.noise_method})"),
+            ("baseline", f"uncertainty {report.uncertainty}, enclose {report.enclose}")]
+    if report.p_value is not None:
+        rows.append(("sweep p-value (per-point test)", f"{_p(report.p_value)} at "
+                                                        f"{report.confidence:.0%} family-wise confidence"))
+    if report.joint_statistic is not None:
+        p = _p(report.joint_p_value)
+        rows.append(("joint statistic T", f"{_num(report.joint_statistic)} against threshold "
+                                          f"{_num(report.joint_threshold)} (p = {p}, "
+                                          f"false alarm {report.false_alarm:g} per sweep)"))
+    interval, fraction = report.stiffness_loss_interval, report.stiffness_loss
+    if report.best_element is not None and interval and fraction is not None and report.verdict == "damage":
+        lo, hi = interval  # a healthy verdict shows no finding
+        loss = 100 * fraction
+        rows.append(("best candidate element", f"element {report.best_element}: stiffness loss "
                                                f"{loss:.3g} % [{100 * lo:.3g}, {100 * hi:.3g}] (95 %, linearized)"))
-    if report.get("channel_pairs"):
-        rows.append(("channel pairs (output<-input)", ", ".join(report["channel_pairs"])))
+    if report.channel_pairs:
+        rows.append(("channel pairs (output<-input)", ", ".join(report.channel_pairs)))
     return rows
 
 
-def _fault_rows(report: dict[str, Any]) -> tuple[list[str], list[list[str]]]:
-    f = np.asarray(report["frequency_hz"], dtype=float)
-    fault = np.asarray(report["fault"], dtype=bool)
-    gh = np.asarray(report["gamma_healthy"], dtype=float)
-    gr = np.asarray(report["gamma_required"], dtype=float)
+def _fault_rows(report: DetectionReport) -> tuple[list[str], list[list[str]]]:
+    f = np.asarray(report.frequency_hz, dtype=float)
+    fault = np.asarray(report.fault, dtype=bool)
+    gh = np.asarray(report.gamma_healthy, dtype=float)
+    gr = np.asarray(report.gamma_required, dtype=float)
     dre, dim, lo, hi, kind = damage_columns(report)
     anchored = kind.startswith("anchored")
     header = ["f (Hz)", "gamma healthy", "gamma required", "ratio",
@@ -183,22 +185,22 @@ def _fault_rows(report: dict[str, Any]) -> tuple[list[str], list[list[str]]]:
     return header, rows
 
 
-def render_detection_html(report: dict[str, Any], plots: Sequence[str | Path],
+def render_detection_html(report: DetectionReport, plots: Sequence[str | Path],
                           baseline_path: str | Path | None = None) -> str:
     """report.html of a detection: verdict and rule, the numbers, the figures embedded, every fault point,
     the benign parameters, the location (detect --locate), the inputs with hashes, the software."""
-    verdict = str(report["verdict"])
+    verdict = str(report.verdict)
     parts = [f"<h1>rotorcheck detection: {_verdict_badge(verdict)}</h1>",
-             f"<p>Sweep <code>{_e(report['sweep'])}</code> (run <code>{_e(report['run_id'])}</code>) on rig "
-             f"<code>{_e(report['rig_id'])}</code> at {_num(report['speed_rpm'], 'g')} rpm; damage port "
-             f"{_e(report['damage_port'])}.</p>",
-             f"<p id=\"reason\"><b>{_e(verdict)}</b>: {_e(report['verdict_reason'])}.</p>",
-             f"<p class=\"rule\" id=\"rule\"><b>Rule.</b> {_e(report['verdict_rule'])}</p>"]
+             f"<p>Sweep <code>{_e(report.sweep)}</code> (run <code>{_e(report.run_id)}</code>) on rig "
+             f"<code>{_e(report.rig_id)}</code> at {_num(report.speed_rpm, 'g')} rpm; damage port "
+             f"{_e(report.damage_port)}.</p>",
+             f"<p id=\"reason\"><b>{_e(verdict)}</b>: {_e(report.verdict_reason)}.</p>",
+             f"<p class=\"rule\" id=\"rule\"><b>Rule.</b> {_e(report.verdict_rule)}</p>"]
     parts += [f"<p>{_e(line)}</p>" for line in headline_damage(report) if line]
     parts.append("<h2>The numbers</h2>" + table(("quantity", "value"), _key_numbers(report)))
-    if report.get("benign_parameters"):
+    if report.benign_parameters:
         rows = [[b["name"], f"{b['estimate']:+.4g}", _interval(b["interval"]), b["unit"],
-                 "yes" if b.get("at_range_edge") else "no"] for b in report["benign_parameters"]]
+                 "yes" if b.get("at_range_edge") else "no"] for b in report.benign_parameters]
         parts.append("<h2>Benign change fitted (inside the rig's variability ranges)</h2>"
                      + table(("parameter", "estimate", "95 % interval", "unit", "at range edge"), rows,
                              (False, True, False, False, False)))
@@ -206,22 +208,22 @@ def render_detection_html(report: dict[str, Any], plots: Sequence[str | Path],
     header, rows = _fault_rows(report)
     parts.append(f"<h2>Fault points: all {len(rows)}</h2>"
                  + (table(header, rows, [True] * len(header)) if rows else "<p>None.</p>"))
-    status = np.asarray(report["status"]).astype(str)
+    status = np.asarray(report.status).astype(str)
     other = [(s, int(np.count_nonzero(status == s))) for s in np.unique(status) if s not in ("ok", "fault")]
     if other:
         parts.append("<p>Points not decided: " + ", ".join(f"{n} with status <code>{_e(s)}</code>" for s, n in other)
                      + ".</p>")
-    loc = report.get("location")
+    loc = report.location
     if loc:
         parts.append("<h2>Location</h2>" + location_table(loc))
-    if report.get("notes"):
-        parts.append("<h2>Notes</h2><ul>" + "".join(f"<li>{_e(n)}</li>" for n in report["notes"]) + "</ul>")
-    inputs = [("sweep", str(report["sweep"]), report.get("sweep_sha256")),
-              ("rig", str(report["rig_id"]), report.get("rig_sha256"))]
+    if report.notes:
+        parts.append("<h2>Notes</h2><ul>" + "".join(f"<li>{_e(n)}</li>" for n in report.notes) + "</ul>")
+    inputs: list[tuple[str, str, str | None]] = [("sweep", str(report.sweep), report.sweep_sha256),
+              ("rig", str(report.rig_id), report.rig_sha256)]
     if baseline_path is not None:
         inputs.append(("baseline", str(baseline_path), sha256_or_none(baseline_path)))
     parts.append(provenance(inputs))
-    return page(f"rotorcheck: {verdict} - {Path(str(report['sweep'])).name}", "\n".join(parts))
+    return page(f"rotorcheck: {verdict} - {Path(str(report.sweep)).name}", "\n".join(parts))
 
 
 def location_table(loc: dict[str, Any]) -> str:

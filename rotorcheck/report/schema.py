@@ -97,6 +97,7 @@ class DetectionReport:
     location: dict[str, Any] | None = None  # rotorcheck.location.LocationResult.to_dict() (detect --locate)
     detectability: dict[str, Any] | None = None  # what this sweep could have revealed (rotorcheck.detectability)
     channel_pairs: list[str] | None = None  # measured FRFs "output<-input" (port labels), the rig's io pair first
+    baseline: str | None = None  # the baseline file the sweep was compared with
     # the joint test (verdict_rule names it when it decided)
     joint_statistic: float | None = None  # T = max_e T_e (chi-square units)
     joint_threshold: float | None = None  # T at which p = false_alarm
