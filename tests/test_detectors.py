@@ -94,3 +94,23 @@ def test_default_rules_and_refusals(open_crack) -> None:
         make_detector(lumped, base, "joint")
     with pytest.raises(InputError, match="--false-alarm"):
         make_detector(rig, base, None, DetectorSettings(false_alarm=1.5))
+
+
+def test_detection_and_diagnosis_plot_what_they_hold(open_crack) -> None:
+    rig, base, new = open_crack
+    out = workflow.detect(rig, base, new)
+    fig = out.found.plot("open crack sample")
+    ax = fig.axes[0]
+    # the deciding ratio, point for point, is on the decision figure (a line or markers carry its values)
+    drawn = np.concatenate([np.asarray(a.get_ydata(), dtype=float) for a in ax.get_lines()])
+    finite = out.found.ratio[np.isfinite(out.found.ratio)]
+    assert np.all(np.isin(np.round(finite, 12), np.round(drawn, 12)))
+    # the measured per-point ratio is |T_new - T_h| / allowance (an independent recomputation)
+    th = base.healthy_frf[:, 0]
+    np.testing.assert_allclose(out.found.points.gamma_required, np.abs(new.frf - th), rtol=1e-9)
+    dfig = out.diagnosis.plot(out.found.fault)
+    mag = dfig.axes[0]
+    ys = [np.asarray(line.get_ydata(), dtype=float) for line in mag.get_lines()]
+    full = [y for y in ys if y.shape == out.diagnosis.anchored.shape]
+    drawn = np.fmax(full[0], full[1])  # the estimate in two lines: where its bound excludes 0, and elsewhere
+    np.testing.assert_allclose(drawn, np.abs(out.diagnosis.anchored), rtol=1e-9)
