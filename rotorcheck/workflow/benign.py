@@ -3,6 +3,7 @@ the per-point certificate beyond benign change, and learning drift from several 
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -10,14 +11,15 @@ import numpy as np
 
 from rotorcheck.config import RigConfig
 from rotorcheck.errors import InputError
-from rotorcheck.robust.joint import BenignModel, joint_test, learn_directions
+from rotorcheck.nominal import ChannelPair
+from rotorcheck.robust.joint import BenignModel, JointResult, LearnedDirections, joint_test, learn_directions
 from rotorcheck.robust.real_box import BoxCertificate, certify_points, merge_certificates
 from rotorcheck.signatures import SILENT, benign_box, benign_prediction, crack_signatures, io_frf, stacked
 from rotorcheck.variability import benign_at, benign_parameters
 from rotorcheck.workflow.measured import MeasuredRun, frf_estimate, per_pair
 
 
-def benign_table(joint: Any, rig: RigConfig) -> list[dict[str, Any]]:
+def benign_table(joint: JointResult, rig: RigConfig) -> list[dict[str, Any]]:
     """The fitted benign parameters: {name, estimate, interval (95 %, linearized), unit, at_range_edge};
     relative changes in percent, offsets in their unit."""
 
@@ -49,7 +51,8 @@ KAPPA_GRID = (KAPPA_NOMINAL, 3.0)
 
 
 def benign_model(rig: RigConfig, f: np.ndarray, speed_rpm: float, Th: np.ndarray, kappa: float,
-                  speed_offset: float = 0.0, correction: np.ndarray | None = None, pairs: Any = None) -> Any:
+                  speed_offset: float = 0.0, correction: np.ndarray | None = None,
+                  pairs: Sequence[ChannelPair] | None = None) -> BenignModel | None:
     """The model's benign change (re-solved, anchored at ``Th``) for the joint test; None without a
     ``variability`` section. A recorded speed offset shifts the speed parameter's range. ``correction``
     (p, f) m/N per unit parameter, learned from healthy sweeps, is added: ``b(theta) + theta C``."""
@@ -94,8 +97,8 @@ def benign_model(rig: RigConfig, f: np.ndarray, speed_rpm: float, Th: np.ndarray
 
 
 def joint_detection(rig: RigConfig, Th: np.ndarray, var_h: np.ndarray, run: MeasuredRun, kappa: float,
-                    learned: Any = None, false_alarm: float = 0.01, speed_rpm: float | None = None,
-                    correction: np.ndarray | None = None) -> Any:
+                    learned: LearnedDirections | None = None, false_alarm: float = 0.01,
+                    speed_rpm: float | None = None, correction: np.ndarray | None = None) -> JointResult:
     """The joint test (:mod:`rotorcheck.robust.joint`) of ``run`` against the healthy FRF ``Th`` (f,) or
     (f, P), one column per channel pair, with the variance of its mean ``var_h`` (same shape), m^2/N^2;
     every point of every pair enters one statistic. ``correction``: see :func:`learn_benign`."""
@@ -110,7 +113,7 @@ def joint_detection(rig: RigConfig, Th: np.ndarray, var_h: np.ndarray, run: Meas
     return joint_test(stacked(est.frf - th), stacked(est.var + vh), S, els, benign, learned, false_alarm)
 
 
-def certify_beyond_benign(rig: RigConfig, Th: np.ndarray, var_h: np.ndarray, run: MeasuredRun, joint: Any,
+def certify_beyond_benign(rig: RigConfig, Th: np.ndarray, var_h: np.ndarray, run: MeasuredRun, joint: JointResult,
                           speed_rpm: float | None = None, max_boxes: int = 200) -> tuple[Any, list[str]] | None:
     """Per point: is the change certified beyond every benign change inside the ranges (the parameters
     real, branch and bound; :mod:`rotorcheck.robust.real_box`), given both sweeps' noise and the joint
@@ -152,7 +155,7 @@ class BenignLearning:
 
     kappa: float  # relative error of the benign prediction carried in H0
     correction: np.ndarray | None = None  # (p, f) m/N per unit parameter: data's correction of the model
-    learned: Any = None  # robust.joint.LearnedDirections: what parameters cannot explain
+    learned: LearnedDirections | None = None  # what the parameters cannot explain
     theta: np.ndarray | None = None  # (K, p) the training sweeps' fitted parameters
     # per benign parameter: how much of the data's response to it the model predicts (the part of the
     # model's sensitivity along the learned one, |<s_model, s_data>| / ||s_data||^2, whitened) and the
@@ -230,12 +233,13 @@ def learn_benign(rig: RigConfig, runs: list[MeasuredRun], false_alarm: float = 0
     if C is not None:
         bm = benign_model(rig, runs[0].frequency_hz, speed, mean, 0.0,
                            pairs=runs[0].pairs if runs[0].n_pairs > 1 else None)
+        assert bm is not None, "a correction was learned, so the rig has benign parameters"
         zero = np.zeros(len(params))
         for j, prm in enumerate(params):
             if not keep[j]:
                 continue
             x = zero.copy()
-            x[j] = h = float(bm.step[j])
+            x[j] = h = float(np.asarray(bm.step)[j])
             s_m = (bm.predict(x) - bm.predict(zero)) / h
             s_d = s_m + C[j]
             inner = np.sum(wgt * s_m.conj() * s_d)

@@ -3,13 +3,12 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
 from rotorcheck.config import Port, RigConfig
 from rotorcheck.nominal import ChannelPair, pair_receptance
-from rotorcheck.robust.damage_block import damage_block_bound
+from rotorcheck.robust.damage_block import DamageBlockBound, damage_block_bound
 from rotorcheck.robust.identify import damage_dynamics
 from rotorcheck.workflow.measured import MeasuredRun, PairGrid
 
@@ -25,7 +24,7 @@ class DirectionalDamage:
     re_interval: tuple[np.ndarray, np.ndarray]
     im_interval: tuple[np.ndarray, np.ndarray]
     draws: int
-    bound: Any = None  # robust.damage_block.DamageBlockBound: the certified set over the noise polydisc
+    bound: DamageBlockBound | None = None  # the certified set over the noise polydisc
 
 
 def damage_per_direction(rig: RigConfig, run: MeasuredRun, healthy_frf: np.ndarray,

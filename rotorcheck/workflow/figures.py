@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from rotorcheck.baseline import Baseline
 from rotorcheck.config import RigConfig
 from rotorcheck.errors import check_choice
-from rotorcheck.nominal import primary_pair
+from rotorcheck.nominal import NominalModel, primary_pair
 from rotorcheck.robust.identify import moebius_disk_image
 from rotorcheck.robust.lft import lft_upper
 from rotorcheck.units import PLOT_FRF_UNITS
@@ -19,8 +20,11 @@ from rotorcheck.workflow.noise import frf_noise_radius
 from rotorcheck.workflow.rigs import damage_port_name, port_static_stiffness
 from rotorcheck.workflow.validation import ValidationOutcome
 
+if TYPE_CHECKING:  # the plots module imports matplotlib: only when plotting
+    from rotorcheck.report.plots import FigureContext
 
-def uncertainty_disk(model: Any, gamma: np.ndarray, noise_bound_m: float | np.ndarray, W: np.ndarray
+
+def uncertainty_disk(model: NominalModel, gamma: np.ndarray, noise_bound_m: float | np.ndarray, W: np.ndarray
                      ) -> tuple[np.ndarray, np.ndarray]:
     """Centre and radius (m/N) of the set of receptances the healthy uncertain model explains."""
     G = model.frf
@@ -41,7 +45,7 @@ def uncertainty_disk(model: Any, gamma: np.ndarray, noise_bound_m: float | np.nd
     return centre, radius + noise
 
 
-def _v_of(b: Any) -> float | np.ndarray:
+def _v_of(b: Baseline) -> float | np.ndarray:
     return b.noise_bound_per_point_m if b.noise_bound_per_point_m is not None else b.noise_bound_m
 
 
@@ -66,7 +70,7 @@ def check_frf_unit(frf_unit: str) -> str:
 
 
 def figure_context(rig: RigConfig, run: MeasuredRun, baseline_path: str | Path | None = None,
-                   frf_unit: str = "m/N") -> Any:
+                   frf_unit: str = "m/N") -> FigureContext:
     """What a validation or detection figure shows: rig, speed (none for a lumped rig), the channel pair
     drawn (the rig's actuator -> sensor), the sweep file and the baseline file."""
     from rotorcheck.report.plots import FigureContext  # lazy import: matplotlib only when plotting

@@ -6,9 +6,10 @@ from typing import Any
 
 import numpy as np
 
+from rotorcheck.baseline import Baseline
 from rotorcheck.config import RigConfig
 from rotorcheck.errors import InputError
-from rotorcheck.location import locate
+from rotorcheck.location import LocationResult, locate
 from rotorcheck.signatures import benign_box
 from rotorcheck.variability import benign_at
 from rotorcheck.workflow.benign import KAPPA_NOMINAL, benign_model
@@ -17,9 +18,9 @@ from rotorcheck.workflow.measured import MeasuredRun, frf_estimate, per_pair
 from rotorcheck.workflow.rigs import baseline_updates, updated_rig
 
 
-def locate_damage(rig: RigConfig, baseline: Any, run: MeasuredRun, false_alarm: float = 0.01,
+def locate_damage(rig: RigConfig, baseline: Baseline, run: MeasuredRun, false_alarm: float = 0.01,
                   elements: tuple[int, ...] | None = None, section_length: float | None = None,
-                  both: bool = True, **options: Any) -> Any:
+                  both: bool = True, **options: Any) -> LocationResult:
     """Where and how big (:func:`rotorcheck.location.locate`) against a baseline validated with
     ``--enclose measured``: :func:`locate_run` with its healthy FRF, speed and updated model."""
     if baseline.enclose != "measured" or healthy_frf_of(baseline) is None:
@@ -32,7 +33,7 @@ def locate_damage(rig: RigConfig, baseline: Any, run: MeasuredRun, false_alarm: 
 
 def locate_run(rig: RigConfig, run: MeasuredRun, healthy_frf: np.ndarray, healthy_var: np.ndarray,
                speed_rpm: float | None = None, false_alarm: float = 0.01, elements: tuple[int, ...] | None = None,
-               section_length: float | None = None, both: bool = True, **options: Any) -> Any:
+               section_length: float | None = None, both: bool = True, **options: Any) -> LocationResult:
     """Every shaft element (or ``elements``) as a candidate for a local stiffness loss
     (:func:`rotorcheck.location.locate`), ``run`` against the healthy FRF (f,) or (f, P) and the variance
     of its mean, the rig's benign parameters real in their ranges (at the healthy ``speed_rpm``; the run's

@@ -10,6 +10,7 @@ from typing import Any
 
 import numpy as np
 
+from rotorcheck.baseline import Baseline
 from rotorcheck.config import RigConfig, load_config
 from rotorcheck.errors import InputError
 from rotorcheck.fe.assembly import build_system
@@ -19,7 +20,7 @@ from rotorcheck.robust.measured import FrfEstimate, combine_sweeps
 from rotorcheck.robust.measured import frf_estimate as _est
 from rotorcheck.robust.noise import point_miss
 from rotorcheck.signal.lockin import SHAFT_ORDERS, fit_shaft_harmonics, remove_shaft_harmonics
-from rotorcheck.sweep.format import ls_frf, ls_frf_var
+from rotorcheck.sweep.format import Sweep, ls_frf, ls_frf_var
 from rotorcheck.sweep.hdf5io import read_sweep, sweep_sha256
 from rotorcheck.workflow.frf import MeasuredFRF
 from rotorcheck.workflow.rigs import rig_for
@@ -120,7 +121,7 @@ def load_run(path: str | Path, config: RigConfig, run_id: str | None = None,
     return measured_run(read_sweep(p), config, run_id, p, sweep_sha256(p), shaft_orders)
 
 
-def measured_run(sweep: Any, config: RigConfig, run_id: str | None = None, path: str | Path = "<memory>",
+def measured_run(sweep: Sweep, config: RigConfig, run_id: str | None = None, path: str | Path = "<memory>",
                  sha256: str = "", shaft_orders: int = SHAFT_ORDERS) -> MeasuredRun:
     """:func:`load_run` on a :class:`rotorcheck.sweep.format.Sweep` already in memory."""
     p = Path(path)
@@ -309,7 +310,7 @@ def variance_dof(run: MeasuredRun) -> np.ndarray:
     return run.dof if run.dof is not None else 2.0 * (run.n_periods.astype(float) - 1.0)
 
 
-def frf_estimate(run: MeasuredRun) -> Any:
+def frf_estimate(run: MeasuredRun) -> FrfEstimate:
     """The run's FRF with its noise (variance of the mean FRF and its dof) for measured detection: one
     column per channel pair (f, P), the rig's actuator -> sensor first."""
 
@@ -318,7 +319,7 @@ def frf_estimate(run: MeasuredRun) -> Any:
     return _est(run.W, run.Zt, run.output_var, variance_dof(run))
 
 
-def healthy_estimate(runs: list[MeasuredRun]) -> Any:
+def healthy_estimate(runs: list[MeasuredRun]) -> FrfEstimate:
     """The measured healthy FRF: the mean of the healthy runs with its variance and Welch dof."""
 
     return combine_sweeps([frf_estimate(r) for r in runs])
@@ -403,7 +404,7 @@ def pair_keys(run: MeasuredRun) -> list[list[str]]:
     return [list(p.key()) for p in run.pairs]
 
 
-def baseline_pairs(baseline: Any) -> list[list[str]] | None:
+def baseline_pairs(baseline: Baseline) -> list[list[str]] | None:
     """The channel pairs a baseline was validated on (None: made before channel pairs were stored)."""
     return baseline.healthy.channel_pairs
 

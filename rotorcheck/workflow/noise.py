@@ -20,7 +20,7 @@ NOISE_METHODS = ("pooled", "per-point", "max", "floor", "manual")
 
 def fit_noise(
     run: MeasuredRun, method: str = "pooled", confidence: float = 0.99, manual_m: float | None = None
-) -> Any:
+) -> NoiseBound:
     """Step 2: the noise bound V (m, uniform in frequency) from a healthy run.
 
     ``pooled`` (default): the noise level pooled over the points (median of the per-point variance
@@ -53,7 +53,7 @@ def fit_noise(
     return nb
 
 
-def noise_baseline(rig: RigConfig, run: MeasuredRun, noise_bound: Any) -> Any:
+def noise_baseline(rig: RigConfig, run: MeasuredRun, noise_bound: NoiseBound) -> Baseline:
     """The baseline after step 2 (stage 'noise'): the noise bound and where it came from."""
 
     return Baseline(Provenance(rig.rig_id, rig.sha256(), [run.sha256], run.run_id, run.speed_rpm),
@@ -70,7 +70,7 @@ def noise_fit(noise_bound: NoiseBound, uncertainty: str, parameter: str, per_poi
 
 
 def prior_noise(baseline_path: str | Path, rig: RigConfig, force: bool, sweep_sha256: str | None = None,
-                reuse: bool = False) -> Any:
+                reuse: bool = False) -> NoiseBound | None:
     """The noise bound of an existing baseline at ``baseline_path`` to validate with (None: fit anew).
 
     A stage-'noise' baseline (``fit-noise``) gives its bound. A validated one is refused unless ``force``
@@ -107,14 +107,14 @@ def prior_noise(baseline_path: str | Path, rig: RigConfig, force: bool, sweep_sh
     return NoiseBound(prior.noise_bound_m, prior.noise_method, prior.noise_confidence, details)
 
 
-def noise_report(noise_bound: Any, sweep: str | Path, baseline_path: str | Path) -> Any:
+def noise_report(noise_bound: NoiseBound, sweep: str | Path, baseline_path: str | Path) -> NoiseReport:
     """``fit-noise --json`` as a :class:`rotorcheck.report.schema.NoiseReport`."""
 
     return NoiseReport(noise_bound.value_m, noise_bound.method, noise_bound.confidence, str(sweep),
                        str(baseline_path), noise_bound.details)
 
 
-def noise_values(noise_bound: Any, run: MeasuredRun | None = None) -> float | np.ndarray:
+def noise_values(noise_bound: NoiseBound, run: MeasuredRun | None = None) -> float | np.ndarray:
     """V (m) as the validation/detection LMIs take it: uniform, or per point for a 'per-point' bound
     (recomputed from ``run``'s own variances at the same confidence when a run is given)."""
     per = noise_bound.details.get("per_point_m") if noise_bound.details else None
@@ -122,7 +122,7 @@ def noise_values(noise_bound: Any, run: MeasuredRun | None = None) -> float | np
         return float(noise_bound.value_m)
     if run is None:
         return np.asarray(per, dtype=float)
-    return _own_v(run, float(noise_bound.confidence))
+    return _own_v(run, float(noise_bound.confidence or 0.0))
 
 
 def _own_v(run: MeasuredRun, confidence: float) -> np.ndarray:
@@ -132,7 +132,7 @@ def _own_v(run: MeasuredRun, confidence: float) -> np.ndarray:
                       dtype=float)
 
 
-def baseline_noise_values(baseline: Any, run: MeasuredRun) -> float | np.ndarray:
+def baseline_noise_values(baseline: Baseline, run: MeasuredRun) -> float | np.ndarray:
     """The noise bound for new data against ``baseline``: uniform, or the new run's own V(w)."""
     if baseline.noise_bound_per_point_m is None:
         return float(baseline.noise_bound_m)

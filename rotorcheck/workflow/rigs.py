@@ -3,11 +3,10 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
-from rotorcheck.baseline import stored_rig
+from rotorcheck.baseline import Baseline, stored_rig
 from rotorcheck.config import RigConfig, load_config
 from rotorcheck.errors import InputError
 from rotorcheck.faults.compliance import with_crack_depth
@@ -57,7 +56,7 @@ def updated_rig(rig: RigConfig, values: dict[str, float] | None) -> RigConfig:
     return with_benign(rig, values)[0]
 
 
-def baseline_updates(baseline: Any) -> dict[str, float] | None:
+def baseline_updates(baseline: Baseline) -> dict[str, float] | None:
     """The updated parameter values stored in a baseline, if any."""
     return baseline.drift.updated_parameters
 

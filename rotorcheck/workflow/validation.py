@@ -4,18 +4,19 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
 from rotorcheck.baseline import Baseline, DriftModel, HealthyData, ModelBound, Provenance
 from rotorcheck.config import RigConfig
 from rotorcheck.errors import InputError, check_choice
-from rotorcheck.nominal import nominal_model
+from rotorcheck.nominal import NominalModel, nominal_model
 from rotorcheck.report.schema import ValidationReport
 from rotorcheck.robust import validation
 from rotorcheck.robust.mu import Structure
-from rotorcheck.updating import update_parameters
+from rotorcheck.robust.noise import NoiseBound
+from rotorcheck.robust.validation import ValidationResult
+from rotorcheck.updating import Update, update_parameters
 from rotorcheck.workflow.benign import KAPPA_NOMINAL, BenignLearning, learn_benign
 from rotorcheck.workflow.measured import (
     MeasuredRun,
@@ -33,20 +34,20 @@ from rotorcheck.workflow.rigs import updated_rig
 class ValidationOutcome:
     """What :func:`validate` returns: the baseline to store and the numbers behind it."""
 
-    baseline: Any  # rotorcheck.baseline.Baseline
-    result: Any  # rotorcheck.robust.validation.ValidationResult
-    model: Any  # rotorcheck.nominal.NominalModel
+    baseline: Baseline
+    result: ValidationResult
+    model: NominalModel
     runs: list[MeasuredRun]
     rig: RigConfig
-    update: Any = None  # rotorcheck.updating.Update (validate --update)
-    learning: Any = None  # BenignLearning (validate --learn-drift)
+    update: Update | None = None  # validate --update
+    learning: BenignLearning | None = None  # validate --learn-drift
 
     @property
     def n_not_enclosed(self) -> int:
         """Points where gamma_h could not be verified (unexplainable, solver failure, bad data)."""
         return int(np.count_nonzero(self.result.status != "ok"))
 
-    def typed_report(self, noise_bound: Any, baseline_path: str | Path) -> Any:
+    def typed_report(self, noise_bound: NoiseBound, baseline_path: str | Path) -> ValidationReport:
         """``validate --json`` as a :class:`rotorcheck.report.schema.ValidationReport`."""
 
         res = self.result
@@ -64,7 +65,7 @@ ENCLOSE_MODES = ("measured", "system", "data")
 def validate(
     rig: RigConfig,
     runs: list[MeasuredRun],
-    noise_bound: Any,
+    noise_bound: NoiseBound,
     enclose: str = "measured",
     fail_at: tuple[int, ...] = (),
     update: bool = False,
@@ -171,7 +172,7 @@ def update_summary(outcome: ValidationOutcome) -> str:
             + f"; RMS relative FRF error {u.rms_before:.3g} -> {u.rms_after:.3g}")
 
 
-def parameter_structure(model: Any, enclose: str) -> Any:
+def parameter_structure(model: NominalModel, enclose: str) -> Structure | None:
     """A named physical parameter (``uncertainty.structure: parametric``) is real: a real scalar block
     (mixed mu, D-G scalings) where the LMI path solves it ('data'); None (one complex block) otherwise
     ('system'/'measured' enclose through the complex closed form, a relaxation the report notes)."""
