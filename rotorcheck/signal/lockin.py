@@ -213,11 +213,16 @@ def shaft_harmonic_fit(
     2 (N - 1)`` (:func:`average_periods`).
     """
     x = np.asarray(per_period, dtype=np.complex128)
-    n = x.shape[0]
-    flat = x.reshape(n, -1)
+    return _harmonic_fit(x, _harmonic_design(x.shape[0], f_exc_hz, shaft_hz, orders, rtol))
+
+
+def _harmonic_design(n: int, f_exc_hz: float, shaft_hz: float, orders: int = SHAFT_ORDERS, rtol: float = 1e-6
+                     ) -> tuple[np.ndarray, float] | None:
+    """The regressors ``A`` (N, q) that :func:`shaft_harmonic_fit` keeps for ``n`` periods and ``g00 =
+    [(A^H A)^{-1}]_00``; None where it returns the plain mean. They depend on the point, not on the
+    channel: computed once for every channel of a point (:func:`fit_shaft_harmonics`)."""
     if orders <= 0 or shaft_hz <= 0.0 or n < 5:
-        mean, var, _ = average_periods(x)
-        return mean, var, 2 * (n - 1)
+        return None
     p = np.arange(n)
     cols = [np.ones(n, dtype=np.complex128)]
     for k in range(1, orders + 1):
@@ -238,16 +243,28 @@ def shaft_harmonic_fit(
             break
     q = len(kept)
     if q == 1 or n < q + 3:
-        mean, var, _ = average_periods(x)
-        return mean, var, 2 * (n - 1)
+        return None
     A = np.stack(kept, axis=1)  # (N, q)
-    coef, *_ = np.linalg.lstsq(A, flat, rcond=None)
-    resid = flat - A @ coef
-    s2 = np.sum(np.abs(resid) ** 2, axis=0) / (n - q)
     # [(A^H A)^-1]_00 = |row 0 of R^-1|^2 (A = QR): never negative, unlike inverting a near-singular Gram
     # matrix (a speed so low that its harmonics nearly alias gave negative variances that way)
     _, R = np.linalg.qr(A)
     g00 = float(np.sum(np.abs(np.linalg.solve(R, np.eye(q))[0]) ** 2))
+    return A, g00
+
+
+def _harmonic_fit(x: np.ndarray, design: tuple[np.ndarray, float] | None) -> tuple[np.ndarray, np.ndarray, int]:
+    """:func:`shaft_harmonic_fit` of the per-period phasors ``x`` (N, ...) with the point's
+    :func:`_harmonic_design`."""
+    n = x.shape[0]
+    if design is None:
+        mean, var, _ = average_periods(x)
+        return mean, var, 2 * (n - 1)
+    A, g00 = design
+    q = A.shape[1]
+    flat = x.reshape(n, -1)
+    coef, *_ = np.linalg.lstsq(A, flat, rcond=None)
+    resid = flat - A @ coef
+    s2 = np.sum(np.abs(resid) ** 2, axis=0) / (n - q)
     mean = coef[0].reshape(x.shape[1:])
     var = (s2 * g00).reshape(x.shape[1:])
     return mean, var, 2 * (n - q)
@@ -266,10 +283,10 @@ def fit_shaft_harmonics(
     var = np.empty((nf, len(cols)))
     dof = np.empty((nf, len(cols)))
     for j in range(nf):
-        per = period_phasor[j, : int(n_periods[j]), :]
+        per = np.asarray(period_phasor[j, : int(n_periods[j]), :], dtype=np.complex128)
+        design = _harmonic_design(per.shape[0], float(frequency_hz[j]), shaft_hz, orders)  # one per point
         for k, c in enumerate(cols):
-            mean[j, k], var[j, k], dof[j, k] = shaft_harmonic_fit(per[:, c], float(frequency_hz[j]), shaft_hz,
-                                                                  orders)
+            mean[j, k], var[j, k], dof[j, k] = _harmonic_fit(per[:, c], design)
     return mean, var, dof
 
 
