@@ -33,11 +33,35 @@ VISIBLE = 1e-4
 def io_frf(config: RigConfig, freq_hz: np.ndarray, speed_rpm: float,
            pairs: Sequence[ChannelPair] | None = None, system: MechanicalSystem | None = None) -> np.ndarray:
     """The model's receptance actuator -> sensor (f,), m/N; with ``pairs`` every channel pair's (f, P).
-    ``system``: ``config`` assembled (:func:`rotorcheck.fe.assembly.build_system`) when the caller has it."""
+    ``system``: ``config`` assembled (:func:`rotorcheck.fe.assembly.build_system`) when the caller has it.
+
+    Without ``system`` the result is kept for equal arguments (the rig by its content): ``detect`` solves
+    the healthy model and each element's crack signature from several places (the joint test, the
+    certificate beyond benign change, the detectability figures); a copy is returned each time."""
+    if system is None:
+        key = _frf_key(config, freq_hz, speed_rpm, pairs)
+        hit = _IO_FRF.get(key)
+        if hit is None:
+            hit = _IO_FRF[key] = io_frf(config, freq_hz, speed_rpm, pairs, build_system(config))
+            _bounded(_IO_FRF, 64)
+        return hit.copy()
     if pairs is not None and len(pairs) > 1:
         return pair_receptance(config, freq_hz, speed_rpm, pairs, system)
     g = nominal_model(config, freq_hz, speed_rpm, system).frf
     return g[:, None] if pairs is not None else g
+
+
+#: :func:`io_frf` results by :func:`_frf_key`
+_IO_FRF: dict[tuple[Any, ...], np.ndarray] = {}
+
+
+def _frf_key(config: RigConfig, freq_hz: np.ndarray, speed_rpm: float,
+             pairs: Sequence[ChannelPair] | None) -> tuple[Any, ...]:
+    """Equal keys, equal :func:`io_frf`: the rig's content (its JSON: floats to the last bit), the grid's
+    bytes, the speed and the channel pairs' ports."""
+    f = np.ascontiguousarray(np.asarray(freq_hz, dtype=float))
+    ports = None if pairs is None else tuple(p.key() for p in pairs)
+    return config.model_dump_json(), f.shape, f.tobytes(), float(speed_rpm), ports
 
 
 #: a channel pair whose model receptance is below this fraction of the largest pair's is one the model
