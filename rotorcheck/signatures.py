@@ -170,24 +170,28 @@ def benign_prediction(config: RigConfig, freq_hz: np.ndarray, speed_rpm: float, 
     # gain (the finite-difference column of a Jacobian, the exact part of the model-error allowance) or a
     # speed change re-uses the solve or the assembled rig of the same values (the same numbers, not re-done)
     solved: dict[tuple[tuple[float, ...], float], np.ndarray] = {}
-    systems: dict[tuple[float, ...], MechanicalSystem] = {}
+    systems: dict[tuple[float, ...], tuple[RigConfig, MechanicalSystem]] = {}
 
     def predict(theta: np.ndarray) -> np.ndarray:
         key = tuple(float(x) for x in theta)
         if key not in cache:
-            values = {p.name: float(x) for p, x in zip(params, theta)}
-            cfg, d_rpm, g_s, g_a = with_benign(config, values)
+            # the speed offset and the gains (no config change), then the rig's own parameters where a
+            # re-solve needs their config (with_benign applies each parameter on its own)
+            _, d_rpm, g_s, g_a = with_benign(config, {p.name: float(x) for p, x in zip(params, theta)
+                                                      if not p.changes_model})
             rig_key = tuple(float(x) for p, x in zip(params, theta) if p.changes_model)
             resolve = d_rpm != 0.0 or any(x != 0.0 for x in rig_key)
             g = g0
             if resolve:
                 hit = solved.get((rig_key, d_rpm))
                 if hit is None:
-                    sys_ = systems.get(rig_key)
-                    if sys_ is None:
-                        sys_ = systems[rig_key] = build_system(cfg)
+                    rig = systems.get(rig_key)
+                    if rig is None:
+                        cfg = with_benign(config, {p.name: float(x) for p, x in zip(params, theta)
+                                                   if p.changes_model})[0]
+                        rig = systems[rig_key] = (cfg, build_system(cfg))
                         _bounded(systems)
-                    hit = solved[(rig_key, d_rpm)] = io_frf(cfg, f, speed_rpm + d_rpm, pairs, sys_)
+                    hit = solved[(rig_key, d_rpm)] = io_frf(rig[0], f, speed_rpm + d_rpm, pairs, rig[1])
                     _bounded(solved)
                 g = hit
             cache[key] = stacked(th * (g_s * g_a * relative(g, g0) - 1.0))

@@ -230,15 +230,16 @@ def _harmonic_design(n: int, f_exc_hz: float, shaft_hz: float, orders: int = SHA
         cols += [z**p, np.conj(z) ** p]
     # greedy Gram-Schmidt: keep a column only if it adds a direction (relative to its own norm)
     kept: list[np.ndarray] = []
-    basis: list[np.ndarray] = []
+    basis: list[tuple[np.ndarray, np.ndarray]] = []  # (q, conj(q)): the conjugate taken once per vector
     for c in cols:
         r = c.copy()
-        for q_ in basis:
-            r -= (q_.conj() @ r) * q_
+        for q_, qc in basis:
+            r -= (qc @ r) * q_
         nr = float(np.linalg.norm(r))
         if nr > rtol * np.linalg.norm(c):
             kept.append(c)
-            basis.append(r / nr)
+            q_ = r / nr
+            basis.append((q_, q_.conj()))
         if len(kept) >= n - 3:
             break
     q = len(kept)
