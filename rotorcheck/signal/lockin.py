@@ -216,6 +216,81 @@ def shaft_harmonic_fit(
     return _harmonic_fit(x, _harmonic_design(x.shape[0], f_exc_hz, shaft_hz, orders, rtol))
 
 
+def _harmonic_columns(n: int, f_exc_hz: float, shaft_hz: float, orders: int) -> list[np.ndarray]:
+    """The candidate regressors of :func:`shaft_harmonic_fit`: ones, then ``z_k^p``, ``conj(z_k)^p``."""
+    p = np.arange(n)
+    cols = [np.ones(n, dtype=np.complex128)]
+    for k in range(1, orders + 1):
+        z = np.exp(2j * np.pi * k * shaft_hz / f_exc_hz)
+        cols += [z**p, np.conj(z) ** p]
+    return cols
+
+
+def _design_of(kept: list[np.ndarray]) -> tuple[np.ndarray, float]:
+    """``(A, g00)`` of the kept regressors."""
+    q = len(kept)
+    A = np.stack(kept, axis=1)  # (N, q)
+    # [(A^H A)^-1]_00 = |row 0 of R^-1|^2 (A = QR): never negative, unlike inverting a near-singular Gram
+    # matrix (a speed so low that its harmonics nearly alias gave negative variances that way)
+    _, R = np.linalg.qr(A)
+    g00 = float(np.sum(np.abs(np.linalg.solve(R, np.eye(q))[0]) ** 2))
+    return A, g00
+
+
+#: relative distance from the keep threshold below which :func:`_harmonic_designs` leaves a point's choice of
+#: regressors to the point-by-point Gram-Schmidt (the batched one differs from it by round-off only, ~1e-9 of
+#: the threshold at worst: far inside this band)
+_GUARD = 1e-6
+
+
+def _harmonic_designs(n_periods: np.ndarray, frequency_hz: np.ndarray, shaft_hz: float, orders: int = SHAFT_ORDERS,
+                      rtol: float = 1e-6) -> list[tuple[np.ndarray, float] | None]:
+    """:func:`_harmonic_design` of every point (``n_periods`` (f,), ``frequency_hz`` (f,)). The greedy
+    Gram-Schmidt that chooses the regressors runs on all points of equal period count at once; a point whose
+    norm ratio falls within :data:`_GUARD` of the threshold is chosen point by point, so the choice, and the
+    regressors (the same columns), are those of :func:`_harmonic_design`."""
+    nf = frequency_hz.size
+    out: list[tuple[np.ndarray, float] | None] = [None] * nf
+    if orders <= 0 or shaft_hz <= 0.0:
+        return out
+    ns = np.asarray(n_periods, dtype=int)
+    for n in np.unique(ns):
+        idx = np.flatnonzero(ns == n)
+        if n < 5:
+            continue
+        cols = [_harmonic_columns(int(n), float(frequency_hz[j]), shaft_hz, orders) for j in idx]
+        C = np.array(cols)  # (P, m, n)
+        P, m = C.shape[0], C.shape[1]
+        basis = np.zeros((P, m, n), dtype=np.complex128)  # orthonormal vectors kept so far, per point
+        n_kept = np.zeros(P, dtype=int)
+        keep = np.zeros((P, m), dtype=bool)
+        done = np.zeros(P, dtype=bool)
+        close = np.zeros(P, dtype=bool)
+        for i in range(m):
+            r = C[:, i].copy()
+            for j in range(i):
+                qj = basis[:, j]  # zero where fewer than j + 1 were kept
+                r -= np.sum(qj.conj() * r, axis=1)[:, None] * qj
+            nr = np.linalg.norm(r, axis=1)
+            thr = rtol * np.linalg.norm(C[:, i], axis=1)
+            close |= ~done & (np.abs(nr - thr) <= _GUARD * thr)
+            add = ~done & (nr > thr)
+            keep[:, i] = add
+            slot = n_kept[add]
+            basis[np.flatnonzero(add), slot] = r[add] / nr[add, None]
+            n_kept += add
+            done |= n_kept >= n - 3
+        for t, j in enumerate(idx):
+            if close[t]:
+                out[j] = _harmonic_design(int(n), float(frequency_hz[j]), shaft_hz, orders, rtol)
+                continue
+            q = int(n_kept[t])
+            if q == 1 or n < q + 3:
+                continue
+            out[j] = _design_of([cols[t][i] for i in range(m) if keep[t, i]])
+    return out
+
+
 def _harmonic_design(n: int, f_exc_hz: float, shaft_hz: float, orders: int = SHAFT_ORDERS, rtol: float = 1e-6
                      ) -> tuple[np.ndarray, float] | None:
     """The regressors ``A`` (N, q) that :func:`shaft_harmonic_fit` keeps for ``n`` periods and ``g00 =
@@ -223,11 +298,7 @@ def _harmonic_design(n: int, f_exc_hz: float, shaft_hz: float, orders: int = SHA
     channel: computed once for every channel of a point (:func:`fit_shaft_harmonics`)."""
     if orders <= 0 or shaft_hz <= 0.0 or n < 5:
         return None
-    p = np.arange(n)
-    cols = [np.ones(n, dtype=np.complex128)]
-    for k in range(1, orders + 1):
-        z = np.exp(2j * np.pi * k * shaft_hz / f_exc_hz)
-        cols += [z**p, np.conj(z) ** p]
+    cols = _harmonic_columns(n, f_exc_hz, shaft_hz, orders)
     # greedy Gram-Schmidt: keep a column only if it adds a direction (relative to its own norm)
     kept: list[np.ndarray] = []
     basis: list[tuple[np.ndarray, np.ndarray]] = []  # (q, conj(q)): the conjugate taken once per vector
@@ -245,12 +316,7 @@ def _harmonic_design(n: int, f_exc_hz: float, shaft_hz: float, orders: int = SHA
     q = len(kept)
     if q == 1 or n < q + 3:
         return None
-    A = np.stack(kept, axis=1)  # (N, q)
-    # [(A^H A)^-1]_00 = |row 0 of R^-1|^2 (A = QR): never negative, unlike inverting a near-singular Gram
-    # matrix (a speed so low that its harmonics nearly alias gave negative variances that way)
-    _, R = np.linalg.qr(A)
-    g00 = float(np.sum(np.abs(np.linalg.solve(R, np.eye(q))[0]) ** 2))
-    return A, g00
+    return _design_of(kept)
 
 
 def _harmonic_fit(x: np.ndarray, design: tuple[np.ndarray, float] | None) -> tuple[np.ndarray, np.ndarray, int]:
@@ -283,11 +349,12 @@ def fit_shaft_harmonics(
     mean = np.empty((nf, len(cols)), complex)
     var = np.empty((nf, len(cols)))
     dof = np.empty((nf, len(cols)))
+    n_per = np.array([period_phasor[j, : int(n_periods[j])].shape[0] for j in range(nf)], dtype=int)
+    designs = _harmonic_designs(n_per, np.asarray(frequency_hz, dtype=float), shaft_hz, orders)  # one per point
     for j in range(nf):
         per = np.asarray(period_phasor[j, : int(n_periods[j]), :], dtype=np.complex128)
-        design = _harmonic_design(per.shape[0], float(frequency_hz[j]), shaft_hz, orders)  # one per point
         for k, c in enumerate(cols):
-            mean[j, k], var[j, k], dof[j, k] = _harmonic_fit(per[:, c], design)
+            mean[j, k], var[j, k], dof[j, k] = _harmonic_fit(per[:, c], designs[j])
     return mean, var, dof
 
 
