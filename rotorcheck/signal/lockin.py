@@ -280,14 +280,14 @@ def _harmonic_designs(n_periods: np.ndarray, frequency_hz: np.ndarray, shaft_hz:
             basis[np.flatnonzero(add), slot] = r[add] / nr[add, None]
             n_kept += add
             done |= n_kept >= n - 3
-        for t, j in enumerate(idx):
+        for t, point in enumerate(idx.tolist()):
             if close[t]:
-                out[j] = _harmonic_design(int(n), float(frequency_hz[j]), shaft_hz, orders, rtol)
+                out[point] = _harmonic_design(int(n), float(frequency_hz[point]), shaft_hz, orders, rtol)
                 continue
             q = int(n_kept[t])
             if q == 1 or n < q + 3:
                 continue
-            out[j] = _design_of([cols[t][i] for i in range(m) if keep[t, i]])
+            out[point] = _design_of([cols[t][i] for i in range(m) if keep[t, i]])
     return out
 
 
