@@ -176,7 +176,7 @@ def _standard_normals(seed: int, draws: int, n: int) -> np.ndarray:
     if have is None or have.shape[0] < draws:
         have = np.random.default_rng(seed).standard_normal((draws, n))
         have.flags.writeable = False
-        if len(_NORMALS) >= 4:
+        if len(_NORMALS) >= 2:  # 200,000 x 9 draws are 14 MB
             _NORMALS.pop(next(iter(_NORMALS)))
         _NORMALS[(seed, n)] = have
     return have[:draws]
