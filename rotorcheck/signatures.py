@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from rotorcheck.config import RigConfig
-from rotorcheck.fe.assembly import build_system
+from rotorcheck.fe.assembly import build_system, config_key
 from rotorcheck.fe.system import MechanicalSystem
 from rotorcheck.nominal import ChannelPair, nominal_model, pair_receptance, primary_pair
 from rotorcheck.robust.real_box import AffineModel, AffineParameter
@@ -40,10 +40,12 @@ def io_frf(config: RigConfig, freq_hz: np.ndarray, speed_rpm: float,
     certificate beyond benign change, the detectability figures); a copy is returned each time."""
     if system is None:
         key = _frf_key(config, freq_hz, speed_rpm, pairs)
-        hit = _IO_FRF.get(key)
+        hit = _IO_FRF.get(key) if key is not None else None
         if hit is None:
-            hit = _IO_FRF[key] = io_frf(config, freq_hz, speed_rpm, pairs, build_system(config))
-            _bounded(_IO_FRF, 64)
+            hit = io_frf(config, freq_hz, speed_rpm, pairs, build_system(config))
+            if key is not None:
+                _IO_FRF[key] = hit
+                _bounded(_IO_FRF, 64)
         return hit.copy()
     if pairs is not None and len(pairs) > 1:
         return pair_receptance(config, freq_hz, speed_rpm, pairs, system)
@@ -56,12 +58,15 @@ _IO_FRF: dict[tuple[Any, ...], np.ndarray] = {}
 
 
 def _frf_key(config: RigConfig, freq_hz: np.ndarray, speed_rpm: float,
-             pairs: Sequence[ChannelPair] | None) -> tuple[Any, ...]:
-    """Equal keys, equal :func:`io_frf`: the rig's content (its JSON: floats to the last bit), the grid's
-    bytes, the speed and the channel pairs' ports."""
+             pairs: Sequence[ChannelPair] | None) -> tuple[Any, ...] | None:
+    """Equal keys, equal :func:`io_frf`: the rig's content (:func:`rotorcheck.fe.assembly.config_key`), the
+    grid's bytes, the speed and the channel pairs' ports; None: not kept."""
+    content = config_key(config)
+    if content is None:
+        return None
     f = np.ascontiguousarray(np.asarray(freq_hz, dtype=float))
     ports = None if pairs is None else tuple(p.key() for p in pairs)
-    return config.model_dump_json(), f.shape, f.tobytes(), float(speed_rpm), ports
+    return content, f.shape, f.tobytes(), float(speed_rpm), ports
 
 
 #: a channel pair whose model receptance is below this fraction of the largest pair's is one the model

@@ -27,6 +27,7 @@ from collections import OrderedDict
 from collections.abc import Mapping
 
 import numpy as np
+import pydantic_core
 
 from rotorcheck.config import Material, ModalDamping, RayleighDamping, RigConfig, ShaftElement
 from rotorcheck.fe.damping import modal_damping_matrix, rayleigh_damping_matrix
@@ -182,6 +183,16 @@ def _node_block(A: np.ndarray, node: int, block: np.ndarray) -> None:
     A[4 * node : 4 * node + 4, 4 * node : 4 * node + 4] += block
 
 
+def config_key(config: RigConfig, exclude: set[str] | None = None) -> bytes | None:
+    """The content of ``config`` (less the fields ``exclude``) as JSON bytes, equal for equal content: floats
+    to the last bit, infinities and NaN spelled out (not null, as ``model_dump_json`` would, like None);
+    None when something in it does not serialize (then nothing is cached by it)."""
+    try:
+        return pydantic_core.to_json(config, exclude=exclude, inf_nan_mode="constants")
+    except (pydantic_core.PydanticSerializationError, TypeError, ValueError):
+        return None
+
+
 #: the bearing-free part of rotors assembled lately (:func:`_rotor_structure`), by its key
 _STRUCTURES: OrderedDict[tuple[object, ...], tuple[object, ...]] = OrderedDict()
 _STRUCTURES_SIZE = 32
@@ -195,8 +206,9 @@ def _rotor_structure(config: RigConfig, modulus_factors: Mapping[int, float] | N
     config's content without its bearings, the modulus factors, the support nodes): a rig re-solved at other
     bearing coefficients or speeds (benign change, issue 28) assembles its shaft once; the arrays are shared
     read-only and every system copies what it changes."""
-    key = (config.model_dump_json(exclude={"bearings"}), tuple(sorted((modulus_factors or {}).items())), n_sup)
-    hit = _STRUCTURES.get(key)
+    content = config_key(config, exclude={"bearings"})
+    key = (content, tuple(sorted((modulus_factors or {}).items())), n_sup)
+    hit = _STRUCTURES.get(key) if content is not None else None
     if hit is not None:
         _STRUCTURES.move_to_end(key)
         return hit  # type: ignore[return-value]
@@ -236,9 +248,10 @@ def _rotor_structure(config: RigConfig, modulus_factors: Mapping[int, float] | N
         if A is not None:
             A.flags.writeable = False
     out = (positions, station_node, infos, layers, M, G, K0, C0, tuple(features), rayleigh_rotor)
-    _STRUCTURES[key] = out
-    if len(_STRUCTURES) > _STRUCTURES_SIZE:
-        _STRUCTURES.popitem(last=False)
+    if content is not None:
+        _STRUCTURES[key] = out
+        if len(_STRUCTURES) > _STRUCTURES_SIZE:
+            _STRUCTURES.popitem(last=False)
     return out
 
 
