@@ -18,6 +18,8 @@ from typing import Any
 import numpy as np
 
 from rotorcheck.config import RigConfig
+from rotorcheck.fe.assembly import build_system, config_key
+from rotorcheck.fe.system import MechanicalSystem
 from rotorcheck.nominal import ChannelPair, nominal_model, pair_receptance, primary_pair
 from rotorcheck.robust.real_box import AffineModel, AffineParameter
 from rotorcheck.variability import BenignParameter, benign_parameters, with_benign
@@ -29,12 +31,42 @@ VISIBLE = 1e-4
 
 
 def io_frf(config: RigConfig, freq_hz: np.ndarray, speed_rpm: float,
-           pairs: Sequence[ChannelPair] | None = None) -> np.ndarray:
-    """The model's receptance actuator -> sensor (f,), m/N; with ``pairs`` every channel pair's (f, P)."""
+           pairs: Sequence[ChannelPair] | None = None, system: MechanicalSystem | None = None) -> np.ndarray:
+    """The model's receptance actuator -> sensor (f,), m/N; with ``pairs`` every channel pair's (f, P).
+    ``system``: ``config`` assembled (:func:`rotorcheck.fe.assembly.build_system`) when the caller has it.
+
+    Without ``system`` the result is kept for equal arguments (the rig by its content): ``detect`` solves
+    the healthy model and each element's crack signature from several places (the joint test, the
+    certificate beyond benign change, the detectability figures); a copy is returned each time."""
+    if system is None:
+        key = _frf_key(config, freq_hz, speed_rpm, pairs)
+        hit = _IO_FRF.get(key) if key is not None else None
+        if hit is None:
+            hit = io_frf(config, freq_hz, speed_rpm, pairs, build_system(config))
+            if key is not None:
+                _IO_FRF[key] = hit
+                _bounded(_IO_FRF, 64)
+        return hit.copy()
     if pairs is not None and len(pairs) > 1:
-        return pair_receptance(config, freq_hz, speed_rpm, pairs)
-    g = nominal_model(config, freq_hz, speed_rpm).frf
+        return pair_receptance(config, freq_hz, speed_rpm, pairs, system)
+    g = nominal_model(config, freq_hz, speed_rpm, system).frf
     return g[:, None] if pairs is not None else g
+
+
+#: :func:`io_frf` results by :func:`_frf_key`
+_IO_FRF: dict[tuple[Any, ...], np.ndarray] = {}
+
+
+def _frf_key(config: RigConfig, freq_hz: np.ndarray, speed_rpm: float,
+             pairs: Sequence[ChannelPair] | None) -> tuple[Any, ...] | None:
+    """Equal keys, equal :func:`io_frf`: the rig's content (:func:`rotorcheck.fe.assembly.config_key`), the
+    grid's bytes, the speed and the channel pairs' ports; None: not kept."""
+    content = config_key(config)
+    if content is None:
+        return None
+    f = np.ascontiguousarray(np.asarray(freq_hz, dtype=float))
+    ports = None if pairs is None else tuple(p.key() for p in pairs)
+    return content, f.shape, f.tobytes(), float(speed_rpm), ports
 
 
 #: a channel pair whose model receptance is below this fraction of the largest pair's is one the model
@@ -101,6 +133,12 @@ def crack_signatures(config: RigConfig, freq_hz: np.ndarray, speed_rpm: float, h
     return tuple(e for e, k in zip(els, seen) if k), S[seen]
 
 
+def _bounded(cache: dict[Any, Any], size: int = 256) -> None:
+    """Drop the oldest entry of ``cache`` beyond ``size`` entries."""
+    if len(cache) > size:
+        cache.pop(next(iter(cache)))
+
+
 @dataclass(frozen=True)
 class BenignPrediction:
     """``predict(theta)``: the benign change (f,) m/N at parameter values ``theta`` (in the
@@ -133,17 +171,36 @@ def benign_prediction(config: RigConfig, freq_hz: np.ndarray, speed_rpm: float, 
     g0 = io_frf(config, f, speed_rpm, pairs)
     th = unstacked(healthy_frf, g0.shape)
     cache: dict[tuple[float, ...], np.ndarray] = {}
+    # the model re-solved depends on the parameters that change the rig and on the speed offset only: a
+    # gain (the finite-difference column of a Jacobian, the exact part of the model-error allowance) or a
+    # speed change re-uses the solve or the assembled rig of the same values (the same numbers, not re-done)
+    solved: dict[tuple[tuple[float, ...], float], np.ndarray] = {}
+    systems: dict[tuple[float, ...], tuple[RigConfig, MechanicalSystem]] = {}
 
     def predict(theta: np.ndarray) -> np.ndarray:
         key = tuple(float(x) for x in theta)
         if key not in cache:
-            values = {p.name: float(x) for p, x in zip(params, theta)}
-            cfg, d_rpm, g_s, g_a = with_benign(config, values)
-            resolve = d_rpm != 0.0 or any(x != 0.0 for p, x in zip(params, theta) if p.changes_model)
-            g = io_frf(cfg, f, speed_rpm + d_rpm, pairs) if resolve else g0
+            # the speed offset and the gains (no config change), then the rig's own parameters where a
+            # re-solve needs their config (with_benign applies each parameter on its own)
+            _, d_rpm, g_s, g_a = with_benign(config, {p.name: float(x) for p, x in zip(params, theta)
+                                                      if not p.changes_model})
+            rig_key = tuple(float(x) for p, x in zip(params, theta) if p.changes_model)
+            resolve = d_rpm != 0.0 or any(x != 0.0 for x in rig_key)
+            g = g0
+            if resolve:
+                hit = solved.get((rig_key, d_rpm))
+                if hit is None:
+                    rig = systems.get(rig_key)
+                    if rig is None:
+                        cfg = with_benign(config, {p.name: float(x) for p, x in zip(params, theta)
+                                                   if p.changes_model})[0]
+                        rig = systems[rig_key] = (cfg, build_system(cfg))
+                        _bounded(systems)
+                    hit = solved[(rig_key, d_rpm)] = io_frf(rig[0], f, speed_rpm + d_rpm, pairs, rig[1])
+                    _bounded(solved)
+                g = hit
             cache[key] = stacked(th * (g_s * g_a * relative(g, g0) - 1.0))
-            if len(cache) > 256:
-                cache.pop(next(iter(cache)))
+            _bounded(cache)
         return cache[key]
 
     return BenignPrediction(params, predict)

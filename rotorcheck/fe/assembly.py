@@ -27,6 +27,7 @@ from collections import OrderedDict
 from collections.abc import Mapping
 
 import numpy as np
+import pydantic_core
 
 from rotorcheck.config import Material, ModalDamping, RayleighDamping, RigConfig, ShaftElement
 from rotorcheck.fe.damping import modal_damping_matrix, rayleigh_damping_matrix
@@ -182,12 +183,37 @@ def _node_block(A: np.ndarray, node: int, block: np.ndarray) -> None:
     A[4 * node : 4 * node + 4, 4 * node : 4 * node + 4] += block
 
 
-def build_rotor(config: RigConfig, modulus_factors: Mapping[int, float] | None = None) -> MechanicalSystem:
-    """Timoshenko FE model of a ``kind: rotor`` config (see module docstring)."""
+def config_key(config: RigConfig, exclude: set[str] | None = None) -> bytes | None:
+    """The content of ``config`` (less the fields ``exclude``) as JSON bytes, equal for equal content: floats
+    to the last bit, infinities and NaN spelled out (not null, as ``model_dump_json`` would, like None);
+    None when something in it does not serialize (then nothing is cached by it)."""
+    try:
+        return pydantic_core.to_json(config, exclude=exclude, inf_nan_mode="constants")
+    except (pydantic_core.PydanticSerializationError, TypeError, ValueError):
+        return None
+
+
+#: the bearing-free part of rotors assembled lately (:func:`_rotor_structure`), by its key
+_STRUCTURES: OrderedDict[tuple[object, ...], tuple[object, ...]] = OrderedDict()
+_STRUCTURES_SIZE = 32
+
+
+def _rotor_structure(config: RigConfig, modulus_factors: Mapping[int, float] | None, n_sup: int) -> tuple[
+        np.ndarray, tuple[int, ...], tuple[BeamElementInfo, ...], tuple[BeamElementInfo, ...], np.ndarray,
+        np.ndarray, np.ndarray, np.ndarray, tuple[tuple[str, str, int], ...], np.ndarray | None]:
+    """Everything of a rotor but its bearings: the mesh, M, G, K0 (shaft, discs, point masses, springs), C0
+    (springs), the features so far and the Rayleigh damping of scope "rotor". Kept for equal inputs (the
+    config's content without its bearings, the modulus factors, the support nodes): a rig re-solved at other
+    bearing coefficients or speeds (benign change, issue 28) assembles its shaft once; the arrays are shared
+    read-only and every system copies what it changes."""
+    content = config_key(config, exclude={"bearings"})
+    key = (content, tuple(sorted((modulus_factors or {}).items())), n_sup)
+    hit = _STRUCTURES.get(key) if content is not None else None
+    if hit is not None:
+        _STRUCTURES.move_to_end(key)
+        return hit  # type: ignore[return-value]
     positions, station_node, infos, layers = rotor_mesh(config, modulus_factors)
-    n_station = len(station_node)
     n_shaft = 4 * positions.size
-    n_sup = config.n_support_nodes
     n_dof = n_shaft + 2 * n_sup
 
     def xy(station: int) -> np.ndarray:
@@ -220,6 +246,32 @@ def build_rotor(config: RigConfig, modulus_factors: Mapping[int, float] | None =
         _node_block(K0, node, np.diag([s.kxx, s.kyy, s.k_rot, s.k_rot]))
         _node_block(C0, node, np.diag([s.cxx, s.cyy, 0.0, 0.0]))
         features.append(("spring", s.name, s.station))
+    for A in (positions, M, G, K0, C0, rayleigh_rotor):
+        if A is not None:
+            A.flags.writeable = False
+    out = (positions, station_node, infos, layers, M, G, K0, C0, tuple(features), rayleigh_rotor)
+    if content is not None:
+        _STRUCTURES[key] = out
+        if len(_STRUCTURES) > _STRUCTURES_SIZE:
+            _STRUCTURES.popitem(last=False)
+    return out
+
+
+def build_rotor(config: RigConfig, modulus_factors: Mapping[int, float] | None = None) -> MechanicalSystem:
+    """Timoshenko FE model of a ``kind: rotor`` config (see module docstring)."""
+    n_sup = config.n_support_nodes
+    positions, station_node, infos, layers, M, G, K0, C0, features_so_far, rayleigh_rotor = _rotor_structure(
+        config, modulus_factors, n_sup)
+    positions = positions.copy()  # the system's own (writable, as before)
+    n_station = len(station_node)
+    n_dof = M.shape[0]
+    features = list(features_so_far)
+    damping = config.damping
+
+    def xy(station: int) -> np.ndarray:
+        """The x and y DOF of a shaft station or a support node."""
+        return np.array([rotor_dof(station_node, positions.size, n_sup, station, d) for d in ("x", "y")])
+
     bearing_dofs: list[tuple[np.ndarray, np.ndarray | None]] = []
     for b in config.bearings:
         bearing_dofs.append((xy(b.station), None if b.n_link is None else xy(b.n_link)))
