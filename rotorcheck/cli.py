@@ -20,11 +20,25 @@ from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
 
-from rotorcheck.errors import InputError, UserInputError
+from rotorcheck.errors import InputError, UserInputError, finite_positive, in_open_unit
 
 EXIT_OK, EXIT_DAMAGE, EXIT_INPUT, EXIT_INCONCLUSIVE = 0, 1, 2, 3
 #: frequency points of a simulated sweep when neither --points nor the rig's analysis.n_points sets them
 DEFAULT_POINTS = 262
+#: the largest spin speed an option accepts, rpm (1e308 rpm overflows every frequency computed from it)
+MAX_SPEED_RPM = 1e6
+
+
+def _speed(value: float | None, option: str = "--speed") -> float | None:
+    """A spin speed option: None or a finite number of rpm in [0, MAX_SPEED_RPM], else an InputError naming it."""
+    return finite_positive(value, option, allow_zero=True, maximum=MAX_SPEED_RPM)
+
+
+def _at_least(value: int | None, minimum: int, option: str) -> int | None:
+    """An integer option: None or >= ``minimum``, else an InputError naming it."""
+    if value is not None and value < minimum:
+        raise InputError(None, option, f"must be >= {minimum}, got {value}")
+    return value
 
 app = typer.Typer(
     add_completion=False,
@@ -125,6 +139,7 @@ def model(
     from rotorcheck.resources import default_rig_path
     from rotorcheck.workflow import model_report
 
+    _speed(speed)
     rig_path = rig if rig is not None else default_rig_path("crack_rig")
     from rotorcheck.workflow import plot_formats
 
@@ -160,6 +175,7 @@ def info(
     from rotorcheck.sweep.hdf5io import read_sweep, sweep_sha256
     from rotorcheck.sweep.summary import summarize
 
+    in_open_unit(confidence, "--confidence")
     sw = read_sweep(sweep)
     doc = summarize(sw, confidence=confidence)
     doc["file"] = str(sweep)
@@ -227,7 +243,11 @@ def convert(
     as_json: JsonOpt = False,
 ) -> int:
     """Convert a sweep between HDF5, UFF58, tidy CSV and wide CSV (FRF-only data need a noise statement)."""
+    from rotorcheck.errors import check_rig_id
     from rotorcheck.sweep.convert import ConvertOptions
+
+    if rig_id is not None:
+        check_rig_id(rig_id, None, "--rig-id")
     from rotorcheck.sweep.convert import convert as convert_files
 
     opts = ConvertOptions(speed_rpm=speed, noise_source=noise_source, noise_var=noise_var, rig_id=rig_id,
@@ -257,6 +277,7 @@ def crack(
     from rotorcheck.resources import configs_dir
     from rotorcheck.workflow import crack_report, plot_formats
 
+    finite_positive(unbalance, "--unbalance", allow_zero=True)
     rig_path = rig if rig is not None else configs_dir() / "crack_rig_truth.yaml"
     with _progress(f"the cracked rotor ({fault}): harmonic balance, orbits, spectra"):
         doc = crack_report(rig_path, fault=fault, unbalance_g_m=unbalance, out_dir=out, force=force,
@@ -287,6 +308,19 @@ def _fail_at(spec: str) -> tuple[int, ...]:
         raise InputError(None, "--fail-at", f"expected comma-separated point indices, got {spec!r}") from None
 
 
+def _known_elements(els: tuple[int, ...] | None, cfg: Any) -> tuple[int, ...] | None:
+    """``--elements`` checked against the rig's shaft elements (an InputError naming the valid range)."""
+    from rotorcheck.signatures import candidate_elements
+
+    known = candidate_elements(cfg)
+    bad = [e for e in els or () if e not in known]
+    if bad:
+        valid = f"{min(known)}-{max(known)}" if known else "none: the rig is lumped"
+        raise InputError(None, "--elements", f"no shaft element {', '.join(map(str, bad))} in rig {cfg.rig_id!r} "
+                         f"(elements {valid})")
+    return els
+
+
 FailAtOpt = Annotated[str, typer.Option("--fail-at", hidden=True, help="Testing: fail the solver at these points.")]
 
 
@@ -312,8 +346,7 @@ def fit_noise(
     from rotorcheck.resources import samples_dir
 
     sweep_path = sweep if sweep is not None else samples_dir() / "crack_rig" / "healthy_1000rpm.h5"
-    if not 0.0 < confidence < 1.0:
-        raise InputError(None, "--confidence", f"must be in (0, 1), got {confidence}")
+    in_open_unit(confidence, "--confidence")
     target = out / "baseline.h5"
     check_writable([target], force)
     cfg, rig_path, (mrun,) = workflow.load_rig_and_runs(sweep_path, rig, target, run)
@@ -461,6 +494,8 @@ def detect(
     from rotorcheck.fileio import atomic_write_text, check_writable
     from rotorcheck.report.reports import REPORT_FILES, render_json, write_reports
 
+    in_open_unit(confidence, "--confidence")
+    in_open_unit(false_alarm, "--false-alarm")
     formats = workflow.plot_formats(plot_format)
     workflow.check_frf_unit(frf_unit)
     base_path = baseline if baseline is not None else out / "baseline.h5"
@@ -546,6 +581,8 @@ def locate(
     formats = workflow.plot_formats(plot_format)
     base_path = baseline if baseline is not None else out / "baseline.h5"
     els = _element_list(elements)
+    finite_positive(section_length, "--crack-section-length")
+    in_open_unit(false_alarm, "--false-alarm")
     targets = [out / "location.json", out / "location.html"] + (workflow.plot_paths(out, ("location",), formats)
                                                                  if plots else [])
     check_writable(targets, force)
@@ -620,6 +657,14 @@ def simulate(
     from rotorcheck.sim.rig_sim import shaft_angle_from, simulate_rig, step_settings
     from rotorcheck.sweep.hdf5io import write_sweep
 
+    _speed(speed)
+    finite_positive(f_min, "--f-min")
+    finite_positive(f_max, "--f-max")
+    finite_positive(noise, "--noise", allow_zero=True)
+    _at_least(points, 2, "--points")
+    _at_least(periods, 1, "--periods")
+    _at_least(seed, 0, "--seed")
+    _at_least(harmonics, 1, "--harmonics")
     check_writable([output], force)
     rig_path = rig if rig is not None else configs_dir() / "crack_rig_truth.yaml"
     cfg = workflow.load_rig(rig_path)
@@ -732,11 +777,14 @@ def detectability(
     from rotorcheck.report.reports import render_json
     from rotorcheck.resources import default_rig_path
 
+    finite_positive(noise_std, "--noise-std")
+    _speed(speed)
+    _at_least(periods, 1, "--periods")
+    _at_least(max_sensors, 1, "--max-sensors")
+    in_open_unit(false_alarm, "--false-alarm")
     rig_path = rig if rig is not None else default_rig_path("crack_rig")
     cfg = workflow.load_rig(rig_path)
-    if not 0.0 < false_alarm < 1.0:
-        raise InputError(None, "--false-alarm", "must be in (0, 1)")
-    els = _element_list(elements)
+    els = _known_elements(_element_list(elements), cfg)
     split = lambda t: [x for x in t.replace(" ", "").split(",") if x]  # noqa: E731
     formats = workflow.plot_formats(plot_format)
     targets = [out / "detectability.json"] + (workflow.plot_paths(out, ("detectability",), formats) if plots else [])
@@ -795,8 +843,11 @@ def import_ross_cmd(
 ) -> int:
     """A ROSS rotor as a rotorcheck rig file, with what could not be carried over (stderr and the file's header)."""
     from rotorcheck.fileio import atomic_write_text, check_writable
+    from rotorcheck.errors import check_rig_id
     from rotorcheck.ross_import import import_ross
 
+    if rig_id is not None:
+        check_rig_id(rig_id, None, "--rig-id")
     check_writable([out], force)
     result = import_ross(rotor, rig_id=rig_id)
     atomic_write_text(out, result.to_yaml())

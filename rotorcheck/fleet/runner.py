@@ -26,7 +26,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
-from rotorcheck.errors import InputError, check_choice
+from rotorcheck.errors import InputError, check_choice, finite_positive
 from rotorcheck.fileio import atomic_write_text
 from rotorcheck.fleet.index import HashIndex
 from rotorcheck.fleet.layout import Fleet, discover
@@ -103,8 +103,7 @@ def check_options(opts: FleetOptions) -> None:
                     ("--trend-confidence", opts.trend_confidence)):
         if not 0.0 < v < 1.0:
             raise InputError(None, name, f"must be in (0, 1), got {v}")
-    if s.low_band_hz is not None and s.low_band_hz <= 0:
-        raise InputError(None, "--low-band", f"must be > 0 Hz, got {s.low_band_hz}")
+    finite_positive(s.low_band_hz, "--low-band")
     parse_limit(opts.limit)
     if opts.executor == "dask" or opts.scheduler:
         try:
