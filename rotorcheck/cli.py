@@ -842,8 +842,8 @@ def import_ross_cmd(
     as_json: JsonOpt = False,
 ) -> int:
     """A ROSS rotor as a rotorcheck rig file, with what could not be carried over (stderr and the file's header)."""
-    from rotorcheck.fileio import atomic_write_text, check_writable
     from rotorcheck.errors import check_rig_id
+    from rotorcheck.fileio import atomic_write_text, check_writable
     from rotorcheck.ross_import import import_ross
 
     if rig_id is not None:

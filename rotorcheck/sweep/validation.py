@@ -16,7 +16,6 @@ from typing import Any
 import numpy as np
 
 from rotorcheck.errors import InputError, check_rig_id
-
 from rotorcheck.sweep.format import (
     DIRECTIONS,
     FRF_ONLY_DATASETS,
