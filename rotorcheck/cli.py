@@ -397,11 +397,12 @@ def validate(
     (a file of several runs, one per speed: every run, one validated set each)."""
     from rotorcheck import workflow
     from rotorcheck.baseline import write_baseline
-    from rotorcheck.fileio import check_writable
+    from rotorcheck.fileio import check_output_place, check_writable
 
     formats = workflow.plot_formats(plot_format)
     workflow.check_frf_unit(frf_unit)
     target = out / "baseline.h5"
+    check_output_place(target)
     cfg, rig_path, firsts = workflow.load_rig_and_runs(sweeps[0], rig, target, run, every_run=True)
     others = [workflow.read_runs(p, cfg, [r.run_id for r in firsts]) for p in sweeps[1:]]
     run_ids = [r.run_id for r in firsts]
@@ -890,6 +891,14 @@ def main(argv: list[str] | None = None) -> int:
         return EXIT_INPUT
     except typer.Exit as exc:
         return int(exc.exit_code)
+    except OSError as exc:  # a file the OS refused (no permission, full disk, a folder in the way): name it
+        if os.environ.get("ROTORCHECK_DEBUG"):
+            raise
+        if exc.filename is None:
+            err.print(f"[bold red]internal error:[/] {type(exc).__name__}: {escape(str(exc))}")
+            return EXIT_INPUT
+        err.print(f"[bold red]error:[/] {escape(str(exc.filename))}: {escape(exc.strerror or str(exc))}")
+        return EXIT_INPUT
     except typer.Abort:
         err.print("aborted")
         return EXIT_INPUT

@@ -10,6 +10,7 @@ flipping it, so no process-wide state changes.
 from __future__ import annotations
 
 import contextlib
+import errno
 import hashlib
 import json
 import os
@@ -20,20 +21,59 @@ from pathlib import Path
 
 from rotorcheck.errors import InputError, OutputExistsError
 
-__all__ = ["atomic_path", "atomic_write_bytes", "atomic_write_text", "check_replaceable", "check_writable",
-           "file_sha256", "publish_dir", "read_bounded_text", "record_outputs", "temp_dir_beside"]
+__all__ = ["atomic_path", "atomic_write_bytes", "atomic_write_text", "check_output_place", "check_replaceable",
+           "check_writable", "file_sha256", "output_error", "publish_dir", "read_bounded_text", "record_outputs",
+           "temp_dir_beside"]
 
 _CREATE_ATTEMPTS = 100
 
 
 def check_writable(paths: Iterable[str | Path], force: bool) -> None:
-    """Refuse (before any work is done) when an output exists and ``force`` is false."""
-    existing = [str(p) for p in paths if Path(p).exists()]
+    """Refuse (before any work is done) when an output exists and ``force`` is false, or (even with
+    ``force``) when an output is a folder or a file stands where its folder should be."""
+    outs = [Path(p) for p in paths]
+    for p in outs:
+        check_output_place(p)
+    existing = [str(p) for p in outs if p.exists()]
     if existing and not force:
         raise OutputExistsError(
             existing[0], "", "exists; refusing to overwrite (use --force)"
             + (f" [{len(existing) - 1} more outputs exist]" if len(existing) > 1 else "")
         )
+
+
+_OUTPUT_REASONS = {
+    errno.EACCES: "no permission to write here", errno.EPERM: "no permission to write here",
+    errno.EROFS: "the file system is read-only", errno.ENOSPC: "no space left on the device",
+    errno.EDQUOT: "the disk quota is exceeded", errno.EISDIR: "is a folder, not a file",
+    errno.ENOTDIR: "a part of the path is a file, not a folder", errno.EEXIST: "a part of the path is a file, not a "
+    "folder", errno.EFBIG: "the file is too large for this file system",
+}
+
+
+def output_error(path: str | Path, exc: OSError) -> InputError:
+    """An output that cannot be written (``exc``) as an InputError naming ``path`` (exit 2, no traceback)."""
+    target = Path(path)
+    code = exc.errno
+    if code is None and "errno = 28" in str(exc):  # HDF5 reports a full disk inside its message
+        code = errno.ENOSPC
+    try:
+        check_output_place(target)
+    except InputError as place:
+        return place
+    reason = _OUTPUT_REASONS.get(code) if code is not None else None
+    return InputError(target, "output", f"cannot write: {reason or exc.strerror or exc}")
+
+
+def check_output_place(path: str | Path) -> None:
+    """An InputError naming ``path`` when it is a folder, or naming the file that stands where one of its
+    folders should be (a file at ``--out``)."""
+    target = Path(path)
+    if target.is_dir():
+        raise InputError(target, "output", _OUTPUT_REASONS[errno.EISDIR])
+    blocking = next((p for p in target.parents if p.exists() and not p.is_dir()), None)
+    if blocking is not None:
+        raise InputError(blocking, "output folder", "is a file, not a folder")
 
 
 def _refusal(target: str) -> FileExistsError:
@@ -138,15 +178,20 @@ def atomic_path(path: str | os.PathLike[str], *, overwrite: bool = True) -> Iter
     target = Path(path)
     if not overwrite and target.exists():
         raise _refusal(os.fspath(path))
-    target.parent.mkdir(parents=True, exist_ok=True)
-    tmp = _create_temp(target)
+    try:
+        target.parent.mkdir(parents=True, exist_ok=True)
+        tmp = _create_temp(target)
+    except OSError as exc:
+        raise output_error(target, exc) from exc
     try:
         yield tmp
         _fsync_file(tmp)
         _publish(tmp, target, overwrite)
-    except BaseException:
-        with contextlib.suppress(FileNotFoundError):
+    except BaseException as exc:
+        with contextlib.suppress(OSError):
             tmp.unlink()
+        if isinstance(exc, OSError) and not isinstance(exc, FileExistsError):
+            raise output_error(target, exc) from exc  # a full disk, a folder in the way, no permission
         raise
     _fsync_dir(target.parent)
 
@@ -192,10 +237,13 @@ def check_replaceable(paths: Iterable[str | Path], force: bool) -> None:
     """Like :func:`check_writable`, but an existing output that rotorcheck wrote itself (listed in
     its folder's manifest, unchanged since) may be replaced; any other existing file is refused
     without ``force``."""
+    outs = [Path(p) for p in paths]
+    for p in outs:
+        check_output_place(p)
     if force:
         return
     blocked: list[str] = []
-    for p in map(Path, paths):
+    for p in outs:
         if not p.exists():
             continue
         known = _manifest(p.parent).get(p.name)

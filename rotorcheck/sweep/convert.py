@@ -107,7 +107,7 @@ def format_of(path: str | os.PathLike[str], given: str | None, *, wide: bool = F
     ext = Path(path).suffix.lower()
     if ext not in _EXTENSIONS:
         raise InputError(os.fspath(path), "", f"cannot tell the format from the extension {ext or '(none)'!r}: use "
-                         ".h5, .hdf5, .uff, .unv or .csv, or pass {'--from' if side == 'IN' else '--to'} "
+                         f".h5, .hdf5, .uff, .unv or .csv, or pass {'--from' if side == 'IN' else '--to'} "
                          f"({', '.join(FORMATS)})")
     fmt = _EXTENSIONS[ext]
     return "wide" if fmt == "csv" and wide else fmt
