@@ -190,6 +190,10 @@ def _processes(tasks: list[SweepTask], workers: int, log: Callable[[str], None])
     return [results[t.task_key] for t in tasks]
 
 
+#: seconds to connect to a --scheduler before giving up (an InputError naming --scheduler)
+SCHEDULER_TIMEOUT_S = 10.0
+
+
 def _dask(tasks: list[SweepTask], workers: int, scheduler: str | None, log: Callable[[str], None]
           ) -> list[dict[str, Any]]:
     """Dask distributed: a client of ``scheduler``, else of a LocalCluster (``workers`` processes, one thread
@@ -200,7 +204,11 @@ def _dask(tasks: list[SweepTask], workers: int, scheduler: str | None, log: Call
 
     cluster = None
     if scheduler:
-        client = Client(scheduler)
+        try:
+            client = Client(scheduler, timeout=SCHEDULER_TIMEOUT_S)
+        except (OSError, TimeoutError, ValueError) as exc:  # unreachable, refused, no such address
+            raise InputError(None, "--scheduler", f"cannot reach a Dask scheduler at {scheduler!r} within "
+                             f"{SCHEDULER_TIMEOUT_S:g} s ({type(exc).__name__}: {exc})") from None
     else:
         cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None,
                                silence_logs=logging.ERROR)
