@@ -41,6 +41,7 @@ import yaml
 
 from rotorcheck.errors import InputError
 from rotorcheck.fileio import atomic_write_text, check_writable
+from rotorcheck.safeload import load_yaml
 from rotorcheck.sweep import uff as _uff
 from rotorcheck.sweep.format import (
     DIRECTIONS,
@@ -55,7 +56,7 @@ from rotorcheck.sweep.format import (
 from rotorcheck.sweep.hdf5io import read_sweep, write_sweep
 from rotorcheck.sweep.tidy_csv import export_tidy_csv, import_tidy_csv
 from rotorcheck.sweep.validation import validate_sweep
-from rotorcheck.sweep.wide_csv import default_column_map_path, export_wide_csv, import_wide_csv
+from rotorcheck.sweep.wide_csv import MAX_MAP_BYTES, default_column_map_path, export_wide_csv, import_wide_csv
 
 __all__ = [
     "FORMATS",
@@ -159,10 +160,13 @@ def _read_tidy_side(path: str, csv_file: str) -> dict[str, Any]:
                                "with channels: [{name, role, node, direction}] (and rig_id, source, created_utc); "
                                f"none at {path}")
     try:
-        with open(path, encoding="utf-8") as fh:
-            d = yaml.safe_load(fh)
-    except (OSError, yaml.YAMLError) as exc:  # JSON is YAML too
-        raise SweepFormatError(path, "/", f"not readable as YAML/JSON: {exc}") from exc
+        with open(path, encoding="utf-8-sig") as fh:
+            text = fh.read(MAX_MAP_BYTES + 1)
+        if len(text) > MAX_MAP_BYTES:
+            raise SweepFormatError(path, "/", f"over {MAX_MAP_BYTES} characters: no side file is that long")
+        d = load_yaml(text)
+    except (OSError, UnicodeDecodeError, yaml.YAMLError) as exc:  # JSON is YAML too
+        raise SweepFormatError(path, "/", f"not readable as YAML/JSON: {exc}") from None
     if not isinstance(d, Mapping):
         raise SweepFormatError(path, "/", "expected a mapping of keys")
     known = {"format", "rig_id", "source", "created_utc", "generator", "channels", "notes"}
