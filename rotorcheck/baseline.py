@@ -188,41 +188,144 @@ def read_baselines(path: str | Path) -> list[Baseline]:
     except OSError as exc:
         raise InputError(p, "", f"not a readable HDF5 baseline ({exc})") from None
     with h5:
-        if h5.attrs.get("schema") != SCHEMA:
-            raise InputError(p, "/@schema", f"not a rotorcheck baseline (schema {h5.attrs.get('schema')!r})")
-        version = h5.attrs.get("schema_version")
         try:
-            known = int(version) == SCHEMA_VERSION
-        except (TypeError, ValueError):
-            known = False
-        if not known:
-            raise InputError(p, "/@schema_version", f"unknown schema_version {version!r}")
-        out = [_read_from(h5, p, "")]
-        if "runs" in h5:
-            out += [_read_from(h5["runs"][rid], p, f"/runs/{rid}") for rid in h5["runs"]]
+            return _read_groups(h5, p)
+        except InputError:
+            raise
+        except (OSError, KeyError, ValueError, TypeError, RuntimeError) as exc:  # h5py on a corrupt file
+            raise InputError(p, "", f"corrupt HDF5 baseline ({type(exc).__name__}: {exc})") from None
+
+
+def _read_groups(h5: h5py.File, p: Path) -> list[Baseline]:
+    """The root's set and every /runs/<run_id> set (:func:`read_baselines`)."""
+    schema = h5.attrs.get("schema")
+    if not isinstance(schema, (str, bytes)) or (schema.decode("utf-8", "replace") if isinstance(schema, bytes)
+                                                else schema) != SCHEMA:
+        raise InputError(p, "/@schema", f"not a rotorcheck baseline (schema {_short(schema)})")
+    version = h5.attrs.get("schema_version")
+    try:
+        known = int(version) == SCHEMA_VERSION
+    except (TypeError, ValueError):
+        known = False
+    if not known:
+        raise InputError(p, "/@schema_version", f"unknown schema_version {version!r}")
+    out = [_read_from(h5, p, "")]
+    if "runs" in h5:
+        runs = h5.get("runs", getlink=False)
+        if not isinstance(runs, h5py.Group):
+            raise InputError(p, "/runs", f"must be a group, got {type(runs).__name__}")
+        for rid in runs:
+            group = runs.get(rid, getlink=False)
+            if not isinstance(group, h5py.Group):
+                raise InputError(p, f"/runs/{rid}", f"must be a group, got {type(group).__name__}")
+            out.append(_read_from(group, p, f"/runs/{rid}"))
     return out
 
 
+_TEXT_ATTRS = ("rig_id", "rig_sha256", "run_id", "noise_method", "uncertainty", "parameter", "enclose", "stage",
+               "created_utc")
+_REAL_ATTRS = ("speed_rpm", "noise_bound_m", "noise_confidence")
+_COMPLEX_DATASETS = ("model_frf", "input_phasor", "output_phasor", "healthy_frf", "benign_directions",
+                     "benign_correction")
+#: the most elements a baseline dataset may have (read only after this is checked)
+MAX_DATASET_ELEMENTS = 50_000_000
+
+
+def _attr_text(h5: h5py.Group, p: Path, field: str, name: str, default: str | None = None) -> str:
+    if name not in h5.attrs:
+        if default is None:
+            raise InputError(p, field, "missing attribute")
+        return default
+    v = h5.attrs[name]
+    if isinstance(v, np.ndarray) and v.shape == () and v.dtype.kind in "SUO":
+        v = v.item()
+    if isinstance(v, bytes):
+        try:
+            v = v.decode("utf-8")
+        except UnicodeDecodeError:
+            raise InputError(p, field, "not UTF-8 text") from None
+    if not isinstance(v, str):
+        raise InputError(p, field, f"must be text, got {type(v).__name__} {_short(v)}")
+    return v
+
+
+def _attr_number(h5: h5py.Group, p: Path, field: str, name: str, integer: bool = False) -> float:
+    v = h5.attrs[name]
+    if isinstance(v, np.ndarray) and v.shape == ():
+        v = v[()]
+    ok = isinstance(v, (int, np.integer)) if integer else isinstance(v, (int, float, np.integer, np.floating))
+    if not ok or isinstance(v, (bool, np.bool_)):
+        raise InputError(p, field, f"must be {'an integer' if integer else 'a real number'}, got "
+                         f"{type(v).__name__} {_short(v)}")
+    return int(v) if integer else float(v)
+
+
+def _short(v: object) -> str:
+    text = repr(v)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+def _read_dataset(h5: h5py.Group, p: Path, where: str, name: str) -> np.ndarray:
+    """A dataset's array once its kind, dtype and size are checked (a group, a string or a huge dataset is an
+    InputError naming it)."""
+    item = h5.get(name, getlink=False)
+    field = f"{where}/{name}"
+    if not isinstance(item, h5py.Dataset):
+        raise InputError(p, field, f"must be a dataset, got {type(item).__name__}")
+    kind = item.dtype.kind
+    want = "S" if name == "gamma_status" else ("fc" if name in _COMPLEX_DATASETS else "fiu")
+    if kind not in want:
+        raise InputError(p, field, f"dtype {item.dtype} is not {'text' if want == 'S' else 'numeric'}")
+    if item.size > MAX_DATASET_ELEMENTS:
+        raise InputError(p, field, f"{item.size} elements: more than a baseline holds ({MAX_DATASET_ELEMENTS})")
+    try:
+        data = np.asarray(item[()])
+    except (OSError, ValueError, TypeError) as exc:  # a corrupt chunk, an unreadable filter
+        raise InputError(p, field, f"unreadable ({type(exc).__name__}: {exc})") from None
+    if want == "S":
+        try:
+            return np.char.decode(data, "utf-8")
+        except UnicodeDecodeError:
+            raise InputError(p, field, "not UTF-8 text") from None
+    return data
+
+
 def _read_from(h5: h5py.Group, p: Path, where: str) -> Baseline:
-    """One validated set from a group of the baseline file (``where``: its path, for messages)."""
+    """One validated set from a group of the baseline file (``where``: its path, for messages). Every
+    attribute and dataset is type-checked before it is used."""
     values: dict[str, object] = {}
-    for name in _ATTRS:
+    for name in _TEXT_ATTRS:
+        values[name] = _attr_text(h5, p, f"{where}/@{name}", name)
+    for name in _REAL_ATTRS:
         if name not in h5.attrs:
             raise InputError(p, f"{where}/@{name}", "missing attribute")
-        v = h5.attrs[name]
-        values[name] = v.decode() if isinstance(v, bytes) else (v.item() if hasattr(v, "item") else v)
-    sweeps = str(h5.attrs.get("sweep_sha256", ""))
+        values[name] = _attr_number(h5, p, f"{where}/@{name}", name)
+    if values["stage"] not in ("noise", "validated"):
+        raise InputError(p, f"{where}/@stage", f"must be 'noise' or 'validated', got {_short(values['stage'])}")
+    sweeps = _attr_text(h5, p, f"{where}/@sweep_sha256", "sweep_sha256", "")
     b = Baseline(sweep_sha256=[s for s in sweeps.split(",") if s], **values)  # type: ignore[arg-type]
-    b.extra = {k[2:]: str(v) for k, v in h5.attrs.items() if k.startswith("x_")}
-    b.shaft_orders_removed = int(h5.attrs.get("shaft_orders_removed", 0))
-    b.n_healthy = int(h5.attrs.get("n_healthy", 1))
+    b.extra = {k[2:]: _attr_text(h5, p, f"{where}/@{k}", k) for k in h5.attrs if k.startswith("x_")}
+    for name, low in (("shaft_orders_removed", 0), ("n_healthy", 1)):
+        if name in h5.attrs:
+            n = int(_attr_number(h5, p, f"{where}/@{name}", name, integer=True))
+            if n < low:
+                raise InputError(p, f"{where}/@{name}", f"must be >= {low}, got {n}")
+            setattr(b, name, n)
     if "benign_kappa" in h5.attrs:
-        b.benign_kappa = float(h5.attrs["benign_kappa"])
-    for name in _DATASETS:
+        b.benign_kappa = _attr_number(h5, p, f"{where}/@benign_kappa", "benign_kappa")
+    if not np.isfinite(b.speed_rpm):
+        raise InputError(p, f"{where}/@speed_rpm", f"must be finite, got {b.speed_rpm}")
+    for name in (*_DATASETS, "gamma_status"):
         if name in h5:
-            setattr(b, name, h5[name][()])
-    if "gamma_status" in h5:
-        b.gamma_status = np.char.decode(h5["gamma_status"][()], "utf-8")
+            setattr(b, name, _read_dataset(h5, p, where, name))
+    for name in ("frequency_hz", "gamma", "gamma_lower", "noise_bound_per_point_m", "benign_direction_bound"):
+        arr = getattr(b, name)
+        if arr is not None and arr.ndim != 1:
+            raise InputError(p, f"{where}/{name}", f"must be 1-D, got shape {arr.shape}")
+    for name in ("healthy_frf", "healthy_frf_var", "healthy_frf_dof", "model_frf", "input_phasor", "output_phasor"):
+        arr = getattr(b, name)
+        if arr is not None and arr.ndim < 1:
+            raise InputError(p, f"{where}/{name}", "must be an array over the frequencies, got a scalar")
     if b.validated:
         for name in ("frequency_hz", "gamma", "model_frf"):
             if getattr(b, name) is None:
