@@ -31,7 +31,7 @@ import h5py
 import numpy as np
 
 from rotorcheck.errors import InputError
-from rotorcheck.fileio import atomic_path
+from rotorcheck.fileio import atomic_path, check_hdf5_global_heaps
 
 SCHEMA = "rotorcheck.baseline"
 SCHEMA_VERSION = 1
@@ -183,6 +183,7 @@ def read_baselines(path: str | Path) -> list[Baseline]:
     p = Path(path)
     if not p.exists():
         raise InputError(p, "", "baseline not found (run 'rotorcheck validate' first, or pass --baseline)")
+    check_hdf5_global_heaps(p)  # before the HDF5 library can loop on a corrupt heap
     try:
         h5 = h5py.File(p, "r")
     except OSError as exc:

@@ -18,12 +18,13 @@ import secrets
 import shutil
 from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
+from typing import Any
 
 from rotorcheck.errors import InputError, OutputExistsError
 
-__all__ = ["atomic_path", "atomic_write_bytes", "atomic_write_text", "check_output_place", "check_replaceable",
-           "check_writable", "file_sha256", "output_error", "publish_dir", "read_bounded_text", "record_outputs",
-           "temp_dir_beside"]
+__all__ = ["atomic_path", "atomic_write_bytes", "atomic_write_text", "check_hdf5_global_heaps",
+           "check_output_place", "check_replaceable", "check_writable", "file_sha256", "output_error", "publish_dir",
+           "read_bounded_text", "record_outputs", "temp_dir_beside"]
 
 _CREATE_ATTEMPTS = 100
 
@@ -301,3 +302,55 @@ def read_bounded_text(
     if "\x00" in text:
         raise error(p, "", "a NUL byte: this is no text file")
     return text
+
+
+# --------------------------------------------------------------------------------------------
+# HDF5 global heaps checked before the HDF5 library reads them
+
+
+def check_hdf5_global_heaps(
+    path: str | Path, error: Callable[[str | Path, str, str], Exception] = InputError,
+) -> None:
+    """Refuse an HDF5 file whose global heap collections (``GCOL``: where variable-length strings live) do
+    not parse: the HDF5 library loops without end on some such files (a bit flip in an object's size), so
+    they are walked here first, object by object, each within its collection and the free space filling
+    the rest exactly. ``error(file, field, message)`` builds the exception."""
+    import mmap
+
+    p = Path(path)
+    try:
+        with open(p, "rb") as fh:
+            if os.fstat(fh.fileno()).st_size == 0:
+                return
+            with mmap.mmap(fh.fileno(), 0, access=mmap.ACCESS_READ) as mm:
+                n = len(mm)
+                pos = mm.find(b"GCOL")
+                while pos >= 0:
+                    if pos + 16 <= n and mm[pos + 4] == 1 and mm[pos + 5:pos + 8] == b"\0\0\0":
+                        problem = _heap_problem(mm, pos, n)
+                        if problem:
+                            raise error(p, f"byte {pos}", f"corrupt HDF5 global heap: {problem}")
+                    pos = mm.find(b"GCOL", pos + 4)
+    except OSError as exc:
+        raise error(p, "", f"cannot read: {exc.strerror or exc}") from None
+
+
+def _heap_problem(mm: Any, pos: int, n: int) -> str:
+    size = int.from_bytes(mm[pos + 8:pos + 16], "little")
+    end = pos + size
+    if size < 4096 or end > n:
+        return f"collection size {size} (at least 4096, within the file of {n} bytes)"
+    p = pos + 16
+    seen: set[int] = set()
+    while end - p >= 16:
+        idx = int.from_bytes(mm[p:p + 2], "little")
+        size = int.from_bytes(mm[p + 8:p + 16], "little")
+        if idx == 0:  # the free space: the rest of the collection exactly
+            return "" if size == end - p else f"free space of {size} bytes where {end - p} remain"
+        if idx in seen:
+            return f"object {idx} twice"
+        seen.add(idx)
+        p += 16 + (size + 7) // 8 * 8
+        if p > end:
+            return f"object {idx} of {size} bytes runs past the collection"
+    return ""

@@ -73,10 +73,8 @@ FORMATS = ("hdf5", "uff", "csv", "wide")
 _ALIASES = {"hdf5": "hdf5", "h5": "hdf5", "uff": "uff", "uff58": "uff", "unv": "uff", "csv": "csv",
             "tidy": "csv", "wide": "wide"}
 _EXTENSIONS = {".h5": "hdf5", ".hdf5": "hdf5", ".uff": "uff", ".unv": "uff", ".csv": "csv"}
-#: UFF specific data types: 19 rpm (z axis); 11 velocity, 12 acceleration (ordinate); 17 time, 20 order (abscissa)
+#: UFF specific data type 19: rpm (z axis)
 _UFF_RPM = 19
-_UFF_NOT_RECEPTANCE = {11: "velocity (mobility)", 12: "acceleration (accelerance)"}
-_UFF_NOT_FREQUENCY = {17: "time", 20: "order"}
 _RULE = re.compile(r"^\s*(?P<x>\d+(?:\.\d*)?(?:[eE][+-]?\d+)?)\s*%\s*of\s+(?P<max>max\s+)?\|H\|\s*$")
 _NOISE_HELP = ("--noise-source 'measured' (the file's variance is the analyser's) | 'assumed: <rule>' "
                "(rules convert computes: 'X % of |H|', 'X % of max |H|'), or --noise-var VAR ((m/N)^2)")
@@ -217,15 +215,7 @@ def _uff_facts(file: str) -> tuple[bool, float | None]:
     for i, s in enumerate(sets):
         if int(s.get("func_type", -1)) != 4:
             continue
-        where = f"dataset #{i + 1}"
-        ordinate = int(s.get("ordinate_spec_data_type", 0))
-        if ordinate in _UFF_NOT_RECEPTANCE:
-            raise SweepFormatError(file, f"{where}/record 9", f"FRF ordinate is {_UFF_NOT_RECEPTANCE[ordinate]}: "
-                                   "rotorcheck needs receptance (displacement/force, m/N); convert it in the analyser")
-        abscissa = int(s.get("abscissa_spec_data_type", 0))
-        if abscissa in _UFF_NOT_FREQUENCY:
-            raise SweepFormatError(file, f"{where}/record 8",
-                                   f"abscissa is {_UFF_NOT_FREQUENCY[abscissa]}, not frequency")
+        _uff._frf_scale(file, f"dataset #{i + 1}", s)  # records 8-10: frequency, displacement per force
         if int(s.get("z_axis_spec_data_type", 0)) == _UFF_RPM:
             speeds.add(float(s.get("z_axis_value", 0.0)))
         else:

@@ -28,7 +28,7 @@ from typing import Any
 import h5py
 import numpy as np
 
-from rotorcheck.fileio import atomic_path
+from rotorcheck.fileio import atomic_path, check_hdf5_global_heaps
 from rotorcheck.sweep.format import (
     CHANNEL_FIELDS,
     EXCITATION,
@@ -231,6 +231,7 @@ def read_sweep(
         raise SweepFormatError(file, "/", f"cannot read file: {exc}") from exc
     if not is_h5:
         raise SweepFormatError(file, "/", "not an HDF5 file (no HDF5 signature)")
+    check_hdf5_global_heaps(file, SweepFormatError)  # before the HDF5 library can loop on a corrupt heap
     try:
         h5 = h5py.File(file, "r")
     except Exception as exc:
