@@ -8,8 +8,8 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import pyuff
 import pytest
+import pyuff
 
 from rotorcheck.cli import main
 from rotorcheck.resources import samples_dir
