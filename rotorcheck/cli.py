@@ -397,7 +397,7 @@ def validate(
     (a file of several runs, one per speed: every run, one validated set each)."""
     from rotorcheck import workflow
     from rotorcheck.baseline import write_baseline
-    from rotorcheck.fileio import check_output_place, check_writable
+    from rotorcheck.fileio import check_output_place, claim_outputs
 
     formats = workflow.plot_formats(plot_format)
     workflow.check_frf_unit(frf_unit)
@@ -406,6 +406,12 @@ def validate(
     cfg, rig_path, firsts = workflow.load_rig_and_runs(sweeps[0], rig, target, run, every_run=True)
     others = [workflow.read_runs(p, cfg, [r.run_id for r in firsts]) for p in sweeps[1:]]
     run_ids = [r.run_id for r in firsts]
+    several = len(run_ids) > 1  # a file of several runs (speeds): one validated set per run
+    plot_dirs = [out / rid if several else out for rid in run_ids]
+    plot_targets = [p for d in plot_dirs for p in workflow.plot_paths(d, workflow.PLOT_STEMS_VALIDATE, formats)
+                    ] if plots else []
+    # one run at a time writes them: claimed before the prior baseline is read
+    claim_outputs([target, *plot_targets], force, "validate", fresh=plot_targets)
     noise = workflow.prior_noise(target, cfg, force, firsts[0].sha256, reuse_noise)
     prior_run = noise.details["run_id"] if noise is not None else None
     reused_from = noise.details.get("fitted_on_sweep", "") if noise is not None else ""
@@ -414,10 +420,7 @@ def validate(
         if reused_from:
             err.print(f"[yellow]the noise bound was fitted on another sweep (sha256 {reused_from[:12]}); used as "
                       "asked (--reuse-noise), recorded in the baseline[/]")
-    several = len(run_ids) > 1  # a file of several runs (speeds): one validated set per run
-    plot_dirs = [out / rid if several else out for rid in run_ids]
-    check_writable([p for d in plot_dirs for p in workflow.plot_paths(d, workflow.PLOT_STEMS_VALIDATE, formats)]
-                   if plots else [], force)
+    written: list[Path] = []
     outcomes, n_bad, docs = [], 0, []
     for k, (first, plot_dir) in enumerate(zip(firsts, plot_dirs)):
         runs = [first] + [o[k] for o in others]
@@ -452,10 +455,12 @@ def validate(
                 f"{runs[0].frequency_hz[i]:.1f} Hz ({res.status[i]})" for i in bad[:10]))
         for p_ in files:
             err.print(f"wrote {p_}")
+        written += map(Path, files)
         docs.append(outcome.typed_report(nb, target).to_dict())
         if "noise_fitted_on_sweep" in outcome.baseline.extra:  # a bound from another sweep, as asked
             docs[-1]["noise_fitted_on_sweep"] = outcome.baseline.extra["noise_fitted_on_sweep"]
     write_baseline(outcomes[0].baseline, target, [o.baseline for o in outcomes[1:]])
+    _record_run("validate", [target, *written], [out, *plot_dirs], force)
     err.print(f"wrote {target}" + (f" ({len(outcomes)} runs: {', '.join(run_ids)})" if several else ""))
     if as_json:
         _emit_json(docs[0] if not several else {"runs": docs})
@@ -492,7 +497,7 @@ def detect(
     """Steps 4-5: verdict (joint test or certified fault points) and the damage with its bound; a file of
     several runs: each run against the baseline's run at its speed, one verdict for the file."""
     from rotorcheck import workflow
-    from rotorcheck.fileio import atomic_write_text, check_writable
+    from rotorcheck.fileio import atomic_write_text, claim_outputs
     from rotorcheck.report.reports import REPORT_FILES, render_json, write_reports
 
     in_open_unit(confidence, "--confidence")
@@ -503,20 +508,24 @@ def detect(
     cfg, rig_file, pairs = workflow.paired_runs(sweep, base_path, rig, run, resample, say=err.print)
     several = len(pairs) > 1
     dirs = [out / r.run_id for _, r in pairs] if several else [out]
-    check_writable(([out / "report.json"] if several else []) + [d / f for d in dirs for f in REPORT_FILES]
-                   + ([p for d in dirs for p in workflow.plot_paths(d, workflow.PLOT_STEMS_DETECT, formats)]
-                      if plots else []), force)
+    targets = (([out / "report.json"] if several else []) + [d / f for d in dirs for f in REPORT_FILES]
+               + ([p for d in dirs for p in workflow.plot_paths(d, workflow.PLOT_STEMS_DETECT, formats)]
+                  if plots else []))
+    claim_outputs(targets, force, "detect", fresh=targets)  # one run at a time writes them
     settings = workflow.DetectorSettings(confidence, false_alarm, _fail_at(fail_at))
     with _progress(f"detecting {sweep.name} against {base_path}"):
         check = workflow.detect_pairs(cfg, rig_file, sweep, base_path, pairs, rule, settings, locate, say=err.print)
     summary: list[dict[str, Any]] = []
+    written: list[Path] = []
     for d, (base, mrun), outcome in zip(dirs, pairs, check.outcomes):
         with _progress("writing reports and plots"):
             report = outcome.report()
             plot_files = workflow.detection_plots(outcome, d, at, formats, base_path, frf_unit) if plots else []
             files = write_reports(report, d, plot_files, base_path)
         _print_outcome(outcome, report, prefix=f"run {mrun.run_id} ({mrun.speed_rpm:g} rpm): " if several else "")
+        written += [*files, *map(Path, plot_files)]
         if not several:
+            _record_run("detect", written, [out], force)
             for p_ in [*map(str, files), *plot_files]:
                 err.print(f"wrote {p_}")
             if as_json:
@@ -527,10 +536,22 @@ def detect(
                         "report": str(d / "report.json")})
     doc = {"sweep": str(sweep), "verdict": check.verdict, "verdict_rule": workflow.FILE_RULE, "runs": summary}
     atomic_write_text(out / "report.json", render_json(doc))
+    _record_run("detect", [*written, out / "report.json"], [out, *dirs], force)
     err.print(f"file verdict: {check.verdict.upper()} ({len(pairs)} runs); wrote {out / 'report.json'}")
     if as_json:
         _emit_json(doc)
     return check.exit_code
+
+
+def _record_run(command: str, written: list[Path], folders: list[Path], force: bool) -> None:
+    """Record what this run of ``command`` wrote (the folders' manifests); a forced run then removes what an
+    earlier run of the command wrote there and this one did not rewrite (e.g. plots after --no-plots)."""
+    from rotorcheck.fileio import record_outputs, remove_stale_outputs
+
+    record_outputs(written, command)
+    if force:
+        for p_ in remove_stale_outputs(folders, command, written):
+            err.print(f"removed {p_} (an earlier {command} run's output this run did not rewrite)")
 
 
 def _print_outcome(outcome: Any, report: dict[str, Any], prefix: str = "") -> None:
@@ -884,6 +905,16 @@ def main(argv: list[str] | None = None) -> int:
         opt = copy.copy(version_opt)
         opt.expose_value = False  # eager: prints and exits; never passed to the command
         sub.params.append(opt)
+    try:
+        return _run(command, argv)
+    finally:
+        from rotorcheck.fileio import release_claims
+
+        release_claims()  # the outputs this command claimed (fileio.claim_outputs)
+
+
+def _run(command: Any, argv: list[str] | None) -> int:
+    """:func:`main` without the claims' release."""
     try:
         rc = command.main(args=argv, prog_name="rotorcheck", standalone_mode=False)
     except (UserInputError, FileExistsError) as exc:  # InputError, ConfigError, SweepFormatError

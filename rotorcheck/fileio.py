@@ -23,8 +23,9 @@ from typing import Any
 from rotorcheck.errors import InputError, OutputExistsError
 
 __all__ = ["atomic_path", "atomic_write_bytes", "atomic_write_text", "check_hdf5_global_heaps",
-           "check_output_place", "check_replaceable", "check_writable", "file_sha256", "output_error", "publish_dir",
-           "read_bounded_text", "record_outputs", "temp_dir_beside"]
+           "check_output_place", "check_replaceable", "check_writable", "claim_outputs", "file_sha256",
+           "output_error", "publish_dir", "read_bounded_text", "record_outputs", "release_claims",
+           "remove_stale_outputs", "temp_dir_beside"]
 
 _CREATE_ATTEMPTS = 100
 
@@ -257,17 +258,152 @@ def check_replaceable(paths: Iterable[str | Path], force: bool) -> None:
         )
 
 
-def record_outputs(paths: Iterable[str | Path]) -> None:
-    """Add written outputs (name and sha256) to the manifest of their folder (atomic)."""
+def _commands(folder: Path) -> dict[str, str]:
+    """``{file name: command}`` of the outputs in ``folder``'s manifest that name the command that wrote them."""
+    try:
+        data = json.loads((folder / MANIFEST_NAME).read_text())
+    except (OSError, ValueError):
+        return {}
+    cmds = data.get("commands") if isinstance(data, dict) else None
+    return {str(k): str(v) for k, v in cmds.items()} if isinstance(cmds, dict) else {}
+
+
+def record_outputs(paths: Iterable[str | Path], command: str | None = None) -> None:
+    """Add written outputs (name and sha256; ``command``: the command that wrote them) to the manifest of
+    their folder (atomic)."""
     by_folder: dict[Path, list[Path]] = {}
     for p in map(Path, paths):
         by_folder.setdefault(p.parent, []).append(p)
     for folder, files in by_folder.items():
         entries = _manifest(folder)
         entries.update({f.name: file_sha256(f) for f in files})
+        commands = {k: v for k, v in _commands(folder).items() if k in entries}
+        for f in files:
+            if command is not None:
+                commands[f.name] = command
+            else:
+                commands.pop(f.name, None)
         doc = {"schema": "rotorcheck.outputs", "note": "files rotorcheck wrote here; it replaces them on a "
-               "later run only while unchanged", "files": dict(sorted(entries.items()))}
+               "later run only while unchanged", "files": dict(sorted(entries.items())),
+               "commands": dict(sorted(commands.items()))}
         atomic_write_text(folder / MANIFEST_NAME, json.dumps(doc, indent=1) + "\n")
+
+
+def remove_stale_outputs(folders: Iterable[str | Path], command: str, kept: Iterable[str | Path]) -> list[Path]:
+    """After a forced run of ``command``: remove the files an earlier run of the same command wrote in
+    ``folders`` (per their manifests, unchanged since) that this run did not rewrite (``kept``); never a
+    file rotorcheck did not write, one another command wrote, or one changed since. Returns what went."""
+    keep = {Path(p).resolve() for p in kept}
+    gone: list[Path] = []
+    for folder in dict.fromkeys(map(Path, folders)):
+        files, commands = _manifest(folder), _commands(folder)
+        for name, cmd in commands.items():
+            p = folder / name
+            if cmd != command or p.resolve() in keep or "/" in name or name.startswith("."):
+                continue
+            with contextlib.suppress(OSError):
+                if p.is_file() and file_sha256(p) == files.get(name):
+                    p.unlink()
+                    gone.append(p)
+        if gone:
+            entries = {k: v for k, v in files.items() if (folder / k) not in gone}
+            doc = {"schema": "rotorcheck.outputs", "note": "files rotorcheck wrote here; it replaces them on a "
+                   "later run only while unchanged", "files": dict(sorted(entries.items())),
+                   "commands": dict(sorted((k, v) for k, v in commands.items() if k in entries))}
+            atomic_write_text(folder / MANIFEST_NAME, json.dumps(doc, indent=1) + "\n")
+    return gone
+
+
+# --------------------------------------------------------------------------------------------
+# claims: one run at a time writes an output
+
+
+CLAIM_SUFFIX = ".rotorcheck-claim"
+_ACTIVE_CLAIMS: list[Path] = []
+_MADE_DIRS: list[Path] = []
+
+
+def _claim_path(target: Path) -> Path:
+    return target.parent / f".{target.name}{CLAIM_SUFFIX}"
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # another user's process
+        return True
+    return True
+
+
+def claim_outputs(paths: Iterable[str | Path], force: bool, command: str, fresh: Iterable[str | Path] = ()) -> None:
+    """Claim every output of this run before the work: a claim file beside each (``O_CREAT | O_EXCL``: one
+    run wins), holding the run's command, pid and start. A path another live run holds is refused naming
+    that run (a claim whose process is gone is taken over). Then ``fresh`` (the outputs that must not exist
+    without ``force``) are checked again: one another run published after this run's first check is refused.
+    :func:`release_claims` (the CLI calls it when the command ends) removes the claims."""
+    import datetime as dt
+
+    outs = [Path(p) for p in paths]
+    stamp = dt.datetime.now(dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
+    doc = json.dumps({"command": command, "pid": os.getpid(), "started_utc": stamp}).encode()
+    try:
+        for target in outs:
+            check_output_place(target)
+            if not target.parent.exists():
+                missing = [d for d in [target.parent, *target.parent.parents] if not d.exists()]
+                target.parent.mkdir(parents=True, exist_ok=True)
+                _MADE_DIRS.extend(missing)
+            claim = _claim_path(target)
+            for attempt in range(2):
+                try:
+                    fd = os.open(claim, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_CLOEXEC", 0), 0o666)
+                except FileExistsError:
+                    holder = _claim_holder(claim)
+                    if attempt == 0 and not _alive(int(holder.get("pid", -1))):
+                        with contextlib.suppress(FileNotFoundError):
+                            claim.unlink()  # a run that died without releasing
+                        continue
+                    who = (f"{holder.get('command', '?')}, pid {holder.get('pid', '?')}, started "
+                           f"{holder.get('started_utc', '?')}")
+                    raise InputError(target, "", f"being written by another rotorcheck run ({who}); refusing to "
+                                     "write it too (wait for that run, or use another --out)") from None
+                _ACTIVE_CLAIMS.append(claim)
+                try:
+                    os.write(fd, doc)
+                finally:
+                    os.close(fd)
+                break
+    except OSError as exc:
+        release_claims()
+        raise output_error(exc.filename or outs[0], exc) from exc
+    except BaseException:
+        release_claims()
+        raise
+    try:
+        check_writable(fresh, force)
+    except BaseException:
+        release_claims()
+        raise
+
+
+def _claim_holder(claim: Path) -> dict[str, Any]:
+    try:
+        data = json.loads(claim.read_text())
+    except (OSError, ValueError):
+        return {}
+    return data if isinstance(data, dict) else {}
+
+
+def release_claims() -> None:
+    """Remove this process's claims (and the folders a claim created that stayed empty)."""
+    while _ACTIVE_CLAIMS:
+        with contextlib.suppress(OSError):
+            _ACTIVE_CLAIMS.pop().unlink()
+    while _MADE_DIRS:
+        with contextlib.suppress(OSError):
+            _MADE_DIRS.pop(0).rmdir()  # only while empty; the deepest first
 
 
 # --------------------------------------------------------------------------------------------
