@@ -193,7 +193,7 @@ def read_baselines(path: str | Path) -> list[Baseline]:
             return _read_groups(h5, p)
         except InputError:
             raise
-        except (OSError, KeyError, ValueError, TypeError, RuntimeError) as exc:  # h5py on a corrupt file
+        except (OSError, KeyError, ValueError, TypeError, RuntimeError, OverflowError, IndexError) as exc:  # h5py
             raise InputError(p, "", f"corrupt HDF5 baseline ({type(exc).__name__}: {exc})") from None
 
 
@@ -206,7 +206,7 @@ def _read_groups(h5: h5py.File, p: Path) -> list[Baseline]:
     version = h5.attrs.get("schema_version")
     try:
         known = int(version) == SCHEMA_VERSION
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         known = False
     if not known:
         raise InputError(p, "/@schema_version", f"unknown schema_version {version!r}")

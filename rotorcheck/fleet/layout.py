@@ -223,9 +223,14 @@ def discover_manifest(path: Path, times: dict[str, str] | None = None) -> Fleet:
                 raise InputError(path, f"{loc}: {c}", "missing or empty")
         files = {}
         for c in ("rig", "baseline", "sweep"):
-            p = Path(row[c]).expanduser()
-            p = p if p.is_absolute() else base_dir / p
-            if not p.is_file():
+            try:
+                p = Path(row[c]).expanduser()
+                p = p if p.is_absolute() else base_dir / p
+                found = p.is_file()
+            except (OSError, RuntimeError, ValueError) as exc:  # a name too long, a NUL byte, no home folder
+                raise InputError(path, f"{loc}: {c}", f"unusable path {row[c][:80]!r}: "
+                                 f"{getattr(exc, 'strerror', None) or exc}") from None
+            if not found:
                 raise InputError(path, f"{loc}: {c}", f"no such file {p}")
             files[c] = p
         name = row["machine"]

@@ -216,6 +216,11 @@ def _load_sets(path: str) -> list[dict]:
     for i, (t, s) in enumerate(zip(types, sets, strict=True)):
         if int(t) != 58:
             raise SweepFormatError(path, f"dataset #{i + 1}", f"type {int(t)}, expected 58")
+        lacks = [k for k in ("x", "data", "func_type", "id1", "id2", "id5", "rsp_node", "rsp_dir", "ref_node",
+                             "ref_dir") if k not in s or s[k] is None]
+        if lacks:
+            raise SweepFormatError(path, f"dataset #{i + 1}", f"no {', '.join(lacks)} (a truncated or malformed "
+                                   "record)")
         _check_binary(path, f"dataset #{i + 1}", s)
         out.append(s)
     return out
