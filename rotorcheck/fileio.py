@@ -24,8 +24,8 @@ from rotorcheck.errors import InputError, OutputExistsError
 
 __all__ = ["atomic_path", "atomic_write_bytes", "atomic_write_text", "check_hdf5_global_heaps",
            "check_output_place", "check_replaceable", "check_writable", "claim_outputs", "file_sha256",
-           "output_error", "publish_dir", "read_bounded_text", "record_outputs", "release_claims",
-           "remove_stale_outputs", "temp_dir_beside"]
+           "hdf5_vlen_problem", "output_error", "publish_dir", "read_bounded_text", "record_outputs",
+           "release_claims", "remove_stale_outputs", "temp_dir_beside"]
 
 _CREATE_ATTEMPTS = 100
 
@@ -446,47 +446,69 @@ def read_bounded_text(
 
 def check_hdf5_global_heaps(
     path: str | Path, error: Callable[[str | Path, str, str], Exception] = InputError,
-) -> None:
+) -> dict[int, dict[int, int]]:
     """Refuse an HDF5 file whose global heap collections (``GCOL``: where variable-length strings live) do
     not parse: the HDF5 library loops without end on some such files (a bit flip in an object's size), so
     they are walked here first, object by object, each within its collection and the free space filling
-    the rest exactly. ``error(file, field, message)`` builds the exception."""
+    the rest exactly. ``error(file, field, message)`` builds the exception. Returns the collections found:
+    ``{file offset: {object index: size}}`` (for :func:`hdf5_vlen_problem`)."""
     import mmap
 
     p = Path(path)
+    heaps: dict[int, dict[int, int]] = {}
     try:
         with open(p, "rb") as fh:
             if os.fstat(fh.fileno()).st_size == 0:
-                return
+                return heaps
             with mmap.mmap(fh.fileno(), 0, access=mmap.ACCESS_READ) as mm:
                 n = len(mm)
                 pos = mm.find(b"GCOL")
                 while pos >= 0:
                     if pos + 16 <= n and mm[pos + 4] == 1 and mm[pos + 5:pos + 8] == b"\0\0\0":
-                        problem = _heap_problem(mm, pos, n)
+                        objects: dict[int, int] = {}
+                        problem = _heap_problem(mm, pos, n, objects)
                         if problem:
                             raise error(p, f"byte {pos}", f"corrupt HDF5 global heap: {problem}")
+                        heaps[pos] = objects
                     pos = mm.find(b"GCOL", pos + 4)
     except OSError as exc:
         raise error(p, "", f"cannot read: {exc.strerror or exc}") from None
+    return heaps
 
 
-def _heap_problem(mm: Any, pos: int, n: int) -> str:
+def _heap_problem(mm: Any, pos: int, n: int, objects: dict[int, int]) -> str:
     size = int.from_bytes(mm[pos + 8:pos + 16], "little")
     end = pos + size
     if size < 4096 or end > n:
         return f"collection size {size} (at least 4096, within the file of {n} bytes)"
     p = pos + 16
-    seen: set[int] = set()
     while end - p >= 16:
         idx = int.from_bytes(mm[p:p + 2], "little")
         size = int.from_bytes(mm[p + 8:p + 16], "little")
         if idx == 0:  # the free space: the rest of the collection exactly
             return "" if size == end - p else f"free space of {size} bytes where {end - p} remain"
-        if idx in seen:
+        if idx in objects:
             return f"object {idx} twice"
-        seen.add(idx)
+        objects[idx] = size
         p += 16 + (size + 7) // 8 * 8
         if p > end:
             return f"object {idx} of {size} bytes runs past the collection"
+    return ""
+
+
+def hdf5_vlen_problem(raw: bytes, heaps: dict[int, dict[int, int]], base: int = 0) -> str:
+    """What is wrong with the variable-length descriptors ``raw`` of a dataset (16 bytes each: length,
+    collection address, object index) given the file's global heaps, else "" (HDF5 spends seconds on a
+    descriptor pointing past the file)."""
+    for k in range(len(raw) // 16):
+        length = int.from_bytes(raw[16 * k:16 * k + 4], "little")
+        addr = int.from_bytes(raw[16 * k + 4:16 * k + 12], "little")
+        idx = int.from_bytes(raw[16 * k + 12:16 * k + 16], "little")
+        if length == 0 and addr == 0:
+            continue
+        objects = heaps.get(addr + base)
+        if objects is None:
+            return f"element {k} refers to no global heap (address {addr})"
+        if idx not in objects or objects[idx] < length:
+            return f"element {k} refers to no object {idx} of {length} bytes in the heap at {addr}"
     return ""

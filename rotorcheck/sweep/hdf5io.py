@@ -28,7 +28,7 @@ from typing import Any
 import h5py
 import numpy as np
 
-from rotorcheck.fileio import atomic_path, check_hdf5_global_heaps
+from rotorcheck.fileio import atomic_path, check_hdf5_global_heaps, hdf5_vlen_problem
 from rotorcheck.sweep.format import (
     CHANNEL_FIELDS,
     EXCITATION,
@@ -70,6 +70,31 @@ def _attr(file: str, obj: h5py.HLObject, name: str, where: str) -> Any:
         raise SweepFormatError(file, f"{where}@{name}", f"unreadable attribute: {exc}") from exc
 
 
+#: the global heaps of the file being read (fileio.check_hdf5_global_heaps), for :func:`_check_vlen`
+_HEAPS: dict[str, dict[int, dict[int, int]]] = {}
+
+
+def _check_vlen(file: str, path: str, obj: h5py.Dataset) -> None:
+    """The variable-length strings of a contiguous dataset point into the file's global heaps (checked on
+    the raw descriptors before HDF5 follows them)."""
+    heaps = _HEAPS.get(file)
+    info = h5py.check_string_dtype(obj.dtype)
+    if heaps is None or info is None or info.length is not None:
+        return
+    offset = obj.id.get_offset()
+    if offset is None:  # chunked or compact: no raw block to look at
+        return
+    base = obj.file.userblock_size
+    with open(file, "rb") as fh:
+        fh.seek(base + offset)
+        raw = fh.read(16 * obj.size)
+    if len(raw) < 16 * obj.size:
+        raise SweepFormatError(file, path, "the strings' descriptors run past the end of the file (truncated?)")
+    problem = hdf5_vlen_problem(raw, heaps, base)
+    if problem:
+        raise SweepFormatError(file, path, f"corrupt string data: {problem}")
+
+
 def _read_ds(file: str, grp: h5py.Group, name: str, where: str) -> np.ndarray:
     path = f"{where}/{name}"
     if name not in grp:
@@ -77,6 +102,7 @@ def _read_ds(file: str, grp: h5py.Group, name: str, where: str) -> np.ndarray:
     obj = grp.get(name)
     if not isinstance(obj, h5py.Dataset):
         raise SweepFormatError(file, path, f"expected a dataset, found {type(obj).__name__}")
+    _check_vlen(file, path, obj)
     try:
         if obj.dtype.kind in "OS" or h5py.check_string_dtype(obj.dtype) is not None:
             return np.asarray(obj.asstr()[()], dtype=object)
@@ -235,12 +261,13 @@ def read_sweep(
         raise SweepFormatError(file, "/", f"cannot read file: {exc}") from exc
     if not is_h5:
         raise SweepFormatError(file, "/", "not an HDF5 file (no HDF5 signature)")
-    check_hdf5_global_heaps(file, SweepFormatError)  # before the HDF5 library can loop on a corrupt heap
+    heaps = check_hdf5_global_heaps(file, SweepFormatError)  # before the HDF5 library loops on a corrupt heap
     try:
         h5 = h5py.File(file, "r")
     except Exception as exc:
         raise SweepFormatError(file, "/", f"cannot open as HDF5 (truncated or corrupt file): {exc}") from exc
     with h5:
+        _HEAPS[file] = heaps
         try:
             return _read_open(file, h5, frf_rtol, period_rtol)
         except SweepFormatError:
@@ -248,6 +275,8 @@ def read_sweep(
         except (KeyError, OSError, RuntimeError, ValueError, TypeError, IndexError) as exc:  # h5py on a corrupt file
             raise SweepFormatError(file, "/", f"unreadable HDF5 content (truncated or corrupt file): "
                                    f"{type(exc).__name__}: {exc}") from None
+        finally:
+            _HEAPS.pop(file, None)
 
 
 def _read_open(file: str, h5: h5py.File, frf_rtol: float, period_rtol: float) -> Sweep:
