@@ -225,14 +225,22 @@ def file_sha256(path: str | os.PathLike[str]) -> str:
     return h.hexdigest()
 
 
-def _manifest(folder: Path) -> dict[str, str]:
-    """``{file name: sha256}`` of the outputs rotorcheck wrote in ``folder`` (empty when none or unreadable)."""
+def _manifest(folder: Path, section: str = "files") -> dict[str, str]:
+    """``{file name: sha256}`` of the outputs rotorcheck wrote in ``folder`` (``section="commands"``: ``{file
+    name: the command that wrote it}``); empty when none or unreadable."""
     try:
         data = json.loads((folder / MANIFEST_NAME).read_text())
     except (OSError, ValueError):
         return {}
-    files = data.get("files") if isinstance(data, dict) else None
+    files = data.get(section) if isinstance(data, dict) else None
     return {str(k): str(v) for k, v in files.items()} if isinstance(files, dict) else {}
+
+
+def _write_manifest(folder: Path, files: dict[str, str], commands: dict[str, str]) -> None:
+    doc = {"schema": "rotorcheck.outputs", "note": "files rotorcheck wrote here; it replaces them on a later run "
+           "only while unchanged", "files": dict(sorted(files.items())),
+           "commands": dict(sorted((k, v) for k, v in commands.items() if k in files))}
+    atomic_write_text(folder / MANIFEST_NAME, json.dumps(doc, indent=1) + "\n")
 
 
 def check_replaceable(paths: Iterable[str | Path], force: bool) -> None:
@@ -258,16 +266,6 @@ def check_replaceable(paths: Iterable[str | Path], force: bool) -> None:
         )
 
 
-def _commands(folder: Path) -> dict[str, str]:
-    """``{file name: command}`` of the outputs in ``folder``'s manifest that name the command that wrote them."""
-    try:
-        data = json.loads((folder / MANIFEST_NAME).read_text())
-    except (OSError, ValueError):
-        return {}
-    cmds = data.get("commands") if isinstance(data, dict) else None
-    return {str(k): str(v) for k, v in cmds.items()} if isinstance(cmds, dict) else {}
-
-
 def record_outputs(paths: Iterable[str | Path], command: str | None = None) -> None:
     """Add written outputs (name and sha256; ``command``: the command that wrote them) to the manifest of
     their folder (atomic)."""
@@ -277,16 +275,13 @@ def record_outputs(paths: Iterable[str | Path], command: str | None = None) -> N
     for folder, files in by_folder.items():
         entries = _manifest(folder)
         entries.update({f.name: file_sha256(f) for f in files})
-        commands = {k: v for k, v in _commands(folder).items() if k in entries}
+        commands = _manifest(folder, "commands")
         for f in files:
             if command is not None:
                 commands[f.name] = command
             else:
                 commands.pop(f.name, None)
-        doc = {"schema": "rotorcheck.outputs", "note": "files rotorcheck wrote here; it replaces them on a "
-               "later run only while unchanged", "files": dict(sorted(entries.items())),
-               "commands": dict(sorted(commands.items()))}
-        atomic_write_text(folder / MANIFEST_NAME, json.dumps(doc, indent=1) + "\n")
+        _write_manifest(folder, entries, commands)
 
 
 def remove_stale_outputs(folders: Iterable[str | Path], command: str, kept: Iterable[str | Path]) -> list[Path]:
@@ -296,7 +291,7 @@ def remove_stale_outputs(folders: Iterable[str | Path], command: str, kept: Iter
     keep = {Path(p).resolve() for p in kept}
     gone: list[Path] = []
     for folder in dict.fromkeys(map(Path, folders)):
-        files, commands = _manifest(folder), _commands(folder)
+        files, commands = _manifest(folder), _manifest(folder, "commands")
         for name, cmd in commands.items():
             p = folder / name
             if cmd != command or p.resolve() in keep or "/" in name or name.startswith("."):
@@ -306,11 +301,7 @@ def remove_stale_outputs(folders: Iterable[str | Path], command: str, kept: Iter
                     p.unlink()
                     gone.append(p)
         if gone:
-            entries = {k: v for k, v in files.items() if (folder / k) not in gone}
-            doc = {"schema": "rotorcheck.outputs", "note": "files rotorcheck wrote here; it replaces them on a "
-                   "later run only while unchanged", "files": dict(sorted(entries.items())),
-                   "commands": dict(sorted((k, v) for k, v in commands.items() if k in entries))}
-            atomic_write_text(folder / MANIFEST_NAME, json.dumps(doc, indent=1) + "\n")
+            _write_manifest(folder, {k: v for k, v in files.items() if (folder / k) not in gone}, commands)
     return gone
 
 

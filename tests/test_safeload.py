@@ -10,7 +10,11 @@ import pytest
 import yaml
 
 from rotorcheck.cli import main
-from rotorcheck.config import _StrictLoader
+
+try:  # the rig loader's SafeLoader subclass (config.py; rotorcheck.config.loading once config is a package)
+    from rotorcheck.config import _StrictLoader  # type: ignore[attr-defined]
+except ImportError:  # pragma: no cover - the config package
+    from rotorcheck.config.loading import StrictLoader as _StrictLoader  # type: ignore[no-redef]
 from rotorcheck.errors import InputError
 from rotorcheck.resources import configs_dir
 from rotorcheck.safeload import MAX_DEPTH, YamlBoundError, load_toml, load_yaml, load_yaml_file, toml_depth
