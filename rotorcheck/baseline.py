@@ -26,12 +26,13 @@ from __future__ import annotations
 import datetime as _dt
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import h5py
 import numpy as np
 
 from rotorcheck.errors import InputError
-from rotorcheck.fileio import atomic_path, check_hdf5_global_heaps
+from rotorcheck.fileio import atomic_path, check_hdf5_global_heaps, hdf5_attr_problem
 
 SCHEMA = "rotorcheck.baseline"
 SCHEMA_VERSION = 1
@@ -199,13 +200,13 @@ def read_baselines(path: str | Path) -> list[Baseline]:
 
 def _read_groups(h5: h5py.File, p: Path) -> list[Baseline]:
     """The root's set and every /runs/<run_id> set (:func:`read_baselines`)."""
-    schema = h5.attrs.get("schema")
+    schema = _attr_value(h5, p, "/@schema", "schema") if "schema" in h5.attrs else None
     if not isinstance(schema, (str, bytes)) or (schema.decode("utf-8", "replace") if isinstance(schema, bytes)
                                                 else schema) != SCHEMA:
         raise InputError(p, "/@schema", f"not a rotorcheck baseline (schema {_short(schema)})")
-    version = h5.attrs.get("schema_version")
+    version = _attr_value(h5, p, "/@schema_version", "schema_version") if "schema_version" in h5.attrs else None
     try:
-        known = int(version) == SCHEMA_VERSION
+        known = version is not None and int(version) == SCHEMA_VERSION
     except (TypeError, ValueError, OverflowError):
         known = False
     if not known:
@@ -237,7 +238,7 @@ def _attr_text(h5: h5py.Group, p: Path, field: str, name: str, default: str | No
         if default is None:
             raise InputError(p, field, "missing attribute")
         return default
-    v = h5.attrs[name]
+    v = _attr_value(h5, p, field, name)
     if isinstance(v, np.ndarray) and v.shape == () and v.dtype.kind in "SUO":
         v = v.item()
     if isinstance(v, bytes):
@@ -250,8 +251,16 @@ def _attr_text(h5: h5py.Group, p: Path, field: str, name: str, default: str | No
     return v
 
 
+def _attr_value(h5: h5py.Group, p: Path, field: str, name: str) -> Any:
+    """The attribute's value once its datatype is one a baseline holds and sane (libhdf5 can crash on others)."""
+    problem = hdf5_attr_problem(h5, name)
+    if problem:
+        raise InputError(p, field, problem)
+    return h5.attrs[name]
+
+
 def _attr_number(h5: h5py.Group, p: Path, field: str, name: str, integer: bool = False) -> float:
-    v = h5.attrs[name]
+    v = _attr_value(h5, p, field, name)
     if isinstance(v, np.ndarray) and v.shape == ():
         v = v[()]
     ok = isinstance(v, (int, np.integer)) if integer else isinstance(v, (int, float, np.integer, np.floating))
@@ -294,6 +303,10 @@ def _read_dataset(h5: h5py.Group, p: Path, where: str, name: str) -> np.ndarray:
 def _read_from(h5: h5py.Group, p: Path, where: str) -> Baseline:
     """One validated set from a group of the baseline file (``where``: its path, for messages). Every
     attribute and dataset is type-checked before it is used."""
+    for name in h5.attrs:  # every attribute is read by the digest check: each must be safe to read
+        problem = hdf5_attr_problem(h5, name)
+        if problem:
+            raise InputError(p, f"{where}/@{name}", problem)
     values: dict[str, object] = {}
     for name in _TEXT_ATTRS:
         values[name] = _attr_text(h5, p, f"{where}/@{name}", name)

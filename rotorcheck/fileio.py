@@ -24,8 +24,8 @@ from rotorcheck.errors import InputError, OutputExistsError
 
 __all__ = ["atomic_path", "atomic_write_bytes", "atomic_write_text", "check_hdf5_global_heaps",
            "check_output_place", "check_replaceable", "check_writable", "claim_outputs", "file_sha256",
-           "hdf5_vlen_problem", "output_error", "publish_dir", "read_bounded_text", "record_outputs",
-           "release_claims", "remove_stale_outputs", "temp_dir_beside"]
+           "hdf5_attr_problem", "hdf5_vlen_problem", "output_error", "publish_dir", "read_bounded_text",
+           "record_outputs", "release_claims", "remove_stale_outputs", "temp_dir_beside"]
 
 _CREATE_ATTEMPTS = 100
 
@@ -503,3 +503,29 @@ def hdf5_vlen_problem(raw: bytes, heaps: dict[int, dict[int, int]], base: int = 
         if idx not in objects or objects[idx] < length:
             return f"element {k} refers to no object {idx} of {length} bytes in the heap at {addr}"
     return ""
+
+
+def hdf5_attr_problem(obj: Any, name: str) -> str:
+    """What makes the attribute ``name`` of the h5py object ``obj`` unsafe to read, else "": only text and
+    plain integers/floats with a sane layout are read (a corrupt datatype message, e.g. an integer whose
+    offset and precision exceed its size, or a variable-length sequence, crashed libhdf5 with SIGSEGV)."""
+    import h5py
+
+    try:
+        t = obj.attrs.get_id(name).get_type()
+    except (KeyError, OSError, RuntimeError, ValueError) as exc:
+        return f"unreadable attribute ({exc})"
+    if isinstance(t, h5py.h5t.TypeStringID):
+        return ""
+    if isinstance(t, h5py.h5t.TypeEnumID):  # h5py's booleans: an enum over a plain integer
+        t = t.get_super()
+    if isinstance(t, h5py.h5t.TypeIntegerID | h5py.h5t.TypeFloatID):
+        size, bits = t.get_size(), 8 * t.get_size()
+        if size not in (1, 2, 4, 8) or t.get_offset() + t.get_precision() > bits:
+            return f"corrupt number type (size {size}, offset {t.get_offset()}, precision {t.get_precision()})"
+        if isinstance(t, h5py.h5t.TypeFloatID):
+            spos, epos, esize, mpos, msize = t.get_fields()
+            if max(spos + 1, epos + esize, mpos + msize) > bits or not 0 < esize < bits or not 0 < msize < bits:
+                return f"corrupt float type (fields {spos, epos, esize, mpos, msize} in {bits} bits)"
+        return ""
+    return f"a {type(t).__name__.removeprefix('Type').removesuffix('ID')} attribute: only text or a number is read"

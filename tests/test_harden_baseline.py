@@ -38,6 +38,13 @@ def _replace(h5: h5py.File, name: str, value: Any) -> None:
         h5.create_dataset(name, data=value)
 
 
+def _vlen_attr(h5: h5py.File, name: str) -> None:
+    del h5.attrs[name]
+    data = np.empty(1, dtype=object)
+    data[0] = np.arange(3, dtype=np.int32)
+    h5.attrs.create(name, data=data, dtype=h5py.vlen_dtype(np.int32))
+
+
 EDITS = [  # (edit, the field named)
     (lambda h: _set_attr(h, "noise_bound_m", "1e-7"), "/@noise_bound_m", "must be a real number, got str"),
     (lambda h: _set_attr(h, "noise_bound_m", np.array([1e-7, 2e-7])), "/@noise_bound_m", "must be a real number"),
@@ -57,6 +64,10 @@ EDITS = [  # (edit, the field named)
     (lambda h: _replace(h, "healthy_frf", 1.0), "/healthy_frf", "must be an array over the frequencies"),
     (lambda h: _replace(h, "gamma_status", np.arange(3)), "/gamma_status", "is not text"),
     (lambda h: _set_attr(h, "schema", np.arange(2)), "/@schema", "not a rotorcheck baseline"),
+    # the fuzzer's SIGSEGV: a variable-length sequence (its corrupt base type crashed libhdf5): refused unread
+    (lambda h: _vlen_attr(h, "noise_method"), "/@noise_method", "a Vlen attribute"),
+    (lambda h: h.attrs.create("x_note", data=np.zeros(1, dtype=[("a", "<i4"), ("b", "<f8")])), "/@x_note",
+     "a Compound attribute"),
 ]
 
 

@@ -28,7 +28,7 @@ from typing import Any
 import h5py
 import numpy as np
 
-from rotorcheck.fileio import atomic_path, check_hdf5_global_heaps, hdf5_vlen_problem
+from rotorcheck.fileio import atomic_path, check_hdf5_global_heaps, hdf5_attr_problem, hdf5_vlen_problem
 from rotorcheck.sweep.format import (
     CHANNEL_FIELDS,
     EXCITATION,
@@ -64,6 +64,9 @@ from rotorcheck.sweep.validation import (
 def _attr(file: str, obj: h5py.HLObject, name: str, where: str) -> Any:
     if name not in obj.attrs:
         raise SweepFormatError(file, f"{where}@{name}", "missing attribute")
+    problem = hdf5_attr_problem(obj, name)  # libhdf5 can crash reading a corrupt datatype
+    if problem:
+        raise SweepFormatError(file, f"{where}@{name}", problem)
     try:
         return obj.attrs[name]
     except Exception as exc:  # unreadable attribute: report, do not guess
