@@ -34,7 +34,7 @@ import h5py
 import numpy as np
 
 from rotorcheck.errors import InputError
-from rotorcheck.fileio import atomic_path
+from rotorcheck.fileio import atomic_path, check_hdf5_global_heaps, hdf5_attr_problem
 
 SCHEMA = "rotorcheck.baseline"
 SCHEMA_VERSION = 1
@@ -189,8 +189,6 @@ class Baseline:
     benign_correction = _field("drift", "correction", "the data's correction of the benign change (p, f)")
 
 
-_ATTRS = ("rig_id", "rig_sha256", "run_id", "speed_rpm", "noise_bound_m", "noise_method",
-          "noise_confidence", "uncertainty", "parameter", "enclose", "stage", "created_utc")
 #: the file's datasets: (name in the file, part, field)
 _DATASETS = (("frequency_hz", "bound", "frequency_hz"), ("gamma", "bound", "gamma"),
              ("gamma_lower", "bound", "gamma_lower"), ("model_frf", "bound", "model_frf"),
@@ -331,39 +329,117 @@ def read_baselines(path: str | Path) -> list[Baseline]:
     p = Path(path)
     if not p.exists():
         raise InputError(p, "", "baseline not found (run 'rotorcheck validate' first, or pass --baseline)")
+    check_hdf5_global_heaps(p)  # before the HDF5 library can loop on a corrupt heap
     try:
         h5 = h5py.File(p, "r")
     except OSError as exc:
         raise InputError(p, "", f"not a readable HDF5 baseline ({exc})") from None
     with h5:
-        if h5.attrs.get("schema") != SCHEMA:
-            raise InputError(p, "/@schema", f"not a rotorcheck baseline (schema {h5.attrs.get('schema')!r})")
-        version = h5.attrs.get("schema_version")
         try:
-            known = int(version) == SCHEMA_VERSION
-        except (TypeError, ValueError):
-            known = False
-        if not known:
-            raise InputError(p, "/@schema_version", f"unknown schema_version {version!r}")
-        out = [_read_from(h5, p, "")]
-        if "runs" in h5:
-            out += [_read_from(h5["runs"][rid], p, f"/runs/{rid}") for rid in h5["runs"]]
+            return _read_groups(h5, p)
+        except InputError:
+            raise
+        except (OSError, KeyError, ValueError, TypeError, RuntimeError, OverflowError, IndexError) as exc:  # h5py
+            raise InputError(p, "", f"corrupt HDF5 baseline ({type(exc).__name__}: {exc})") from None
+
+
+def _read_groups(h5: h5py.File, p: Path) -> list[Baseline]:
+    """The root's set and every /runs/<run_id> set (:func:`read_baselines`)."""
+    schema = _attr_value(h5, p, "/@schema", "schema") if "schema" in h5.attrs else None
+    if not isinstance(schema, (str, bytes)) or (schema.decode("utf-8", "replace") if isinstance(schema, bytes)
+                                                else schema) != SCHEMA:
+        raise InputError(p, "/@schema", f"not a rotorcheck baseline (schema {_short(schema)})")
+    version = _attr_value(h5, p, "/@schema_version", "schema_version") if "schema_version" in h5.attrs else None
+    try:
+        known = version is not None and int(version) == SCHEMA_VERSION
+    except (TypeError, ValueError, OverflowError):
+        known = False
+    if not known:
+        raise InputError(p, "/@schema_version", f"unknown schema_version {version!r}")
+    out = [_read_from(h5, p, "")]
+    if "runs" in h5:
+        runs = h5.get("runs", getlink=False)
+        if not isinstance(runs, h5py.Group):
+            raise InputError(p, "/runs", f"must be a group, got {type(runs).__name__}")
+        for rid in runs:
+            group = runs.get(rid, getlink=False)
+            if not isinstance(group, h5py.Group):
+                raise InputError(p, f"/runs/{rid}", f"must be a group, got {type(group).__name__}")
+            out.append(_read_from(group, p, f"/runs/{rid}"))
     return out
 
 
-def _attr(h5: h5py.Group, p: Path, where: str, name: str, kind: type, default: object = None) -> Any:
-    """Attribute ``name`` as ``kind`` (str, float or int), refused naming it when missing or of another type."""
+_COMPLEX_DATASETS = ("model_frf", "input_phasor", "output_phasor", "healthy_frf", "benign_directions",
+                     "benign_correction")
+#: the most elements a baseline dataset may have (read only after this is checked)
+MAX_DATASET_ELEMENTS = 50_000_000
+
+
+def _attr_text(h5: h5py.Group, p: Path, field: str, name: str, default: str | None = None) -> str:
     if name not in h5.attrs:
-        if default is not None:
-            return default
-        raise InputError(p, f"{where}/@{name}", "missing attribute")
-    v = h5.attrs[name]
-    v = v.decode() if isinstance(v, bytes) else (v.item() if hasattr(v, "item") else v)
-    if kind is str and isinstance(v, str):
-        return v
-    if kind in (float, int) and isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool):
-        return kind(v)
-    raise InputError(p, f"{where}/@{name}", f"must be {'text' if kind is str else 'a number'}, got {v!r}")
+        if default is None:
+            raise InputError(p, field, "missing attribute")
+        return default
+    v = _attr_value(h5, p, field, name)
+    if isinstance(v, np.ndarray) and v.shape == () and v.dtype.kind in "SUO":
+        v = v.item()
+    if isinstance(v, bytes):
+        try:
+            v = v.decode("utf-8")
+        except UnicodeDecodeError:
+            raise InputError(p, field, "not UTF-8 text") from None
+    if not isinstance(v, str):
+        raise InputError(p, field, f"must be text, got {type(v).__name__} {_short(v)}")
+    return v
+
+
+def _attr_value(h5: h5py.Group, p: Path, field: str, name: str) -> Any:
+    """The attribute's value once its datatype is one a baseline holds and sane (libhdf5 can crash on others)."""
+    problem = hdf5_attr_problem(h5, name)
+    if problem:
+        raise InputError(p, field, problem)
+    return h5.attrs[name]
+
+
+def _attr_number(h5: h5py.Group, p: Path, field: str, name: str, integer: bool = False) -> float:
+    v = _attr_value(h5, p, field, name)
+    if isinstance(v, np.ndarray) and v.shape == ():
+        v = v[()]
+    ok = isinstance(v, (int, np.integer)) if integer else isinstance(v, (int, float, np.integer, np.floating))
+    if not ok or isinstance(v, (bool, np.bool_)):
+        raise InputError(p, field, f"must be {'an integer' if integer else 'a real number'}, got "
+                         f"{type(v).__name__} {_short(v)}")
+    return int(v) if integer else float(v)
+
+
+def _short(v: object) -> str:
+    text = repr(v)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+def _read_dataset(h5: h5py.Group, p: Path, where: str, name: str) -> np.ndarray:
+    """A dataset's array once its kind, dtype and size are checked (a group, a string or a huge dataset is an
+    InputError naming it)."""
+    item = h5.get(name, getlink=False)
+    field = f"{where}/{name}"
+    if not isinstance(item, h5py.Dataset):
+        raise InputError(p, field, f"must be a dataset, got {type(item).__name__}")
+    kind = item.dtype.kind
+    want = "S" if name == "gamma_status" else ("fc" if name in _COMPLEX_DATASETS else "fiu")
+    if kind not in want:
+        raise InputError(p, field, f"dtype {item.dtype} is not {'text' if want == 'S' else 'numeric'}")
+    if item.size > MAX_DATASET_ELEMENTS:
+        raise InputError(p, field, f"{item.size} elements: more than a baseline holds ({MAX_DATASET_ELEMENTS})")
+    try:
+        data = np.asarray(item[()])
+    except (OSError, ValueError, TypeError) as exc:  # a corrupt chunk, an unreadable filter
+        raise InputError(p, field, f"unreadable ({type(exc).__name__}: {exc})") from None
+    if want == "S":
+        try:
+            return np.char.decode(data, "utf-8")
+        except UnicodeDecodeError:
+            raise InputError(p, field, "not UTF-8 text") from None
+    return data
 
 
 def _json_attr(h5: h5py.Group, p: Path, where: str, name: str, check: type) -> Any:
@@ -371,7 +447,7 @@ def _json_attr(h5: h5py.Group, p: Path, where: str, name: str, check: type) -> A
     if f"x_{name}" not in h5.attrs:
         return None
     try:
-        value = json.loads(_attr(h5, p, where, f"x_{name}", str))
+        value = json.loads(_attr_text(h5, p, f"{where}/@x_{name}", f"x_{name}"))
     except ValueError:
         raise InputError(p, f"{where}/@x_{name}", "not JSON") from None
     if not isinstance(value, check):
@@ -380,32 +456,50 @@ def _json_attr(h5: h5py.Group, p: Path, where: str, name: str, check: type) -> A
 
 
 def _read_from(h5: h5py.Group, p: Path, where: str) -> Baseline:
-    """One validated set from a group of the baseline file (``where``: its path, for messages)."""
+    """One validated set from a group of the baseline file (``where``: its path, for messages). Every
+    attribute and dataset is type-checked before it is used."""
+    for name in h5.attrs:  # every attribute is read by the digest check: each must be safe to read
+        problem = hdf5_attr_problem(h5, name)
+        if problem:
+            raise InputError(p, f"{where}/@{name}", problem)
+
     def text(name: str, default: str | None = None) -> str:
-        return str(_attr(h5, p, where, name, str, default))
+        return _attr_text(h5, p, f"{where}/@{name}", name, default)
 
     def number(name: str) -> float:
-        return float(_attr(h5, p, where, name, float))
+        if name not in h5.attrs:
+            raise InputError(p, f"{where}/@{name}", "missing attribute")
+        return _attr_number(h5, p, f"{where}/@{name}", name)
+
+    def count(name: str, low: int) -> int:
+        if name not in h5.attrs:
+            return low
+        n = int(_attr_number(h5, p, f"{where}/@{name}", name, integer=True))
+        if n < low:
+            raise InputError(p, f"{where}/@{name}", f"must be >= {low}, got {n}")
+        return n
 
     def data(name: str) -> np.ndarray | None:
-        return h5[name][()] if name in h5 else None
+        return _read_dataset(h5, p, where, name) if name in h5 else None
 
     stage = text("stage")
     if stage not in ("noise", "validated"):
-        raise InputError(p, f"{where}/@stage", f"must be 'noise' or 'validated', got {stage!r}")
+        raise InputError(p, f"{where}/@stage", f"must be 'noise' or 'validated', got {_short(stage)}")
+    speed = number("speed_rpm")
+    if not np.isfinite(speed):
+        raise InputError(p, f"{where}/@speed_rpm", f"must be finite, got {speed}")
     prov = Provenance(text("rig_id"), text("rig_sha256"), [s for s in text("sweep_sha256", "").split(",") if s],
-                      text("run_id"), number("speed_rpm"), text("created_utc"),
+                      text("run_id"), speed, text("created_utc"),
                       text("x_rig_path") if "x_rig_path" in h5.attrs else None,
                       text("x_noise_fitted_on_sweep") if "x_noise_fitted_on_sweep" in h5.attrs else None)
     noise = NoiseFit(number("noise_bound_m"), text("noise_method"), number("noise_confidence"),
                      data("noise_bound_per_point_m"), text("uncertainty"), text("parameter"))
     pairs = _json_attr(h5, p, where, "channel_pairs", list)
     healthy = HealthyData(data("healthy_frf"), data("healthy_frf_var"), data("healthy_frf_dof"), data("input_phasor"),
-                          data("output_phasor"), int(_attr(h5, p, where, "shaft_orders_removed", int, 0)),
-                          int(_attr(h5, p, where, "n_healthy", int, 1)),
+                          data("output_phasor"), count("shaft_orders_removed", 0), count("n_healthy", 1),
                           None if pairs is None else [[str(x) for x in pr] for pr in pairs])
     updated = _json_attr(h5, p, where, "updated_parameters", dict)
-    drift = DriftModel(float(_attr(h5, p, where, "benign_kappa", float)) if "benign_kappa" in h5.attrs else None,
+    drift = DriftModel(number("benign_kappa") if "benign_kappa" in h5.attrs else None,
                        data("benign_directions"), data("benign_direction_bound"), data("benign_correction"),
                        None if updated is None else {str(k): float(v) for k, v in updated.items()},
                        _json_attr(h5, p, where, "benign_model_share", dict))
@@ -414,10 +508,18 @@ def _read_from(h5: h5py.Group, p: Path, where: str) -> Baseline:
         for name in ("frequency_hz", "gamma", "model_frf"):
             if name not in h5:
                 raise InputError(p, f"{where}/{name}", "missing dataset in a validated baseline")
-        status = np.char.decode(h5["gamma_status"][()], "utf-8") if "gamma_status" in h5 else None
-        bound = ModelBound(text("enclose"), text("uncertainty"), text("parameter"), h5["frequency_hz"][()],
-                           h5["gamma"][()], h5["model_frf"][()], data("gamma_lower"), status)
+        freq, gamma, model = (_read_dataset(h5, p, where, n) for n in ("frequency_hz", "gamma", "model_frf"))
+        bound = ModelBound(text("enclose"), text("uncertainty"), text("parameter"), freq, gamma, model,
+                           data("gamma_lower"), data("gamma_status"))
     b = Baseline(prov, noise, bound, healthy, drift)
+    for name in ("frequency_hz", "gamma", "gamma_lower", "noise_bound_per_point_m", "benign_direction_bound"):
+        arr = getattr(b, name)
+        if arr is not None and arr.ndim != 1:
+            raise InputError(p, f"{where}/{name}", f"must be 1-D, got shape {arr.shape}")
+    for name in ("healthy_frf", "healthy_frf_var", "healthy_frf_dof", "model_frf", "input_phasor", "output_phasor"):
+        arr = getattr(b, name)
+        if arr is not None and arr.ndim < 1:
+            raise InputError(p, f"{where}/{name}", "must be an array over the frequencies, got a scalar")
     if b.validated:
         for name in ("frequency_hz", "gamma", "model_frf"):
             if getattr(b, name) is None:

@@ -20,12 +20,26 @@ from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
 
-from rotorcheck.errors import InputError, UserInputError
+from rotorcheck.errors import InputError, UserInputError, finite_positive, in_open_unit
 from rotorcheck.report.schema import DetectionReport
 
 EXIT_OK, EXIT_DAMAGE, EXIT_INPUT, EXIT_INCONCLUSIVE = 0, 1, 2, 3
 #: frequency points of a simulated sweep when neither --points nor the rig's analysis.n_points sets them
 DEFAULT_POINTS = 262
+#: the largest spin speed an option accepts, rpm (1e308 rpm overflows every frequency computed from it)
+MAX_SPEED_RPM = 1e6
+
+
+def _speed(value: float | None, option: str = "--speed") -> float | None:
+    """A spin speed option: None or a finite number of rpm in [0, MAX_SPEED_RPM], else an InputError naming it."""
+    return finite_positive(value, option, allow_zero=True, maximum=MAX_SPEED_RPM)
+
+
+def _at_least(value: int | None, minimum: int, option: str) -> int | None:
+    """An integer option: None or >= ``minimum``, else an InputError naming it."""
+    if value is not None and value < minimum:
+        raise InputError(None, option, f"must be >= {minimum}, got {value}")
+    return value
 
 app = typer.Typer(
     add_completion=False,
@@ -126,6 +140,7 @@ def model(
     from rotorcheck.resources import default_rig_path
     from rotorcheck.workflow import model_report
 
+    _speed(speed)
     rig_path = rig if rig is not None else default_rig_path("crack_rig")
     from rotorcheck.workflow import plot_formats
 
@@ -161,6 +176,7 @@ def info(
     from rotorcheck.sweep.hdf5io import read_sweep, sweep_sha256
     from rotorcheck.sweep.summary import summarize
 
+    in_open_unit(confidence, "--confidence")
     sw = read_sweep(sweep)
     doc = summarize(sw, confidence=confidence)
     doc["file"] = str(sweep)
@@ -228,7 +244,11 @@ def convert(
     as_json: JsonOpt = False,
 ) -> int:
     """Convert a sweep between HDF5, UFF58, tidy CSV and wide CSV (FRF-only data need a noise statement)."""
+    from rotorcheck.errors import check_rig_id
     from rotorcheck.sweep.convert import ConvertOptions
+
+    if rig_id is not None:
+        check_rig_id(rig_id, None, "--rig-id")
     from rotorcheck.sweep.convert import convert as convert_files
 
     opts = ConvertOptions(speed_rpm=speed, noise_source=noise_source, noise_var=noise_var, rig_id=rig_id,
@@ -258,6 +278,7 @@ def crack(
     from rotorcheck.resources import configs_dir
     from rotorcheck.workflow import crack_report, plot_formats
 
+    finite_positive(unbalance, "--unbalance", allow_zero=True)
     rig_path = rig if rig is not None else configs_dir() / "crack_rig_truth.yaml"
     with _progress(f"the cracked rotor ({fault}): harmonic balance, orbits, spectra"):
         doc = crack_report(rig_path, fault=fault, unbalance_g_m=unbalance, out_dir=out, force=force,
@@ -288,6 +309,19 @@ def _fail_at(spec: str) -> tuple[int, ...]:
         raise InputError(None, "--fail-at", f"expected comma-separated point indices, got {spec!r}") from None
 
 
+def _known_elements(els: tuple[int, ...] | None, cfg: Any) -> tuple[int, ...] | None:
+    """``--elements`` checked against the rig's shaft elements (an InputError naming the valid range)."""
+    from rotorcheck.signatures import candidate_elements
+
+    known = candidate_elements(cfg)
+    bad = [e for e in els or () if e not in known]
+    if bad:
+        valid = f"{min(known)}-{max(known)}" if known else "none: the rig is lumped"
+        raise InputError(None, "--elements", f"no shaft element {', '.join(map(str, bad))} in rig {cfg.rig_id!r} "
+                         f"(elements {valid})")
+    return els
+
+
 FailAtOpt = Annotated[str, typer.Option("--fail-at", hidden=True, help="Testing: fail the solver at these points.")]
 
 
@@ -313,8 +347,7 @@ def fit_noise(
     from rotorcheck.resources import samples_dir
 
     sweep_path = sweep if sweep is not None else samples_dir() / "crack_rig" / "healthy_1000rpm.h5"
-    if not 0.0 < confidence < 1.0:
-        raise InputError(None, "--confidence", f"must be in (0, 1), got {confidence}")
+    in_open_unit(confidence, "--confidence")
     target = out / "baseline.h5"
     check_writable([target], force)
     cfg, rig_path, (mrun,) = workflow.load_rig_and_runs(sweep_path, rig, target, run)
@@ -365,14 +398,21 @@ def validate(
     (a file of several runs, one per speed: every run, one validated set each)."""
     from rotorcheck import workflow
     from rotorcheck.baseline import write_baseline
-    from rotorcheck.fileio import check_writable
+    from rotorcheck.fileio import check_output_place, claim_outputs
 
     formats = workflow.plot_formats(plot_format)
     workflow.check_frf_unit(frf_unit)
     target = out / "baseline.h5"
+    check_output_place(target)
     cfg, rig_path, firsts = workflow.load_rig_and_runs(sweeps[0], rig, target, run, every_run=True)
     others = [workflow.read_runs(p, cfg, [r.run_id for r in firsts]) for p in sweeps[1:]]
     run_ids = [r.run_id for r in firsts]
+    several = len(run_ids) > 1  # a file of several runs (speeds): one validated set per run
+    plot_dirs = [out / rid if several else out for rid in run_ids]
+    plot_targets = [p for d in plot_dirs for p in workflow.plot_paths(d, workflow.PLOT_STEMS_VALIDATE, formats)
+                    ] if plots else []
+    # one run at a time writes them: claimed before the prior baseline is read
+    claim_outputs([target, *plot_targets], force, "validate", fresh=plot_targets)
     noise = workflow.prior_noise(target, cfg, force, firsts[0].sha256, reuse_noise)
     prior_run = noise.details["run_id"] if noise is not None else None
     reused_from = noise.details.get("fitted_on_sweep", "") if noise is not None else ""
@@ -381,10 +421,7 @@ def validate(
         if reused_from:
             err.print(f"[yellow]the noise bound was fitted on another sweep (sha256 {reused_from[:12]}); used as "
                       "asked (--reuse-noise), recorded in the baseline[/]")
-    several = len(run_ids) > 1  # a file of several runs (speeds): one validated set per run
-    plot_dirs = [out / rid if several else out for rid in run_ids]
-    check_writable([p for d in plot_dirs for p in workflow.plot_paths(d, workflow.PLOT_STEMS_VALIDATE, formats)]
-                   if plots else [], force)
+    written: list[Path] = []
     outcomes, n_bad, docs = [], 0, []
     for k, (first, plot_dir) in enumerate(zip(firsts, plot_dirs)):
         runs = [first] + [o[k] for o in others]
@@ -419,10 +456,12 @@ def validate(
                 f"{runs[0].frequency_hz[i]:.1f} Hz ({res.status[i]})" for i in bad[:10]))
         for p_ in files:
             err.print(f"wrote {p_}")
+        written += map(Path, files)
         docs.append(outcome.typed_report(nb, target).to_dict())
         if outcome.baseline.provenance.noise_fitted_on_sweep:  # a bound from another sweep, as asked
             docs[-1]["noise_fitted_on_sweep"] = outcome.baseline.provenance.noise_fitted_on_sweep
     write_baseline(outcomes[0].baseline, target, [o.baseline for o in outcomes[1:]])
+    _record_run("validate", [target, *written], [out, *plot_dirs], force)
     err.print(f"wrote {target}" + (f" ({len(outcomes)} runs: {', '.join(run_ids)})" if several else ""))
     if as_json:
         _emit_json(docs[0] if not several else {"runs": docs})
@@ -459,22 +498,26 @@ def detect(
     """Steps 4-5: verdict (joint test or certified fault points) and the damage with its bound; a file of
     several runs: each run against the baseline's run at its speed, one verdict for the file."""
     from rotorcheck import workflow
-    from rotorcheck.fileio import atomic_write_text, check_writable
+    from rotorcheck.fileio import atomic_write_text, claim_outputs
     from rotorcheck.report.reports import REPORT_FILES, render_json, write_reports
 
+    in_open_unit(confidence, "--confidence")
+    in_open_unit(false_alarm, "--false-alarm")
     formats = workflow.plot_formats(plot_format)
     workflow.check_frf_unit(frf_unit)
     base_path = baseline if baseline is not None else out / "baseline.h5"
     cfg, rig_file, pairs = workflow.paired_runs(sweep, base_path, rig, run, resample, say=err.print)
     several = len(pairs) > 1
     dirs = [out / r.run_id for _, r in pairs] if several else [out]
-    check_writable(([out / "report.json"] if several else []) + [d / f for d in dirs for f in REPORT_FILES]
-                   + ([p for d in dirs for p in workflow.plot_paths(d, workflow.PLOT_STEMS_DETECT, formats)]
-                      if plots else []), force)
+    targets = (([out / "report.json"] if several else []) + [d / f for d in dirs for f in REPORT_FILES]
+               + ([p for d in dirs for p in workflow.plot_paths(d, workflow.PLOT_STEMS_DETECT, formats)]
+                  if plots else []))
+    claim_outputs(targets, force, "detect", fresh=targets)  # one run at a time writes them
     settings = workflow.DetectorSettings(confidence, false_alarm, _fail_at(fail_at))
     with _progress(f"detecting {sweep.name} against {base_path}"):
         check = workflow.detect_pairs(cfg, rig_file, sweep, base_path, pairs, rule, settings, locate, say=err.print)
     summary: list[dict[str, Any]] = []
+    written: list[Path] = []
     for d, (base, mrun), outcome in zip(dirs, pairs, check.outcomes):
         with _progress("writing reports and plots"):
             report = outcome.typed_report()
@@ -482,7 +525,9 @@ def detect(
             plot_files = workflow.detection_plots(outcome, d, at, formats, base_path, frf_unit) if plots else []
             files = write_reports(report, d, plot_files, base_path)
         _print_outcome(outcome, report, prefix=f"run {mrun.run_id} ({mrun.speed_rpm:g} rpm): " if several else "")
+        written += [*files, *map(Path, plot_files)]
         if not several:
+            _record_run("detect", written, [out], force)
             for p_ in [*map(str, files), *plot_files]:
                 err.print(f"wrote {p_}")
             if as_json:
@@ -493,10 +538,22 @@ def detect(
                         "report": str(d / "report.json")})
     doc = {"sweep": str(sweep), "verdict": check.verdict, "verdict_rule": workflow.FILE_RULE, "runs": summary}
     atomic_write_text(out / "report.json", render_json(doc))
+    _record_run("detect", [*written, out / "report.json"], [out, *dirs], force)
     err.print(f"file verdict: {check.verdict.upper()} ({len(pairs)} runs); wrote {out / 'report.json'}")
     if as_json:
         _emit_json(doc)
     return check.exit_code
+
+
+def _record_run(command: str, written: list[Path], folders: list[Path], force: bool) -> None:
+    """Record what this run of ``command`` wrote (the folders' manifests); a forced run then removes what an
+    earlier run of the command wrote there and this one did not rewrite (e.g. plots after --no-plots)."""
+    from rotorcheck.fileio import record_outputs, remove_stale_outputs
+
+    record_outputs(written, command)
+    if force:
+        for p_ in remove_stale_outputs(folders, command, written):
+            err.print(f"removed {p_} (an earlier {command} run's output this run did not rewrite)")
 
 
 def _print_outcome(outcome: Any, report: DetectionReport, prefix: str = "") -> None:
@@ -549,6 +606,8 @@ def locate(
     formats = workflow.plot_formats(plot_format)
     base_path = baseline if baseline is not None else out / "baseline.h5"
     els = _element_list(elements)
+    finite_positive(section_length, "--crack-section-length")
+    in_open_unit(false_alarm, "--false-alarm")
     targets = [out / "location.json", out / "location.html"] + (workflow.plot_paths(out, ("location",), formats)
                                                                  if plots else [])
     check_writable(targets, force)
@@ -648,6 +707,14 @@ def simulate(
     from rotorcheck.sim.rig_sim import shaft_angle_from, simulate_rig, step_settings
     from rotorcheck.sweep.hdf5io import write_sweep
 
+    _speed(speed)
+    finite_positive(f_min, "--f-min")
+    finite_positive(f_max, "--f-max")
+    finite_positive(noise, "--noise", allow_zero=True)
+    _at_least(points, 2, "--points")
+    _at_least(periods, 1, "--periods")
+    _at_least(seed, 0, "--seed")
+    _at_least(harmonics, 1, "--harmonics")
     check_writable([output], force)
     rig_path = rig if rig is not None else configs_dir() / "crack_rig_truth.yaml"
     cfg = workflow.load_rig(rig_path)
@@ -760,11 +827,14 @@ def detectability(
     from rotorcheck.report.reports import render_json
     from rotorcheck.resources import default_rig_path
 
+    finite_positive(noise_std, "--noise-std")
+    _speed(speed)
+    _at_least(periods, 1, "--periods")
+    _at_least(max_sensors, 1, "--max-sensors")
+    in_open_unit(false_alarm, "--false-alarm")
     rig_path = rig if rig is not None else default_rig_path("crack_rig")
     cfg = workflow.load_rig(rig_path)
-    if not 0.0 < false_alarm < 1.0:
-        raise InputError(None, "--false-alarm", "must be in (0, 1)")
-    els = _element_list(elements)
+    els = _known_elements(_element_list(elements), cfg)
     split = lambda t: [x for x in t.replace(" ", "").split(",") if x]  # noqa: E731
     formats = workflow.plot_formats(plot_format)
     targets = [out / "detectability.json"] + (workflow.plot_paths(out, ("detectability",), formats) if plots else [])
@@ -822,9 +892,12 @@ def import_ross_cmd(
     as_json: JsonOpt = False,
 ) -> int:
     """A ROSS rotor as a rotorcheck rig file, with what could not be carried over (stderr and the file's header)."""
+    from rotorcheck.errors import check_rig_id
     from rotorcheck.fileio import atomic_write_text, check_writable
     from rotorcheck.ross_import import import_ross
 
+    if rig_id is not None:
+        check_rig_id(rig_id, None, "--rig-id")
     check_writable([out], force)
     result = import_ross(rotor, rig_id=rig_id)
     atomic_write_text(out, result.to_yaml())
@@ -861,12 +934,30 @@ def main(argv: list[str] | None = None) -> int:
         opt.expose_value = False  # eager: prints and exits; never passed to the command
         sub.params.append(opt)
     try:
+        return _run(command, argv)
+    finally:
+        from rotorcheck.fileio import release_claims
+
+        release_claims()  # the outputs this command claimed (fileio.claim_outputs)
+
+
+def _run(command: Any, argv: list[str] | None) -> int:
+    """:func:`main` without the claims' release."""
+    try:
         rc = command.main(args=argv, prog_name="rotorcheck", standalone_mode=False)
     except (UserInputError, FileExistsError) as exc:  # InputError, ConfigError, SweepFormatError
         err.print(f"[bold red]error:[/] {escape(str(exc))}")
         return EXIT_INPUT
     except typer.Exit as exc:
         return int(exc.exit_code)
+    except OSError as exc:  # a file the OS refused (no permission, full disk, a folder in the way): name it
+        if os.environ.get("ROTORCHECK_DEBUG"):
+            raise
+        if exc.filename is None:
+            err.print(f"[bold red]internal error:[/] {type(exc).__name__}: {escape(str(exc))}")
+            return EXIT_INPUT
+        err.print(f"[bold red]error:[/] {escape(str(exc.filename))}: {escape(exc.strerror or str(exc))}")
+        return EXIT_INPUT
     except typer.Abort:
         err.print("aborted")
         return EXIT_INPUT

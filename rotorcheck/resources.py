@@ -12,7 +12,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from rotorcheck.errors import InputError
+from rotorcheck.errors import InputError, check_rig_id
 
 
 def _bundled(name: str) -> Path:
@@ -34,7 +34,9 @@ def samples_dir() -> Path:
 
 
 def default_rig_path(rig_id: str) -> Path:
-    """The bundled nominal rig for ``rig_id`` (``configs/<rig_id>.yaml``)."""
+    """The bundled nominal rig for ``rig_id`` (``configs/<rig_id>.yaml``); a rig_id that is no name (a path)
+    is refused: it never loads a file outside the bundled rigs."""
+    check_rig_id(rig_id, None, "rig_id")
     path = configs_dir() / f"{rig_id}.yaml"
     if not path.exists():
         msg = f"no bundled rig for rig_id {rig_id!r} ({path} not found); pass --rig"

@@ -37,11 +37,9 @@ Axial and torsional terms are dropped: rotorcheck's model is lateral only.
 
 from __future__ import annotations
 
-import importlib
 import itertools
 import math
 import re
-import sys
 import textwrap
 import warnings
 from collections.abc import Callable, Sequence
@@ -55,6 +53,7 @@ import yaml
 from rotorcheck.config import BEARING_TERMS, MAX_RIG_BYTES, ConfigError, parse_config
 from rotorcheck.errors import InputError
 from rotorcheck.fileio import read_bounded_text
+from rotorcheck.safeload import load_toml
 
 __all__ = ["MAX_ROSS_BYTES", "RossImport", "import_ross", "ross_hutchinson_coefficient"]
 
@@ -545,14 +544,7 @@ def _bearing_entry(
 def _load_toml(path: Path) -> dict[str, Any]:
     source = str(path)
     text = read_bounded_text(path, MAX_ROSS_BYTES, "ROSS rotor file")
-    toml = importlib.import_module("tomllib" if sys.version_info >= (3, 11) else "tomli")
-    try:
-        data = toml.loads(text)
-    except toml.TOMLDecodeError as exc:
-        raise InputError(source, "", f"not TOML: {exc}") from None
-    if not isinstance(data, dict):  # pragma: no cover - a TOML document is a table
-        raise InputError(source, "", "not TOML")
-    return data
+    return load_toml(text, source)  # nesting bounded before parsing
 
 
 def import_ross(path: str | Path, rig_id: str | None = None, speed_points: int = 65) -> RossImport:

@@ -18,6 +18,7 @@ ROOT = Path(__file__).resolve().parents[1] / "rotorcheck"
 LAYERS: tuple[tuple[str, ...], ...] = (
     ("rotorcheck", "rotorcheck.errors", "rotorcheck.units"),
     ("rotorcheck.fileio", "rotorcheck.resources"),
+    ("rotorcheck.safeload",),  # bounded YAML/TOML parsing over fileio's bounded reading; below config
     ("rotorcheck.config",),
     ("rotorcheck.variability",),  # benign parameter ranges over the config: above it, below fe/robust
     ("rotorcheck.fe", "rotorcheck.signal", "rotorcheck.robust"),  # numerics: FE, signal processing, robust

@@ -16,6 +16,7 @@ from rotorcheck.config.errors import first_error
 from rotorcheck.config.resolve import resolve_benign
 from rotorcheck.config.rig import RigConfig
 from rotorcheck.fileio import read_bounded_text
+from rotorcheck.safeload import load_yaml
 
 
 def parse_config(data: Any, source: str | Path = "<config>") -> RigConfig:
@@ -85,11 +86,12 @@ def _non_finite(data: Any, path: str = "") -> str | None:
 def load_config(path: str | Path) -> RigConfig:
     """Read and validate a rig YAML file; raises :class:`ConfigError` naming file and field. Refused
     before validation: files over :data:`MAX_RIG_BYTES`, text that is not UTF-8, duplicate keys,
-    integers with a leading zero, nesting too deep to parse, NaN or infinite numbers (by field)."""
+    integers with a leading zero, nesting too deep to parse, YAML alias bombs (more aliases or expanded nodes
+    than :mod:`rotorcheck.safeload` allows), NaN or infinite numbers (by field)."""
     p = Path(path)
     text = read_bounded_text(p, MAX_RIG_BYTES, "rig file", ConfigError)
     try:
-        data = yaml.load(text, Loader=StrictLoader)  # a SafeLoader subclass
+        data = load_yaml(text, StrictLoader)  # bounded: aliases, nesting and expanded nodes (issue 32)
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f"line {mark.line + 1}, column {mark.column + 1}: " if mark else ""

@@ -23,12 +23,17 @@ from __future__ import annotations
 
 import csv
 import datetime as dt
+import io
 import os
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from rotorcheck.errors import InputError
+from rotorcheck.fileio import read_bounded_text
+
+#: the largest fleet manifest read, bytes
+MAX_MANIFEST_BYTES = 20_000_000
 
 #: a time stamp in a sweep's file name: 2026-03-01T02-00, 2026-03-01T02-00-30, 2026-03-01T02:00:30Z,
 #: 20260301T0200 (read as UTC)
@@ -166,23 +171,24 @@ def discover_dir(root: Path, times: dict[str, str] | None = None, skip: Path | N
 
 
 def _rows_csv(path: Path) -> list[dict[str, str]]:
-    with open(path, newline="", encoding="utf-8") as fh:
-        reader = csv.DictReader(fh)
+    text = read_bounded_text(path, MAX_MANIFEST_BYTES, "fleet manifest").removeprefix("\ufeff")  # Excel's BOM
+    reader = csv.DictReader(io.StringIO(text, newline=""))
+    try:
         cols = [c.strip() for c in (reader.fieldnames or [])]
         missing = [c for c in MANIFEST_COLUMNS if c not in cols]
         if missing:
             raise InputError(path, f"column {missing[0]!r}", f"missing (a manifest needs the columns "
                              f"{', '.join(MANIFEST_COLUMNS)} and optionally time)")
-        return [{(k or "").strip(): (v or "").strip() for k, v in row.items()} for row in reader]
+        return [{(k or "").strip(): (v or "").strip() if isinstance(v, str | None) else "" for k, v in row.items()}
+                for row in reader]
+    except csv.Error as exc:
+        raise InputError(path, f"line {reader.line_num}", f"not CSV: {exc}") from None
 
 
 def _rows_yaml(path: Path) -> list[dict[str, str]]:
-    import yaml
+    from rotorcheck.safeload import load_yaml_file  # here: yaml only for a YAML manifest
 
-    try:
-        doc = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except yaml.YAMLError as exc:
-        raise InputError(path, "", f"not valid YAML ({exc})") from None
+    doc = load_yaml_file(path, MAX_MANIFEST_BYTES, "fleet manifest")
     rows = doc.get("sweeps") if isinstance(doc, dict) else None
     if not isinstance(rows, list):
         raise InputError(path, "sweeps", "missing: a YAML manifest is a list of rows under 'sweeps:' with "
@@ -217,9 +223,14 @@ def discover_manifest(path: Path, times: dict[str, str] | None = None) -> Fleet:
                 raise InputError(path, f"{loc}: {c}", "missing or empty")
         files = {}
         for c in ("rig", "baseline", "sweep"):
-            p = Path(row[c]).expanduser()
-            p = p if p.is_absolute() else base_dir / p
-            if not p.is_file():
+            try:
+                p = Path(row[c]).expanduser()
+                p = p if p.is_absolute() else base_dir / p
+                found = p.is_file()
+            except (OSError, RuntimeError, ValueError) as exc:  # a name too long, a NUL byte, no home folder
+                raise InputError(path, f"{loc}: {c}", f"unusable path {row[c][:80]!r}: "
+                                 f"{getattr(exc, 'strerror', None) or exc}") from None
+            if not found:
                 raise InputError(path, f"{loc}: {c}", f"no such file {p}")
             files[c] = p
         name = row["machine"]

@@ -26,7 +26,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
-from rotorcheck.errors import InputError, check_choice
+from rotorcheck.errors import InputError, check_choice, finite_positive
 from rotorcheck.fileio import atomic_write_text
 from rotorcheck.fleet.index import HashIndex
 from rotorcheck.fleet.layout import Fleet, discover
@@ -103,8 +103,7 @@ def check_options(opts: FleetOptions) -> None:
                     ("--trend-confidence", opts.trend_confidence)):
         if not 0.0 < v < 1.0:
             raise InputError(None, name, f"must be in (0, 1), got {v}")
-    if s.low_band_hz is not None and s.low_band_hz <= 0:
-        raise InputError(None, "--low-band", f"must be > 0 Hz, got {s.low_band_hz}")
+    finite_positive(s.low_band_hz, "--low-band")
     parse_limit(opts.limit)
     if opts.executor == "dask" or opts.scheduler:
         try:
@@ -191,6 +190,10 @@ def _processes(tasks: list[SweepTask], workers: int, log: Callable[[str], None])
     return [results[t.task_key] for t in tasks]
 
 
+#: seconds to connect to a --scheduler before giving up (an InputError naming --scheduler)
+SCHEDULER_TIMEOUT_S = 10.0
+
+
 def _dask(tasks: list[SweepTask], workers: int, scheduler: str | None, log: Callable[[str], None]
           ) -> list[dict[str, Any]]:
     """Dask distributed: a client of ``scheduler``, else of a LocalCluster (``workers`` processes, one thread
@@ -201,7 +204,11 @@ def _dask(tasks: list[SweepTask], workers: int, scheduler: str | None, log: Call
 
     cluster = None
     if scheduler:
-        client = Client(scheduler)
+        try:
+            client = Client(scheduler, timeout=SCHEDULER_TIMEOUT_S)
+        except (OSError, TimeoutError, ValueError) as exc:  # unreachable, refused, no such address
+            raise InputError(None, "--scheduler", f"cannot reach a Dask scheduler at {scheduler!r} within "
+                             f"{SCHEDULER_TIMEOUT_S:g} s ({type(exc).__name__}: {exc})") from None
     else:
         cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None,
                                silence_logs=logging.ERROR)

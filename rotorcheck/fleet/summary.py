@@ -39,7 +39,8 @@ ALERT_RULES = {
     "limit-exceeded": "alarm: the latest low-frequency stiffness change exceeds the limit {limit:.4g} N/m by more than "
                       "its {confidence:.0%} half-width",
     "damage-unconfirmed": "watch: the latest sweep has the verdict damage, not yet {confirm} in a row",
-    "sweep-error": "watch: the latest sweep could not be checked (bad input)",
+    "sweep-error": "watch: the latest sweep could not be checked (bad input); it neither confirms nor clears an "
+                   "alarm",
 }
 
 
@@ -147,9 +148,12 @@ def alerts(rows_by_machine: dict[str, list[dict[str, Any]]], trends: dict[str, A
     for machine, rows in sorted(rows_by_machine.items()):
         if not rows:
             continue
-        verdicts = [r["verdict"] for r in rows]
+        # a sweep that could not be checked (an error row: unreadable, truncated) neither confirms nor clears
+        # an alarm: the streak counts the checked sweeps only; the unreadable ones get a watch note
+        judged = [r for r in rows if r["verdict"] != "error"]
+        unchecked = rows[max((i + 1 for i, r in enumerate(rows) if r["verdict"] != "error"), default=0):]
         streak = 0
-        while streak < len(verdicts) and verdicts[-1 - streak] == "damage":
+        while streak < len(judged) and judged[-1 - streak]["verdict"] == "damage":
             streak += 1
         tr = trends.get(machine)
         tr_doc = tr.to_dict() if tr is not None else {}
@@ -163,7 +167,7 @@ def alerts(rows_by_machine: dict[str, list[dict[str, Any]]], trends: dict[str, A
                  "crossing_time": tr_doc.get("crossing_time"), "crossing_interval": tr_doc.get("crossing_interval")}
         rules = []
         if streak >= confirm:
-            rules.append(("alarm", "damage-confirmed", rows[len(rows) - streak + confirm - 1]["time"]))
+            rules.append(("alarm", "damage-confirmed", judged[len(judged) - streak + confirm - 1]["time"]))
         fit = getattr(tr, "fit", None)
         if limit is not None and fit is not None:
             from rotorcheck.fleet.trend import days
@@ -171,14 +175,14 @@ def alerts(rows_by_machine: dict[str, list[dict[str, Any]]], trends: dict[str, A
             if fit.beyond(limit, days(last["time"])):
                 rules.append(("alarm", "limit-exceeded", last["time"]))
         if 0 < streak < confirm:
-            rules.append(("watch", "damage-unconfirmed", last["time"]))
-        if last["verdict"] == "error":
-            rules.append(("watch", "sweep-error", last["time"]))
+            rules.append(("watch", "damage-unconfirmed", judged[-1]["time"]))
+        if unchecked:
+            rules.append(("watch", "sweep-error", unchecked[0]["time"]))
         for level, rule, since in rules:
             text = ALERT_RULES[rule].format(confirm=confirm, false_alarm=false_alarm, limit=limit or 0.0,
                                             confidence=getattr(fit, "confidence", 0.95))
             out.append({"level": level, "rule": rule, "rule_text": text, "since": since,
-                        "first_damage_time": rows[len(rows) - streak]["time"] if streak else None, **entry})
+                        "first_damage_time": judged[len(judged) - streak]["time"] if streak else None, **entry})
     return sorted(out, key=lambda e: (e["level"] != "alarm", e["machine"], e["rule"]))
 
 

@@ -41,6 +41,7 @@ import yaml
 
 from rotorcheck.errors import InputError
 from rotorcheck.fileio import atomic_write_text, check_writable
+from rotorcheck.safeload import load_yaml
 from rotorcheck.sweep import uff as _uff
 from rotorcheck.sweep.format import (
     DIRECTIONS,
@@ -55,7 +56,7 @@ from rotorcheck.sweep.format import (
 from rotorcheck.sweep.hdf5io import read_sweep, write_sweep
 from rotorcheck.sweep.tidy_csv import export_tidy_csv, import_tidy_csv
 from rotorcheck.sweep.validation import validate_sweep
-from rotorcheck.sweep.wide_csv import default_column_map_path, export_wide_csv, import_wide_csv
+from rotorcheck.sweep.wide_csv import MAX_MAP_BYTES, default_column_map_path, export_wide_csv, import_wide_csv
 
 __all__ = [
     "FORMATS",
@@ -72,10 +73,8 @@ FORMATS = ("hdf5", "uff", "csv", "wide")
 _ALIASES = {"hdf5": "hdf5", "h5": "hdf5", "uff": "uff", "uff58": "uff", "unv": "uff", "csv": "csv",
             "tidy": "csv", "wide": "wide"}
 _EXTENSIONS = {".h5": "hdf5", ".hdf5": "hdf5", ".uff": "uff", ".unv": "uff", ".csv": "csv"}
-#: UFF specific data types: 19 rpm (z axis); 11 velocity, 12 acceleration (ordinate); 17 time, 20 order (abscissa)
+#: UFF specific data type 19: rpm (z axis)
 _UFF_RPM = 19
-_UFF_NOT_RECEPTANCE = {11: "velocity (mobility)", 12: "acceleration (accelerance)"}
-_UFF_NOT_FREQUENCY = {17: "time", 20: "order"}
 _RULE = re.compile(r"^\s*(?P<x>\d+(?:\.\d*)?(?:[eE][+-]?\d+)?)\s*%\s*of\s+(?P<max>max\s+)?\|H\|\s*$")
 _NOISE_HELP = ("--noise-source 'measured' (the file's variance is the analyser's) | 'assumed: <rule>' "
                "(rules convert computes: 'X % of |H|', 'X % of max |H|'), or --noise-var VAR ((m/N)^2)")
@@ -107,7 +106,7 @@ def format_of(path: str | os.PathLike[str], given: str | None, *, wide: bool = F
     ext = Path(path).suffix.lower()
     if ext not in _EXTENSIONS:
         raise InputError(os.fspath(path), "", f"cannot tell the format from the extension {ext or '(none)'!r}: use "
-                         ".h5, .hdf5, .uff, .unv or .csv, or pass {'--from' if side == 'IN' else '--to'} "
+                         f".h5, .hdf5, .uff, .unv or .csv, or pass {'--from' if side == 'IN' else '--to'} "
                          f"({', '.join(FORMATS)})")
     fmt = _EXTENSIONS[ext]
     return "wide" if fmt == "csv" and wide else fmt
@@ -159,10 +158,13 @@ def _read_tidy_side(path: str, csv_file: str) -> dict[str, Any]:
                                "with channels: [{name, role, node, direction}] (and rig_id, source, created_utc); "
                                f"none at {path}")
     try:
-        with open(path, encoding="utf-8") as fh:
-            d = yaml.safe_load(fh)
-    except (OSError, yaml.YAMLError) as exc:  # JSON is YAML too
-        raise SweepFormatError(path, "/", f"not readable as YAML/JSON: {exc}") from exc
+        with open(path, encoding="utf-8-sig") as fh:
+            text = fh.read(MAX_MAP_BYTES + 1)
+        if len(text) > MAX_MAP_BYTES:
+            raise SweepFormatError(path, "/", f"over {MAX_MAP_BYTES} characters: no side file is that long")
+        d = load_yaml(text)
+    except (OSError, UnicodeDecodeError, yaml.YAMLError) as exc:  # JSON is YAML too
+        raise SweepFormatError(path, "/", f"not readable as YAML/JSON: {exc}") from None
     if not isinstance(d, Mapping):
         raise SweepFormatError(path, "/", "expected a mapping of keys")
     known = {"format", "rig_id", "source", "created_utc", "generator", "channels", "notes"}
@@ -213,15 +215,7 @@ def _uff_facts(file: str) -> tuple[bool, float | None]:
     for i, s in enumerate(sets):
         if int(s.get("func_type", -1)) != 4:
             continue
-        where = f"dataset #{i + 1}"
-        ordinate = int(s.get("ordinate_spec_data_type", 0))
-        if ordinate in _UFF_NOT_RECEPTANCE:
-            raise SweepFormatError(file, f"{where}/record 9", f"FRF ordinate is {_UFF_NOT_RECEPTANCE[ordinate]}: "
-                                   "rotorcheck needs receptance (displacement/force, m/N); convert it in the analyser")
-        abscissa = int(s.get("abscissa_spec_data_type", 0))
-        if abscissa in _UFF_NOT_FREQUENCY:
-            raise SweepFormatError(file, f"{where}/record 8",
-                                   f"abscissa is {_UFF_NOT_FREQUENCY[abscissa]}, not frequency")
+        _uff._frf_scale(file, f"dataset #{i + 1}", s)  # records 8-10: frequency, displacement per force
         if int(s.get("z_axis_spec_data_type", 0)) == _UFF_RPM:
             speeds.add(float(s.get("z_axis_value", 0.0)))
         else:

@@ -29,7 +29,7 @@ from typing import Any
 import h5py
 import numpy as np
 
-from rotorcheck.fileio import atomic_path
+from rotorcheck.fileio import atomic_path, check_hdf5_global_heaps, hdf5_attr_problem, hdf5_vlen_problem
 from rotorcheck.sweep.format import (
     CHANNEL_FIELDS,
     EXCITATION,
@@ -65,10 +65,38 @@ from rotorcheck.sweep.validation import (
 def _attr(file: str, obj: h5py.HLObject, name: str, where: str) -> Any:
     if name not in obj.attrs:
         raise SweepFormatError(file, f"{where}@{name}", "missing attribute")
+    problem = hdf5_attr_problem(obj, name)  # libhdf5 can crash reading a corrupt datatype
+    if problem:
+        raise SweepFormatError(file, f"{where}@{name}", problem)
     try:
         return obj.attrs[name]
     except Exception as exc:  # unreadable attribute: report, do not guess
         raise SweepFormatError(file, f"{where}@{name}", f"unreadable attribute: {exc}") from exc
+
+
+#: the global heaps of the file being read (fileio.check_hdf5_global_heaps), for :func:`_check_vlen`
+_HEAPS: dict[str, dict[int, dict[int, int]]] = {}
+
+
+def _check_vlen(file: str, path: str, obj: h5py.Dataset) -> None:
+    """The variable-length strings of a contiguous dataset point into the file's global heaps (checked on
+    the raw descriptors before HDF5 follows them)."""
+    heaps = _HEAPS.get(file)
+    info = h5py.check_string_dtype(obj.dtype)
+    if heaps is None or info is None or info.length is not None:
+        return
+    offset = obj.id.get_offset()
+    if offset is None:  # chunked or compact: no raw block to look at
+        return
+    base = obj.file.userblock_size
+    with open(file, "rb") as fh:
+        fh.seek(base + offset)
+        raw = fh.read(16 * obj.size)
+    if len(raw) < 16 * obj.size:
+        raise SweepFormatError(file, path, "the strings' descriptors run past the end of the file (truncated?)")
+    problem = hdf5_vlen_problem(raw, heaps, base)
+    if problem:
+        raise SweepFormatError(file, path, f"corrupt string data: {problem}")
 
 
 def _read_ds(file: str, grp: h5py.Group, name: str, where: str) -> np.ndarray:
@@ -78,6 +106,7 @@ def _read_ds(file: str, grp: h5py.Group, name: str, where: str) -> np.ndarray:
     obj = grp.get(name)
     if not isinstance(obj, h5py.Dataset):
         raise SweepFormatError(file, path, f"expected a dataset, found {type(obj).__name__}")
+    _check_vlen(file, path, obj)
     try:
         if obj.dtype.kind in "OS" or h5py.check_string_dtype(obj.dtype) is not None:
             return np.asarray(obj.asstr()[()], dtype=object)
@@ -188,7 +217,11 @@ def check_self_contained(file: str, h5: h5py.File, max_bytes: int = MAX_SWEEP_BY
                                        "file must hold its own data")
             if isinstance(link, h5py.SoftLink):
                 raise SweepFormatError(file, path, f"a soft link to {link.path}: not part of the sweep format")
-            obj = group[name]
+            try:
+                obj = group[name]
+            except (KeyError, OSError, RuntimeError, ValueError) as exc:  # HDF5 cannot open it: a corrupt header
+                raise SweepFormatError(file, path, f"unreadable HDF5 object (truncated or corrupt file): {exc}"
+                                       ) from None
             key = obj.id.__hash__()
             if key in seen:
                 continue
@@ -232,97 +265,112 @@ def read_sweep(
         raise SweepFormatError(file, "/", f"cannot read file: {exc}") from exc
     if not is_h5:
         raise SweepFormatError(file, "/", "not an HDF5 file (no HDF5 signature)")
+    heaps = check_hdf5_global_heaps(file, SweepFormatError)  # before the HDF5 library loops on a corrupt heap
     try:
         h5 = h5py.File(file, "r")
     except Exception as exc:
         raise SweepFormatError(file, "/", f"cannot open as HDF5 (truncated or corrupt file): {exc}") from exc
     with h5:
-        check_self_contained(file, h5)
-        schema = check_text(file, "/@schema", _attr(file, h5, "schema", ""), "schema")
-        if schema != SCHEMA:
-            raise SweepFormatError(file, "/@schema", f"schema {schema!r}, expected {SCHEMA!r}")
-        ver = _attr(file, h5, "schema_version", "")
-        if isinstance(ver, np.ndarray) and ver.shape in ((), (1,)):
-            ver = ver.reshape(()).item() if ver.dtype.kind in "iu" else ver
-        if isinstance(ver, bool) or not isinstance(ver, int | np.integer):
-            raise SweepFormatError(file, "/@schema_version", f"schema_version {ver!r} is not an integer")
-        if int(ver) not in SCHEMA_VERSIONS:
-            raise SweepFormatError(
-                file,
-                "/@schema_version",
-                f"unknown schema_version {int(ver)} (this reader knows "
-                f"{', '.join(str(v) for v in SCHEMA_VERSIONS)})",
-            )
-        version = int(ver)
-        exc_attr = check_text(file, "/@excitation", _attr(file, h5, "excitation", ""), "excitation")
-        if exc_attr != EXCITATION:
-            raise SweepFormatError(file, "/@excitation", f"excitation {exc_attr!r}, expected {EXCITATION!r}")
-        conv = check_text(
-            file, "/@phasor_convention", _attr(file, h5, "phasor_convention", ""), "convention"
-        )
-        if conv != PHASOR_CONVENTION:
-            raise SweepFormatError(
-                file,
-                "/@phasor_convention",
-                f"phasor_convention {conv!r}, expected {PHASOR_CONVENTION!r}",
-            )
-        rig_id = check_text(file, "/@rig_id", _attr(file, h5, "rig_id", ""), "rig_id")
-        source = check_text(file, "/@source", _attr(file, h5, "source", ""), "source")
-        generator = check_text(file, "/@generator", _attr(file, h5, "generator", ""), "generator")
-        created = check_text(file, "/@created_utc", _attr(file, h5, "created_utc", ""), "created_utc")
-        validate_header(file, rig_id, source, generator, created)
-        channels = _read_channels(file, h5)
+        _HEAPS[file] = heaps
+        try:
+            return _read_open(file, h5, frf_rtol, period_rtol)
+        except SweepFormatError:
+            raise
+        except (KeyError, OSError, RuntimeError, ValueError, TypeError, IndexError) as exc:  # h5py on a corrupt file
+            raise SweepFormatError(file, "/", f"unreadable HDF5 content (truncated or corrupt file): "
+                                   f"{type(exc).__name__}: {exc}") from None
+        finally:
+            _HEAPS.pop(file, None)
 
-        if "runs" not in h5:
-            raise SweepFormatError(file, "/runs", "missing group")
-        runs_grp = h5["runs"]
-        if not isinstance(runs_grp, h5py.Group):
-            raise SweepFormatError(file, "/runs", "expected a group")
-        if len(runs_grp) == 0:
-            raise SweepFormatError(file, "/runs", "no runs")
-        runs: dict[str, Run] = {}
-        for run_id in runs_grp:
-            where = f"/runs/{run_id}"
-            g = runs_grp.get(run_id)
-            if not isinstance(g, h5py.Group):
-                raise SweepFormatError(file, where, "expected a group (one per run)")
-            speed = _attr(file, g, "speed_rpm", where)
-            if isinstance(speed, np.ndarray) and speed.shape in ((), (1,)):
-                speed = speed.reshape(()).item()
-            if isinstance(speed, np.generic):
-                speed = speed.item()
-            notes = ""
-            if "notes" in g.attrs:
-                notes = check_text(file, f"{where}@notes", _attr(file, g, "notes", where), "notes")
-            if version == SCHEMA_VERSION_V1:
-                data = {name: _read_ds(file, g, name, where) for name in RUN_DATASETS}
-                pp = _read_ds(file, g, "period_phasor", where) if "period_phasor" in g else None
-                run = Run.from_v1(
-                    run_id,
-                    speed,
-                    data["frequency"],
-                    data["input_phasor"],
-                    data["output_phasor"],
-                    data["output_var"],
-                    data["n_periods"],
-                    data["frf"],
-                    period_phasor=pp,
-                    notes=notes,
-                    origin=file,
-                )
-            else:
-                run = _read_run_v2(file, g, where, run_id, speed, notes)
-            validate_run(
-                file,
-                run,
-                channels,
-                frf_rtol=frf_rtol,
-                period_rtol=period_rtol,
-                exact_dtypes=True,
-                version=version,
+
+def _read_open(file: str, h5: h5py.File, frf_rtol: float, period_rtol: float) -> Sweep:
+    """:func:`read_sweep` of the opened file."""
+    check_self_contained(file, h5)
+    schema = check_text(file, "/@schema", _attr(file, h5, "schema", ""), "schema")
+    if schema != SCHEMA:
+        raise SweepFormatError(file, "/@schema", f"schema {schema!r}, expected {SCHEMA!r}")
+    ver = _attr(file, h5, "schema_version", "")
+    if isinstance(ver, np.ndarray) and ver.shape in ((), (1,)):
+        ver = ver.reshape(()).item() if ver.dtype.kind in "iu" else ver
+    if isinstance(ver, bool) or not isinstance(ver, int | np.integer):
+        raise SweepFormatError(file, "/@schema_version", f"schema_version {ver!r} is not an integer")
+    if int(ver) not in SCHEMA_VERSIONS:
+        raise SweepFormatError(
+            file,
+            "/@schema_version",
+            f"unknown schema_version {int(ver)} (this reader knows "
+            f"{', '.join(str(v) for v in SCHEMA_VERSIONS)})",
+        )
+    version = int(ver)
+    exc_attr = check_text(file, "/@excitation", _attr(file, h5, "excitation", ""), "excitation")
+    if exc_attr != EXCITATION:
+        raise SweepFormatError(file, "/@excitation", f"excitation {exc_attr!r}, expected {EXCITATION!r}")
+    conv = check_text(
+        file, "/@phasor_convention", _attr(file, h5, "phasor_convention", ""), "convention"
+    )
+    if conv != PHASOR_CONVENTION:
+        raise SweepFormatError(
+            file,
+            "/@phasor_convention",
+            f"phasor_convention {conv!r}, expected {PHASOR_CONVENTION!r}",
+        )
+    rig_id = check_text(file, "/@rig_id", _attr(file, h5, "rig_id", ""), "rig_id")
+    source = check_text(file, "/@source", _attr(file, h5, "source", ""), "source")
+    generator = check_text(file, "/@generator", _attr(file, h5, "generator", ""), "generator")
+    created = check_text(file, "/@created_utc", _attr(file, h5, "created_utc", ""), "created_utc")
+    validate_header(file, rig_id, source, generator, created)
+    channels = _read_channels(file, h5)
+
+    if "runs" not in h5:
+        raise SweepFormatError(file, "/runs", "missing group")
+    runs_grp = h5["runs"]
+    if not isinstance(runs_grp, h5py.Group):
+        raise SweepFormatError(file, "/runs", "expected a group")
+    if len(runs_grp) == 0:
+        raise SweepFormatError(file, "/runs", "no runs")
+    runs: dict[str, Run] = {}
+    for run_id in runs_grp:
+        where = f"/runs/{run_id}"
+        g = runs_grp.get(run_id)
+        if not isinstance(g, h5py.Group):
+            raise SweepFormatError(file, where, "expected a group (one per run)")
+        speed = _attr(file, g, "speed_rpm", where)
+        if isinstance(speed, np.ndarray) and speed.shape in ((), (1,)):
+            speed = speed.reshape(()).item()
+        if isinstance(speed, np.generic):
+            speed = speed.item()
+        notes = ""
+        if "notes" in g.attrs:
+            notes = check_text(file, f"{where}@notes", _attr(file, g, "notes", where), "notes")
+        if version == SCHEMA_VERSION_V1:
+            data = {name: _read_ds(file, g, name, where) for name in RUN_DATASETS}
+            pp = _read_ds(file, g, "period_phasor", where) if "period_phasor" in g else None
+            run = Run.from_v1(
+                run_id,
+                speed,
+                data["frequency"],
+                data["input_phasor"],
+                data["output_phasor"],
+                data["output_var"],
+                data["n_periods"],
+                data["frf"],
+                period_phasor=pp,
+                notes=notes,
+                origin=file,
             )
-            run.speed_rpm = float(speed)
-            runs[run_id] = run
+        else:
+            run = _read_run_v2(file, g, where, run_id, speed, notes)
+        validate_run(
+            file,
+            run,
+            channels,
+            frf_rtol=frf_rtol,
+            period_rtol=period_rtol,
+            exact_dtypes=True,
+            version=version,
+        )
+        run.speed_rpm = float(speed)
+        runs[run_id] = run
     return Sweep(
         rig_id=rig_id,
         source=source,

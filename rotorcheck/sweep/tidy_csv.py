@@ -23,6 +23,7 @@ cells into an FRF-only run; its ``noise_source`` is the caller's (when given) or
 from __future__ import annotations
 
 import csv
+import math
 import os
 from collections.abc import Sequence
 
@@ -108,22 +109,30 @@ def export_tidy_csv(
 def _rows(file: str) -> tuple[list[str], list[tuple[int, dict[str, str]]]]:
     if not os.path.exists(file):
         raise SweepFormatError(file, "/", "no such file")
-    with open(file, newline="", encoding="utf-8") as fh:
+    lineno = 1
+    # utf-8-sig: Excel's "CSV UTF-8" starts with a byte-order mark, which is no part of the first column's name
+    with open(file, newline="", encoding="utf-8-sig") as fh:
         reader = csv.reader(fh)
         try:
             header = next(reader)
+            missing = [c for c in COLUMNS if c not in header]
+            if missing:
+                raise SweepFormatError(file, "line 1", f"missing columns {missing}")
+            rows = []
+            for raw in reader:
+                lineno = reader.line_num
+                if not raw:
+                    continue
+                if len(raw) != len(header):
+                    raise SweepFormatError(file, f"line {lineno}", f"{len(raw)} fields, header has {len(header)}")
+                rows.append((lineno, dict(zip(header, raw, strict=True))))
         except StopIteration:
             raise SweepFormatError(file, "line 1", "empty file (no header)") from None
-        missing = [c for c in COLUMNS if c not in header]
-        if missing:
-            raise SweepFormatError(file, "line 1", f"missing columns {missing}")
-        rows = []
-        for lineno, raw in enumerate(reader, start=2):
-            if not raw:
-                continue
-            if len(raw) != len(header):
-                raise SweepFormatError(file, f"line {lineno}", f"{len(raw)} fields, header has {len(header)}")
-            rows.append((lineno, dict(zip(header, raw, strict=True))))
+        except UnicodeDecodeError as exc:
+            raise SweepFormatError(file, f"line {lineno + 1}", f"not UTF-8 text (byte {exc.start} of a chunk): "
+                                   "save the CSV as UTF-8") from None
+        except csv.Error as exc:
+            raise SweepFormatError(file, f"line {reader.line_num}", f"not CSV: {exc}") from None
     if not rows:
         raise SweepFormatError(file, "line 2", "no data rows")
     return header, rows
@@ -131,9 +140,12 @@ def _rows(file: str) -> tuple[list[str], list[tuple[int, dict[str, str]]]]:
 
 def _num(file: str, lineno: int, row: dict[str, str], col: str) -> float:
     try:
-        return float(row[col])
+        value = float(row[col])
     except ValueError:
         raise SweepFormatError(file, f"line {lineno}/{col}", f"not a number: {row[col]!r}") from None
+    if not math.isfinite(value):
+        raise SweepFormatError(file, f"line {lineno}/{col}", f"not a finite number: {row[col]!r}")
+    return value
 
 
 def _all_or_none(file: str, rid: str, col: str, filled: list[bool]) -> bool:

@@ -216,8 +216,112 @@ def _load_sets(path: str) -> list[dict]:
     for i, (t, s) in enumerate(zip(types, sets, strict=True)):
         if int(t) != 58:
             raise SweepFormatError(path, f"dataset #{i + 1}", f"type {int(t)}, expected 58")
+        lacks = [k for k in ("x", "data", "func_type", "id1", "id2", "id5", "rsp_node", "rsp_dir", "ref_node",
+                             "ref_dir") if k not in s or s[k] is None]
+        if lacks:
+            raise SweepFormatError(path, f"dataset #{i + 1}", f"no {', '.join(lacks)} (a truncated or malformed "
+                                   "record)")
+        _check_binary(path, f"dataset #{i + 1}", s)
         out.append(s)
     return out
+
+
+#: UFF specific data types (records 8-11, field 1) of an FRF record's axes
+_SPEC_TYPES = {0: "unknown", 1: "general", 2: "stress", 3: "strain", 5: "temperature", 6: "heat flux",
+               8: "displacement", 9: "reaction force", 11: "velocity (mobility)", 12: "acceleration (accelerance)",
+               13: "excitation force", 15: "pressure", 16: "mass", 17: "time", 18: "frequency", 19: "rpm",
+               20: "order"}
+#: length units of an FRF ordinate (record 9 label), to m
+_LENGTH_UNITS = {"m": 1.0, "mm": 1e-3, "um": 1e-6, "µm": 1e-6, "μm": 1e-6, "micron": 1e-6, "nm": 1e-9}
+#: force units of an FRF denominator (record 10 label), to N
+_FORCE_UNITS = {"n": 1.0, "kn": 1e3}
+_NO_LABEL = ("", "none")
+
+
+def _label(s: dict, key: str) -> str:
+    return str(s.get(key, "") or "").strip()
+
+
+def _frf_scale(path: str, where: str, s: dict) -> float:
+    """The factor that turns an FRF record's ordinate into m/N, from its record 8-10 types, unit exponents and
+    labels; an abscissa that is not frequency (in Hz) or an ordinate that is not displacement per force is a
+    SweepFormatError naming the record."""
+    absc = int(s.get("abscissa_spec_data_type", 0))
+    if absc not in (0, 18):
+        raise SweepFormatError(path, f"{where}/record 8", f"abscissa is {_SPEC_TYPES.get(absc, 'type ' + str(absc))} "
+                               f"(specific data type {absc}), not frequency")
+    lab = _label(s, "abscissa_axis_units_lab")
+    if lab.lower() not in (*_NO_LABEL, "hz"):
+        raise SweepFormatError(path, f"{where}/record 8", f"abscissa unit {lab!r}, not Hz")
+    ordt = int(s.get("ordinate_spec_data_type", 0))
+    if ordt not in (0, 8):
+        what = _SPEC_TYPES.get(ordt, f"type {ordt}")
+        raise SweepFormatError(path, f"{where}/record 9", f"FRF ordinate is {what}: rotorcheck needs receptance "
+                               "(displacement/force, m/N); convert it in the analyser")
+    den_t = int(s.get("orddenom_spec_data_type", 0))
+    if den_t not in (0, 9, 13):
+        raise SweepFormatError(path, f"{where}/record 10", f"FRF denominator is "
+                               f"{_SPEC_TYPES.get(den_t, 'type ' + str(den_t))}, not a force")
+    exps = {k: int(s.get(k, 0)) for k in ("ordinate_len_unit_exp", "ordinate_force_unit_exp",
+                                          "orddenom_len_unit_exp", "orddenom_force_unit_exp")}
+    if exps["ordinate_len_unit_exp"] not in (0, 1) or exps["ordinate_force_unit_exp"] != 0 \
+            or exps["orddenom_len_unit_exp"] != 0 or exps["orddenom_force_unit_exp"] not in (0, 1):
+        raise SweepFormatError(path, f"{where}/record 9", f"unit exponents {exps}: not a length per force")
+    num, den = _label(s, "ordinate_axis_units_lab"), _label(s, "orddenom_axis_units_lab")
+    if "/" in num:  # the ordinate labelled as the whole FRF unit, e.g. "mm/N"
+        num, per = (t.strip() for t in num.split("/", 1))
+        if den.lower() not in _NO_LABEL and den.lower() != per.lower():
+            raise SweepFormatError(path, f"{where}/record 10", f"denominator unit {den!r} contradicts the ordinate's "
+                                   f"{_label(s, 'ordinate_axis_units_lab')!r}")
+        den = per
+    length = 1.0 if num.lower() in _NO_LABEL else _LENGTH_UNITS.get(num.lower() if num != "Mm" else num)
+    if length is None:
+        raise SweepFormatError(path, f"{where}/record 9", f"ordinate unit {num!r} not understood: rotorcheck reads "
+                               f"{', '.join(k for k in _LENGTH_UNITS if k.isascii())} (per N)")
+    force = 1.0 if den.lower() in _NO_LABEL else _FORCE_UNITS.get(den.lower() if den != "MN" else den)
+    if force is None:
+        raise SweepFormatError(path, f"{where}/record 10", f"denominator unit {den!r} not understood: rotorcheck "
+                               "reads N, kN")
+    return length / force
+
+
+def _plausible(x: np.ndarray, values: np.ndarray) -> bool:
+    """Numbers a measured sweep can hold: finite, no subnormal or astronomically large values, an increasing
+    non-negative abscissa."""
+    v = np.concatenate([x.ravel(), values.real.ravel(), values.imag.ravel()]).astype(np.float64)
+    a = np.abs(v)
+    return bool(np.all(np.isfinite(v)) and not np.any((a > 0) & (a < 1e-250)) and not np.any(a > 1e250)
+                and np.all(x >= 0) and np.all(np.diff(x) > 0))
+
+
+def _swapped(a: np.ndarray, single: bool) -> np.ndarray:
+    """The other byte order's reading of values pyuff decoded (4-byte floats when ``single``)."""
+    a = np.asarray(a)
+    if np.iscomplexobj(a):
+        return _swapped(a.real, single) + 1j * _swapped(a.imag, single)
+    return a.astype(np.float32).byteswap().astype(np.float64) if single else a.astype(np.float64).byteswap()
+
+
+def _check_binary(path: str, where: str, s: dict) -> None:
+    """A binary 58b record must be IEEE floats whose byte order is the one record 1 states: data that only
+    make sense byte-swapped are refused (naming the byte ordering field), never read as other numbers."""
+    if not int(s.get("binary", 0)):
+        return
+    fp = int(s.get("fp_format", 2))
+    if fp != 2:
+        raise SweepFormatError(path, f"{where}/record 1", f"floating-point format {fp} (1 VAX, 3 IBM): rotorcheck "
+                               "reads IEEE 754 (2) only")
+    x = np.asarray(s.get("x"), dtype=np.float64)
+    data = np.asarray(s.get("data"))
+    if data.dtype.kind not in "fc" or x.shape != data.shape[:1]:
+        return
+    single = int(s.get("ord_data_type", 6)) in (2, 5)
+    even = int(s.get("abscissa_spacing", 0)) == 1  # the abscissa from record 7, not from the data
+    if not _plausible(x, data) and _plausible(x if even else _swapped(x, single), _swapped(data, single)):
+        order = {1: "little-endian", 2: "big-endian"}.get(int(s.get("byte_ordering", 1)), "?")
+        raise SweepFormatError(path, f"{where}/record 1", f"byte ordering {int(s.get('byte_ordering', 1))} "
+                               f"({order}) states the wrong byte order: the data read that way are no sweep, "
+                               "byte-swapped they are; correct the header")
 
 
 def _channel(path: str, where: str, name: str | None, node: int, code: int, role: str) -> Channel:
@@ -331,7 +435,7 @@ def _frf_table(file: str, rid: str, recs: list[tuple[int, dict]], var_recs: list
             x0 = x
         elif x.shape != x0.shape or not np.array_equal(x, x0):
             raise SweepFormatError(file, f"{where}/abscissa", "frequency grid differs within run")
-        cells[key] = np.asarray(s["data"], dtype=np.complex128)
+        cells[key] = np.asarray(s["data"], dtype=np.complex128) * _frf_scale(file, where, s)
     assert x0 is not None and speed is not None
     if len(noise) != 1:
         raise SweepFormatError(file, "/", f"run {rid!r}: noise= token differs between FRF records")

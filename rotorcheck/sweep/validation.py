@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from rotorcheck.errors import InputError, check_rig_id
 from rotorcheck.sweep.format import (
     DIRECTIONS,
     FRF_ONLY_DATASETS,
@@ -63,6 +64,10 @@ def validate_header(file: str, rig_id: Any, source: Any, generator: Any, created
     rig = check_text(file, "/@rig_id", rig_id, "rig_id")
     if not rig.strip():
         raise SweepFormatError(file, "/@rig_id", "rig_id is empty")
+    try:
+        check_rig_id(rig, file, "/@rig_id")
+    except InputError as exc:  # a rig_id names a bundled rig, never a file elsewhere on disk
+        raise SweepFormatError(file, "/@rig_id", exc.message) from None
     src = check_text(file, "/@source", source, "source")
     if src not in SOURCES:
         raise SweepFormatError(file, "/@source", f"source {src!r} is not one of {SOURCES}")

@@ -57,6 +57,7 @@ import numpy as np
 import yaml
 
 from rotorcheck.fileio import atomic_path
+from rotorcheck.safeload import load_yaml
 from rotorcheck.sweep.format import (
     DIRECTIONS,
     SOURCES,
@@ -148,16 +149,22 @@ def default_column_map_path(csv_path: str | os.PathLike[str]) -> Path:
 # --------------------------------------------------------------------------------------------
 
 
+#: the longest column map (or tidy CSV side file) read, characters
+MAX_MAP_BYTES = 1_000_000
+
+
 def _load_mapping(path: str) -> Mapping[str, Any]:
     if not os.path.exists(path):
         raise SweepFormatError(path, "/", "no such column map file")
     try:
-        with open(path, encoding="utf-8") as fh:
-            text = fh.read()
-    except OSError as exc:
-        raise SweepFormatError(path, "/", f"cannot read: {exc}") from exc
+        with open(path, encoding="utf-8-sig") as fh:
+            text = fh.read(MAX_MAP_BYTES + 1)
+    except (OSError, UnicodeDecodeError) as exc:
+        raise SweepFormatError(path, "/", f"cannot read as UTF-8 text: {exc}") from None
+    if len(text) > MAX_MAP_BYTES:
+        raise SweepFormatError(path, "/", f"over {MAX_MAP_BYTES} characters: no column map is that long")
     try:
-        data = json.loads(text) if path.lower().endswith(".json") else yaml.safe_load(text)
+        data = json.loads(text) if path.lower().endswith(".json") else load_yaml(text)
     except (ValueError, yaml.YAMLError) as exc:
         kind = "JSON" if path.lower().endswith(".json") else "YAML"
         raise SweepFormatError(path, "/", f"not valid {kind}: {exc}") from exc
