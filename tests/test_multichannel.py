@@ -4,7 +4,9 @@
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -127,7 +129,7 @@ def test_simulate_several_actuators_and_sensors(tmp_path: Path, capsys: pytest.C
     assert "--actuator" in capsys.readouterr().err
 
 
-def test_xy_at_standstill_where_the_cross_pairs_are_silent() -> None:
+def test_xy_at_standstill_where_the_cross_pairs_are_silent(sample_pipeline: Callable[..., tuple[Any, Any]]) -> None:
     """At 0 rpm the x and y planes decouple: the model's x -> y receptances are round-off. The bundled x/y
     open-crack sample is still damage, with those pairs predicting no change (signature rows zero there)
     and certified nowhere; more certified fault points than the one-channel sample of the same crack."""
@@ -136,11 +138,11 @@ def test_xy_at_standstill_where_the_cross_pairs_are_silent() -> None:
 
     nominal = load_config(configs_dir() / "crack_rig.yaml")
     out = {}
-    for tag in ("crack_rig_xy", "crack_rig"):
+    for tag in ("crack_rig_xy", "crack_rig"):  # fit-noise, validate (measured), detect: shared (conftest)
         h = workflow.load_run(samples_dir() / tag / "healthy_0rpm.h5", nominal)
-        n = workflow.load_run(samples_dir() / tag / "open_crack_0rpm.h5", nominal)
-        val = workflow.validate(nominal, [h], workflow.fit_noise(h))
-        out[tag] = (h, workflow.detect(nominal, val.baseline, n))
+        _, res = sample_pipeline(configs_dir() / "crack_rig.yaml", samples_dir() / tag / "healthy_0rpm.h5",
+                                 samples_dir() / tag / "open_crack_0rpm.h5", "measured")
+        out[tag] = (h, res)
     h, res = out["crack_rig_xy"]
     assert res.verdict.verdict == "damage" and res.joint.damage
     g0 = io_frf(nominal, h.frequency_hz, 0.0, h.pairs)

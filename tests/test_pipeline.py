@@ -10,7 +10,9 @@ from __future__ import annotations
 import copy
 import hashlib
 import json
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -29,15 +31,18 @@ from tools import golden
 ROOT = Path(__file__).resolve().parents[1]
 CONFIGS, SAMPLES = ROOT / "configs", ROOT / "data_samples"
 CR = SAMPLES / "crack_rig"
+Pipeline = Callable[..., tuple[Any, Any]]
 
 
-def _pipeline(healthy: Path, new: Path, enclose: str, rig: str = "crack_rig.yaml"):
-    cfg = load_config(CONFIGS / rig)
-    run_h = workflow.load_run(healthy, cfg)
-    noise = workflow.fit_noise(run_h)
-    val = workflow.validate(cfg, [run_h], noise, enclose=enclose)
-    run_n = workflow.load_run(new, cfg)
-    return val, workflow.detect(cfg, val.baseline, run_n)
+@pytest.fixture
+def pipeline(sample_pipeline: Pipeline) -> Callable[..., tuple[Any, Any]]:
+    """fit-noise, validate (``enclose``), detect through the library: (validation, detection), shared with the
+    other tests of this worker (conftest.sample_pipeline)."""
+
+    def run(healthy: Path, new: Path, enclose: str, rig: str = "crack_rig.yaml") -> tuple[Any, Any]:
+        return sample_pipeline(CONFIGS / rig, healthy, new, enclose)
+
+    return run
 
 
 def _json(capsys: pytest.CaptureFixture) -> dict:
@@ -72,19 +77,19 @@ def test_golden_compare_catches_a_change() -> None:
 
 @pytest.mark.parametrize("enclose", ["system", "data"])
 @pytest.mark.parametrize("sweep", ["healthy_0rpm.h5", "healthy_1000rpm.h5"])
-def test_healthy_data_never_invalidated_by_its_own_baseline(sweep: str, enclose: str) -> None:
-    val, det = _pipeline(CR / sweep, CR / sweep, enclose)
+def test_healthy_data_never_invalidated_by_its_own_baseline(sweep: str, enclose: str, pipeline: Pipeline) -> None:
+    val, det = pipeline(CR / sweep, CR / sweep, enclose)
     assert val.n_not_enclosed == 0
     assert int(np.count_nonzero(det.detection.fault)) == 0
     assert det.verdict.verdict == "healthy"
 
 
-def test_false_alarm_table() -> None:
+def test_false_alarm_table(pipeline: Pipeline) -> None:
     """Fault points on the repeat healthy sweep and on the breathing crack, both enclose modes."""
     table = {}
     for enclose in ("system", "data"):
         for new in ("healthy_1000rpm_repeat.h5", "breathing_crack_1000rpm.h5"):
-            _, det = _pipeline(CR / "healthy_1000rpm.h5", CR / new, enclose)
+            _, det = pipeline(CR / "healthy_1000rpm.h5", CR / new, enclose)
             table[(enclose, new)] = (int(np.count_nonzero(det.detection.fault)), det.verdict.verdict)
     # 'system' encloses every system consistent with the data: a repeat with fresh noise raises nothing
     assert table[("system", "healthy_1000rpm_repeat.h5")] == (0, "healthy")
@@ -96,9 +101,9 @@ def test_false_alarm_table() -> None:
     assert table[("data", "breathing_crack_1000rpm.h5")][0] > n_sys
 
 
-def test_breathing_crack_fault_points_where_the_dissertation_saw_them() -> None:
+def test_breathing_crack_fault_points_where_the_dissertation_saw_them(pipeline: Pipeline) -> None:
     """Section 5.6: faults before the first resonance and near the second (21 of 262 in simulation)."""
-    _, det = _pipeline(CR / "healthy_1000rpm.h5", CR / "breathing_crack_1000rpm.h5", "system")
+    _, det = pipeline(CR / "healthy_1000rpm.h5", CR / "breathing_crack_1000rpm.h5", "system")
     f = det.run.frequency_hz[np.asarray(det.detection.fault, bool)]
     assert f.size >= 10
     # leading up to (and through) the first resonance, and around the second
@@ -106,9 +111,9 @@ def test_breathing_crack_fault_points_where_the_dissertation_saw_them() -> None:
     assert np.count_nonzero(near_modes) >= 0.9 * f.size
 
 
-def test_open_crack_detected_below_the_second_resonance() -> None:
-    _, det_sys = _pipeline(CR / "healthy_0rpm.h5", CR / "open_crack_0rpm.h5", "system")
-    _, det_dat = _pipeline(CR / "healthy_0rpm.h5", CR / "open_crack_0rpm.h5", "data")
+def test_open_crack_detected_below_the_second_resonance(pipeline: Pipeline) -> None:
+    _, det_sys = pipeline(CR / "healthy_0rpm.h5", CR / "open_crack_0rpm.h5", "system")
+    _, det_dat = pipeline(CR / "healthy_0rpm.h5", CR / "open_crack_0rpm.h5", "data")
     f = det_sys.run.frequency_hz
     fault_sys = np.asarray(det_sys.detection.fault, bool)
     fault_dat = np.asarray(det_dat.detection.fault, bool)
@@ -118,9 +123,9 @@ def test_open_crack_detected_below_the_second_resonance() -> None:
     assert det_sys.verdict.verdict == "damage"
 
 
-def test_identified_damage_below_first_resonance_is_a_flat_stiffness_loss() -> None:
+def test_identified_damage_below_first_resonance_is_a_flat_stiffness_loss(pipeline: Pipeline) -> None:
     """D_u (anchored at the healthy data) vs the FE reference: nominal rig with E of element 4 at 46 %."""
-    _, det = _pipeline(CR / "healthy_0rpm.h5", CR / "open_crack_0rpm.h5", "system")
+    _, det = pipeline(CR / "healthy_0rpm.h5", CR / "open_crack_0rpm.h5", "system")
     f = det.run.frequency_hz
     low = f <= 50.0
     d = det.anchored[low]

@@ -9,7 +9,7 @@ FE solve (not the frequency-response path the figure uses).
 
 from __future__ import annotations
 
-from pathlib import Path
+from collections.abc import Callable
 
 import numpy as np
 import pytest
@@ -25,31 +25,25 @@ CR = samples_dir() / "crack_rig"
 TM = samples_dir() / "three_mass"
 
 
-def _outcome(rig: Path, healthy: Path, new: Path, enclose: str) -> tuple[object, object]:
-    cfg = load_config(rig)
-    run_h = workflow.load_run(healthy, cfg)
-    val = workflow.validate(cfg, [run_h], workflow.fit_noise(run_h), enclose=enclose)
-    return val, workflow.detect(cfg, val.baseline, workflow.load_run(new, cfg))
-
-
 @pytest.fixture(scope="module")
-def breathing() -> tuple[object, object]:
+def breathing(sample_pipeline: Callable[..., tuple[object, object]]) -> tuple[object, object]:
     """The breathing crack at 1000 rpm against the measured baseline (joint test)."""
-    return _outcome(configs_dir() / "crack_rig.yaml", CR / "healthy_1000rpm.h5", CR / "breathing_crack_1000rpm.h5",
-                    "measured")
+    return sample_pipeline(configs_dir() / "crack_rig.yaml", CR / "healthy_1000rpm.h5",
+                           CR / "breathing_crack_1000rpm.h5", "measured")
 
 
 @pytest.fixture(scope="module")
-def xy_open_crack() -> tuple[object, object]:
+def xy_open_crack(sample_pipeline: Callable[..., tuple[object, object]]) -> tuple[object, object]:
     """The open crack at standstill with x and y probes (8 channel pairs), measured baseline."""
     xy = samples_dir() / "crack_rig_xy"
-    return _outcome(configs_dir() / "crack_rig.yaml", xy / "healthy_0rpm.h5", xy / "open_crack_0rpm.h5", "measured")
+    return sample_pipeline(configs_dir() / "crack_rig.yaml", xy / "healthy_0rpm.h5", xy / "open_crack_0rpm.h5",
+                           "measured")
 
 
 @pytest.fixture(scope="module")
-def three_mass() -> tuple[object, object]:
+def three_mass(sample_pipeline: Callable[..., tuple[object, object]]) -> tuple[object, object]:
     """Three-mass trial 1 (a lumped rig that does not rotate) with the set enclosing every system."""
-    return _outcome(configs_dir() / "three_mass_trial1.yaml", TM / "healthy.h5", TM / "damaged.h5", "system")
+    return sample_pipeline(configs_dir() / "three_mass_trial1.yaml", TM / "healthy.h5", TM / "damaged.h5", "system")
 
 
 def _drawn(fig: Figure) -> None:
