@@ -1,13 +1,12 @@
 """End to end: fit-noise, validate, detect on the bundled samples; false alarms; bad input.
 
-Independent references: the golden file (explicit `make golden` only), the FE model of the nominal
+Independent references: the golden file (explicit `make golden` only; test_golden.py), the FE model of the nominal
 rig with the open crack (the damage a noise-free, model-error-free world would identify), the
 three-mass table of rigs.md section 2, and the dissertation's detection counts (section 5.6-5.7).
 """
 
 from __future__ import annotations
 
-import copy
 import hashlib
 import json
 from collections.abc import Callable
@@ -26,7 +25,7 @@ from rotorcheck.fe.frf import receptance
 from rotorcheck.nominal import nominal_model
 from rotorcheck.report.reports import REPORT_FILES
 from rotorcheck.robust.identify import damage_dynamics
-from tools import golden
+from tests.shared_runs import CliRun
 
 ROOT = Path(__file__).resolve().parents[1]
 CONFIGS, SAMPLES = ROOT / "configs", ROOT / "data_samples"
@@ -51,24 +50,6 @@ def _json(capsys: pytest.CaptureFixture) -> dict:
 
 def _digest(folder: Path) -> dict[str, str]:
     return {p.name: hashlib.sha256(p.read_bytes()).hexdigest() for p in sorted(folder.iterdir()) if p.is_file()}
-
-
-# --------------------------------------------------------------------------------------------
-# the CI regression of the design card
-
-
-def test_golden_regression() -> None:
-    reference = json.loads(golden.GOLDEN.read_text())
-    problems = golden.compare(golden.compute(), reference)
-    assert not problems, "\n".join(problems[:20])
-
-
-def test_golden_compare_catches_a_change() -> None:
-    reference = json.loads(golden.GOLDEN.read_text())
-    changed = copy.deepcopy(reference)
-    changed["breathing_1000rpm_system"]["n_fault_points"] += 1
-    changed["open_crack_0rpm_system"]["probe_damage_re"][0] *= 1 + 1e-3
-    assert len(golden.compare(changed, reference)) == 2
 
 
 # --------------------------------------------------------------------------------------------
@@ -186,18 +167,21 @@ def test_three_mass_end_to_end(tmp_path: Path, capsys: pytest.CaptureFixture) ->
 # bad input and failures: exit codes, messages, nothing partial
 
 
-def _baseline(tmp_path: Path, sweep: Path = CR / "healthy_1000rpm.h5") -> Path:
-    out = tmp_path / "out"
-    assert main(["validate", str(sweep), "--out", str(out), "--no-plots"]) == EXIT_OK
-    return out
+@pytest.fixture
+def validated_1000rpm(cli_once: Callable[[str, list[list[str]]], CliRun], tmp_path: Path) -> Path:
+    """`validate --no-plots` of healthy_1000rpm.h5 (run once per pytest run, conftest.cli_once): a copy to write
+    into, ``tmp_path/out``."""
+    run = cli_once("validated_1000rpm", [["validate", str(CR / "healthy_1000rpm.h5"), "--out", "{out}", "--no-plots"]])
+    assert run.codes == (EXIT_OK,)
+    return run.copy_to(tmp_path / "out")
 
 
 def _no_reports(folder: Path) -> bool:
     return not any((folder / name).exists() for name in REPORT_FILES)
 
 
-def test_detect_refuses_another_grid(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
-    out = _baseline(tmp_path)
+def test_detect_refuses_another_grid(tmp_path: Path, validated_1000rpm: Path, capsys: pytest.CaptureFixture) -> None:
+    out = validated_1000rpm
     other = tmp_path / "other_grid.h5"
     assert main(["simulate", str(other), "--speed", "1000", "--points", "200", "--periods", "8"]) == EXIT_OK
     capsys.readouterr()
@@ -247,8 +231,9 @@ def test_resampling_is_linear_interpolation_with_its_variance() -> None:
         resample_run(run, np.array([29.0, 35.0]))
 
 
-def test_detect_refuses_a_baseline_of_another_rig(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
-    out = _baseline(tmp_path)
+def test_detect_refuses_a_baseline_of_another_rig(tmp_path: Path, validated_1000rpm: Path,
+                                                  capsys: pytest.CaptureFixture) -> None:
+    out = validated_1000rpm
     data = yaml.safe_load((CONFIGS / "crack_rig.yaml").read_text())
     data["bearings"][0]["kxx"] = 1.6e7  # same rig_id, another description
     other = tmp_path / "other_rig.yaml"
@@ -308,8 +293,8 @@ def test_solver_failure_at_one_point_is_reported_not_a_number(tmp_path: Path, ca
     assert "--fail-at" in capsys.readouterr().err
 
 
-def test_outputs_are_never_overwritten_silently(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
-    out = _baseline(tmp_path)
+def test_outputs_are_never_overwritten_silently(validated_1000rpm: Path, capsys: pytest.CaptureFixture) -> None:
+    out = validated_1000rpm
     args = ["detect", str(CR / "breathing_crack_1000rpm.h5"), "--out", str(out), "--no-plots"]
     assert main(args) == EXIT_DAMAGE
     before = _digest(out)
@@ -321,8 +306,8 @@ def test_outputs_are_never_overwritten_silently(tmp_path: Path, capsys: pytest.C
     assert main([*args, "--force"]) == EXIT_DAMAGE
 
 
-def test_detect_json_and_files(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
-    out = _baseline(tmp_path)
+def test_detect_json_and_files(validated_1000rpm: Path, capsys: pytest.CaptureFixture) -> None:
+    out = validated_1000rpm
     capsys.readouterr()
     assert main(["detect", str(CR / "breathing_crack_1000rpm.h5"), "--out", str(out), "--json"]) == EXIT_DAMAGE
     cap = capsys.readouterr()
