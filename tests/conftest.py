@@ -12,20 +12,18 @@ the run's base temporary folder, which every xdist worker of the run sees, keyed
 commands and of their input files. The first worker that needs it makes it, holding a lock file created
 with ``O_EXCL``; another waits for it. The folder is read only for the tests: copy it (:meth:`CliRun.copy_to`)
 before writing into it. Library pipelines (fit-noise, validate, detect in-process) are memoised per worker
-and pickled for the other workers (:func:`sample_pipeline`): their outcomes are shared objects, to read, never
-to change.
+(:func:`sample_pipeline`): their outcomes are shared objects, to read, never to change.
 """
 
 from __future__ import annotations
 
-import pickle
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
 import pytest
 
-from tests.shared_runs import CliRun, cli_run, crack_rig_sample, once, run_key, shared_root, validate_0rpm_steps
+from tests.shared_runs import CliRun, cli_run, crack_rig_sample, shared_root, validate_0rpm_steps
 
 #: the slowest test files, longest first (CPU seconds measured on 2026-11-27, rounded): scheduled first under
 #: xdist. test_locate.py makes the shared open-crack location (conftest.located_open_crack) that
@@ -101,36 +99,27 @@ def located_open_crack(cli_once: Callable[[str, Sequence[Sequence[str]]], CliRun
 
 
 @pytest.fixture(scope="session")
-def sample_pipeline(tmp_path_factory: pytest.TempPathFactory) -> Callable[..., tuple[Any, Any]]:
+def sample_pipeline() -> Callable[..., tuple[Any, Any]]:
     """``sample_pipeline(rig, healthy, new, enclose)``: fit-noise, validate (``enclose``) and detect through the
-    library (paths to a rig file and two sweeps): the validation and detection outcomes, made once per run
-    (pickled for the other workers, :func:`tests.shared_runs.once`) and memoised in this worker, a validation
-    shared by every new sweep against it. Shared objects: read them, never change them."""
+    library (paths to a rig file and two sweeps): the validation and detection outcomes, memoised in this worker
+    (a validation shared by every new sweep against it; the outcomes hold closures: no pickling them for the
+    other worker). Shared objects: read them, never change them."""
     from rotorcheck import workflow
     from rotorcheck.config import load_config
 
-    root = shared_root(tmp_path_factory)
     validations: dict[tuple[str, str, str], Any] = {}
-    outcomes: dict[tuple[str, str, str, str], tuple[Any, Any]] = {}
-
-    def make(key: tuple[str, str, str, str], folder: Path) -> None:
-        rig, healthy, enclose, new = key
-        if key[:3] not in validations:
-            cfg = load_config(rig)
-            run_h = workflow.load_run(healthy, cfg)
-            validations[key[:3]] = cfg, workflow.validate(cfg, [run_h], workflow.fit_noise(run_h), enclose=enclose)
-        cfg, val = validations[key[:3]]
-        outcomes[key] = val, workflow.detect(cfg, val.baseline, workflow.load_run(new, cfg))
-        (folder / "outcomes.pickle").write_bytes(pickle.dumps(outcomes[key]))
-        (folder / "done.json").write_text("{}")
+    detections: dict[tuple[str, str, str, str], Any] = {}
 
     def run(rig: str | Path, healthy: str | Path, new: str | Path, enclose: str = "measured") -> tuple[Any, Any]:
-        key = (str(Path(rig).resolve()), str(Path(healthy).resolve()), enclose, str(Path(new).resolve()))
-        if key not in outcomes:
-            folder = once(root, run_key(f"pipeline-{enclose}", [list(key)]), lambda f: make(key, f))
-            if key not in outcomes:  # made by another worker
-                outcomes[key] = pickle.loads((folder / "outcomes.pickle").read_bytes())
-                validations.setdefault(key[:3], (load_config(key[0]), outcomes[key][0]))
-        return outcomes[key]
+        key = (str(Path(rig).resolve()), str(Path(healthy).resolve()), enclose)
+        if key not in validations:
+            cfg = load_config(rig)
+            run_h = workflow.load_run(healthy, cfg)
+            validations[key] = cfg, workflow.validate(cfg, [run_h], workflow.fit_noise(run_h), enclose=enclose)
+        cfg, val = validations[key]
+        dkey = (*key, str(Path(new).resolve()))
+        if dkey not in detections:
+            detections[dkey] = workflow.detect(cfg, val.baseline, workflow.load_run(new, cfg))
+        return val, detections[dkey]
 
     return run

@@ -165,6 +165,48 @@ def test_xy_at_standstill_where_the_cross_pairs_are_silent(sample_pipeline: Call
     assert res.detection.n_fault > out["crack_rig"][1].detection.n_fault
 
 
+@pytest.fixture(scope="module")
+def xy_open_crack(sample_pipeline: Callable[..., tuple[object, object]]) -> tuple[object, object]:
+    """The open crack at standstill with x and y probes (8 channel pairs), measured baseline."""
+    from rotorcheck.resources import samples_dir
+
+    xy = samples_dir() / "crack_rig_xy"
+    return sample_pipeline(configs_dir() / "crack_rig.yaml", xy / "healthy_0rpm.h5", xy / "open_crack_0rpm.h5",
+                           "measured")
+
+
+def test_decision_with_several_pairs_plots_the_statistic_that_decided(xy_open_crack: tuple) -> None:
+    """8 channel pairs (the bundled x/y open crack at standstill, the detection of the test above): a point is a
+    fault when any pair (or the damage-direction test) exceeds its allowance; the plotted ratio is that largest
+    one, so red points are exactly those above 1, grey ones at or below; the largest pair ratio computed here from
+    the distances and radii is never above the plotted one."""
+    _, out = xy_open_crack
+    rep = out.report()  # type: ignore[attr-defined]
+    assert len(rep["channel_pairs"]) == 8 and rep["n_fault_points"] > 0
+    figs = workflow.detection_figures(out)  # type: ignore[arg-type]
+    ax = figs["detection_decision"].axes[0]
+    f = out.run.frequency_hz  # type: ignore[attr-defined]
+    m = out.measured  # type: ignore[attr-defined]
+    pair_ratio = np.max(m.distance / m.radius, axis=1)
+    n_red = 0
+    for ln in ax.get_lines():
+        key = ln.get_gid() or str(ln.get_label())
+        if key != "fault_points" and not key.startswith("explained"):
+            continue
+        x, y = np.asarray(ln.get_xdata()), np.asarray(ln.get_ydata())
+        idx = np.searchsorted(f, x)
+        assert np.all(pair_ratio[idx] <= y * (1 + 1e-9))
+        if key == "fault_points":
+            assert np.all(y > 1.0)
+            n_red = len(x)
+        else:
+            assert np.all(y <= 1.0)
+    assert n_red == rep["n_fault_points"]
+    bode = figs["detection_bode"].axes[0]
+    assert any("in any of the 8 pairs" in str(ln.get_label()) for ln in bode.get_lines())
+    assert "(1 of 8 channel pairs)" in bode.get_title()
+
+
 LOSS_X4 = 2.0e5  # N/m: a stiffness loss at station 4 in x only (the damage port's station)
 
 
