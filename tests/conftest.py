@@ -25,38 +25,41 @@ import pytest
 
 from tests.shared_runs import CliRun, cli_run, crack_rig_sample, shared_root, validate_0rpm_steps
 
-#: the slowest test files, longest first (CPU seconds measured on 2026-11-27, rounded): scheduled first under
-#: xdist. test_locate.py makes the shared open-crack location (conftest.located_open_crack) that
-#: report/test_html_report.py reads later on.
+#: the slowest test files, longest first (CPU seconds of a whole-suite run on 2026-11-27 with the machine shared,
+#: rounded): scheduled first under xdist. test_locate.py makes the shared open-crack location
+#: (conftest.located_open_crack) that report/test_html_report.py reads later on.
 SLOW_FIRST: tuple[str, ...] = (
-    "tests/test_locate.py",  # 30: the shared locate, detect + locate of one element
-    "tests/test_multichannel.py",  # 30
-    "tests/faults/test_faults_time_sim.py",  # 28: harmonic balance against time integration
-    "tests/test_pipeline.py",  # 25
-    "tests/test_sigkill.py",  # 25: commands in subprocesses, killed at four moments each
-    "tests/robust/test_damage_block.py",  # 20
-    "tests/fleet/test_fleet_executors.py",  # 19: serial, processes, Dask
-    "tests/test_measured_detection.py",  # 18: Monte Carlo coverage
-    "tests/robust/test_robust_mu.py",  # 16
-    "tests/report/test_model_figures.py",  # 16
-    "tests/test_golden.py",  # 15: 14 cases through the command line
-    "tests/sweep/test_sweep_simulator.py",  # 15
-    "tests/report/test_html_report.py",  # 15
-    "tests/fleet/test_fleet_dask_kill.py",  # 12
-    "tests/fleet/test_fleet_runs.py",  # 12
+    "tests/test_multichannel.py",  # 47: x/y end to end, the x/y standstill detection
+    "tests/faults/test_faults_time_sim.py",  # 36: harmonic balance against time integration
+    "tests/test_locate.py",  # 29: the shared locate; detect and locate one element
+    "tests/fleet/test_fleet_executors.py",  # 29: serial, processes, Dask
+    "tests/test_pipeline.py",  # 27
+    "tests/robust/test_damage_block.py",  # 26
+    "tests/robust/test_robust_mu.py",  # 26: brute-force references
+    "tests/test_measured_detection.py",  # 24: Monte Carlo coverage
+    "tests/sweep/test_sweep_simulator.py",  # 20: ODE time integration
+    "tests/test_sigkill.py",  # 20: commands in subprocesses, killed at four moments each
+    "tests/report/test_model_figures.py",  # 20
+    "tests/fleet/test_fleet_runs.py",  # 20
+    "tests/test_golden.py",  # 17: 14 cases through the command line
+    "tests/test_compressor_rig.py",  # 15
+    "tests/test_detectability.py",  # 15
+    "tests/fleet/test_fleet_dask_kill.py",  # 14
+    "tests/test_samples.py",  # 13: regenerates every bundled sample
     "tests/test_rig_features.py",  # 12
-    "tests/test_compressor_rig.py",  # 12
-    "tests/test_samples.py",  # 11
-    "tests/test_uff_detect.py",  # 10
-    "tests/report/test_detection_figures.py",  # 10
-    "tests/robust/test_mixed_mu.py",  # 10
-    "tests/test_install.py",  # 9: builds and installs the wheel
-    "tests/robust/test_robust_defects.py",  # 8
-    "tests/robust/test_severity.py",  # 7
-    "tests/test_multirun.py",  # 5
-    "tests/robust/test_robust_identify.py",  # 5
-    "tests/test_detectability.py",  # 5
-    "tests/robust/test_joint.py",  # 4
+    "tests/test_install.py",  # 11: builds and installs the wheel
+    "tests/robust/test_robust_defects.py",  # 10
+    "tests/test_uff_detect.py",  # 9
+    "tests/report/test_html_report.py",  # 6
+    "tests/test_baseline_digest.py",  # 6
+    "tests/test_multirun.py",  # 6
+    "tests/robust/test_mixed_mu.py",  # 5
+    "tests/robust/test_joint.py",  # 5
+    "tests/report/test_detection_figures.py",  # 5
+    "tests/robust/test_severity.py",  # 4
+    "tests/fe/test_fe_plots.py",  # 4
+    "tests/robust/test_robust_identify.py",  # 4
+    "tests/test_own_rig.py",  # 4
 )
 
 
