@@ -19,6 +19,7 @@ from rotorcheck.cli import EXIT_DAMAGE, EXIT_INPUT, EXIT_OK, main
 from rotorcheck.errors import InputError
 from rotorcheck.report.reports import REPORT_FILES
 from rotorcheck.resources import samples_dir
+from tests.shared_runs import CliRun
 
 CR = samples_dir() / "crack_rig"
 
@@ -62,11 +63,10 @@ EDITS: dict[str, tuple[Callable[[h5py.File], None], str]] = {
 
 
 @pytest.fixture(scope="module")
-def validated(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    out = tmp_path_factory.mktemp("base") / "out"
-    assert main(["fit-noise", str(CR / "healthy_0rpm.h5"), "--out", str(out)]) == EXIT_OK
-    assert main(["validate", str(CR / "healthy_0rpm.h5"), "--out", str(out), "--no-plots"]) == EXIT_OK
-    return out / "baseline.h5"
+def validated(validated_0rpm: CliRun) -> Path:
+    """The shared `fit-noise` + `validate --no-plots` of healthy_0rpm.h5 (read only: the tests copy it)."""
+    assert validated_0rpm.codes == (EXIT_OK, EXIT_OK)
+    return validated_0rpm.out / "baseline.h5"
 
 
 def test_an_untouched_baseline_reads_and_detects(validated: Path, tmp_path: Path) -> None:

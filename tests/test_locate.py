@@ -13,23 +13,21 @@ import pytest
 
 from rotorcheck.cli import EXIT_DAMAGE, EXIT_INPUT, EXIT_OK, main
 from rotorcheck.resources import samples_dir
+from tests.shared_runs import CliRun
 
 S = samples_dir() / "crack_rig"
 
 
-@pytest.fixture(scope="module")
-def base0(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    out = tmp_path_factory.mktemp("loc") / "out"
-    assert main(["fit-noise", str(S / "healthy_0rpm.h5"), "--out", str(out)]) == EXIT_OK
-    assert main(["validate", str(S / "healthy_0rpm.h5"), "--out", str(out), "--no-plots"]) == EXIT_OK
-    return out
+@pytest.fixture
+def base0(validated_0rpm: CliRun, tmp_path: Path) -> Path:
+    """A copy of the shared `fit-noise` + `validate --no-plots` folder of healthy_0rpm.h5."""
+    return validated_0rpm.copy_to(tmp_path / "out")
 
 
-def test_locate_the_open_crack_sample(base0: Path, capsys: pytest.CaptureFixture) -> None:
-    capsys.readouterr()
-    code = main(["locate", str(S / "open_crack_0rpm.h5"), "--out", str(base0), "--elements", "1,4,9", "--json"])
-    doc = json.loads(capsys.readouterr().out)
-    assert code == EXIT_DAMAGE
+def test_locate_the_open_crack_sample(located_open_crack: CliRun, tmp_path: Path) -> None:
+    """`locate open_crack_0rpm.h5 --elements 1,4,9 --json` (the shared run, conftest.located_open_crack)."""
+    doc = located_open_crack.json()
+    assert located_open_crack.codes == (EXIT_OK, EXIT_OK, EXIT_DAMAGE)  # fit-noise, validate, locate
     assert doc["best_element"] == 4 and doc["healthy_excluded"] is True and doc["hypothesis"] == "open"
     c = {x["element"]: x for x in doc["candidates"]}
     lo, hi = c[4]["loss_interval"]
@@ -38,9 +36,11 @@ def test_locate_the_open_crack_sample(base0: Path, capsys: pytest.CaptureFixture
     assert mf[0] <= 0.46 <= mf[1]
     for e in (1, 9):
         assert c[e]["status"] == "excluded" and c[e]["excluding_frequencies_hz"] and c[e]["rank"] is None
-    assert (base0 / "location.json").exists() and (base0 / "location.png").exists()
-    # nothing is overwritten without --force
-    assert main(["locate", str(S / "open_crack_0rpm.h5"), "--out", str(base0), "--elements", "4"]) == EXIT_INPUT
+    out = located_open_crack.out
+    assert (out / "location.json").exists() and (out / "location.png").exists()
+    # nothing is overwritten without --force (in a copy: the shared folder stays as the run left it)
+    out = located_open_crack.copy_to(tmp_path / "out")
+    assert main(["locate", str(S / "open_crack_0rpm.h5"), "--out", str(out), "--elements", "4"]) == EXIT_INPUT
 
 
 def test_locate_bad_elements_is_input_error(base0: Path, capsys: pytest.CaptureFixture) -> None:

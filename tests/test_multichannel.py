@@ -4,7 +4,10 @@
 from __future__ import annotations
 
 import json
+import shutil
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -47,6 +50,15 @@ def files(rigs, tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:  #
     return out
 
 
+@pytest.fixture(scope="module")
+def xy_validated(files, tmp_path_factory: pytest.TempPathFactory) -> Path:  # type: ignore[no-untyped-def]
+    """`fit-noise` and `validate --no-plots` of the x/y healthy sweep, once for the module (read only: copy it)."""
+    out = tmp_path_factory.mktemp("xy_base") / "out"
+    assert main(["fit-noise", str(files["xy_healthy"]), "--out", str(out)]) == EXIT_OK
+    assert main(["validate", str(files["xy_healthy"]), "--out", str(out), "--no-plots"]) == EXIT_OK
+    return out
+
+
 def test_channel_pairs_and_their_noise(rigs, files) -> None:  # type: ignore[no-untyped-def]
     """The 8 pairs, the rig's actuator -> sensor first and equal to the one-channel run's FRF within the
     noise; every pair's FRF against the truth model's receptance: the whitened error's mean square is
@@ -64,7 +76,7 @@ def test_channel_pairs_and_their_noise(rigs, files) -> None:  # type: ignore[no-
     assert float(np.mean(d)) < 3.0
 
 
-def test_xy_end_to_end_detects_at_least_as_much_as_one_channel(files, tmp_path: Path,
+def test_xy_end_to_end_detects_at_least_as_much_as_one_channel(files, xy_validated: Path, tmp_path: Path,  # type: ignore[no-untyped-def]
                                                                 capsys: pytest.CaptureFixture) -> None:
     """fit-noise, validate and detect (per-point certified rule) on the x/y files: the crack is damage
     (exit 1) with at least as many certified fault points as the one-channel sweep of the same crack and
@@ -75,8 +87,11 @@ def test_xy_end_to_end_detects_at_least_as_much_as_one_channel(files, tmp_path: 
     docs = {}
     for tag in ("xy", "one"):
         out = tmp_path / tag
-        assert main(["fit-noise", str(files[f"{tag}_healthy"]), "--out", str(out)]) == EXIT_OK
-        assert main(["validate", str(files[f"{tag}_healthy"]), "--out", str(out), "--no-plots"]) == EXIT_OK
+        if tag == "xy":  # the module's fit-noise and validate of the x/y healthy sweep
+            shutil.copytree(xy_validated, out)
+        else:
+            assert main(["fit-noise", str(files[f"{tag}_healthy"]), "--out", str(out)]) == EXIT_OK
+            assert main(["validate", str(files[f"{tag}_healthy"]), "--out", str(out), "--no-plots"]) == EXIT_OK
         capsys.readouterr()
         assert main(["detect", str(files[f"{tag}_crack"]), "--out", str(out), "--no-plots", "--json",
                      "--rule", "certified"]) == EXIT_DAMAGE
@@ -89,11 +104,9 @@ def test_xy_end_to_end_detects_at_least_as_much_as_one_channel(files, tmp_path: 
     assert min(docs["xy_joint"]["detectable_stiffness_loss"]) < min(docs["one_joint"]["detectable_stiffness_loss"])
 
 
-def test_detect_refuses_other_channels_than_the_baseline(files, tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
-    out = tmp_path / "b"
-    assert main(["fit-noise", str(files["xy_healthy"]), "--out", str(out)]) == EXIT_OK
-    assert main(["validate", str(files["xy_healthy"]), "--out", str(out), "--no-plots"]) == EXIT_OK
-    capsys.readouterr()
+def test_detect_refuses_other_channels_than_the_baseline(files, xy_validated: Path, tmp_path: Path,  # type: ignore[no-untyped-def]
+                                                         capsys: pytest.CaptureFixture) -> None:
+    out = shutil.copytree(xy_validated, tmp_path / "b")  # the x/y baseline
     assert main(["detect", str(files["one_crack"]), "--out", str(out), "--no-plots"]) == EXIT_INPUT
     err = capsys.readouterr().err
     assert "/channels" in err and "s6.x<-s8.x" in err and "s2.y<-s8.y" in err
@@ -127,7 +140,7 @@ def test_simulate_several_actuators_and_sensors(tmp_path: Path, capsys: pytest.C
     assert "--actuator" in capsys.readouterr().err
 
 
-def test_xy_at_standstill_where_the_cross_pairs_are_silent() -> None:
+def test_xy_at_standstill_where_the_cross_pairs_are_silent(sample_pipeline: Callable[..., tuple[Any, Any]]) -> None:
     """At 0 rpm the x and y planes decouple: the model's x -> y receptances are round-off. The bundled x/y
     open-crack sample is still damage, with those pairs predicting no change (signature rows zero there)
     and certified nowhere; more certified fault points than the one-channel sample of the same crack."""
@@ -136,11 +149,11 @@ def test_xy_at_standstill_where_the_cross_pairs_are_silent() -> None:
 
     nominal = load_config(configs_dir() / "crack_rig.yaml")
     out = {}
-    for tag in ("crack_rig_xy", "crack_rig"):
+    for tag in ("crack_rig_xy", "crack_rig"):  # fit-noise, validate (measured), detect: shared (conftest)
         h = workflow.load_run(samples_dir() / tag / "healthy_0rpm.h5", nominal)
-        n = workflow.load_run(samples_dir() / tag / "open_crack_0rpm.h5", nominal)
-        val = workflow.validate(nominal, [h], workflow.fit_noise(h))
-        out[tag] = (h, workflow.detect(nominal, val.baseline, n))
+        _, res = sample_pipeline(configs_dir() / "crack_rig.yaml", samples_dir() / tag / "healthy_0rpm.h5",
+                                 samples_dir() / tag / "open_crack_0rpm.h5", "measured")
+        out[tag] = (h, res)
     h, res = out["crack_rig_xy"]
     assert res.verdict.verdict == "damage" and res.joint.damage
     g0 = io_frf(nominal, h.frequency_hz, 0.0, h.pairs)
@@ -150,6 +163,48 @@ def test_xy_at_standstill_where_the_cross_pairs_are_silent() -> None:
     nf = h.frequency_hz.size
     assert all(np.all(S[:, k * nf:(k + 1) * nf] == 0) for k in silent)
     assert res.detection.n_fault > out["crack_rig"][1].detection.n_fault
+
+
+@pytest.fixture(scope="module")
+def xy_open_crack(sample_pipeline: Callable[..., tuple[object, object]]) -> tuple[object, object]:
+    """The open crack at standstill with x and y probes (8 channel pairs), measured baseline."""
+    from rotorcheck.resources import samples_dir
+
+    xy = samples_dir() / "crack_rig_xy"
+    return sample_pipeline(configs_dir() / "crack_rig.yaml", xy / "healthy_0rpm.h5", xy / "open_crack_0rpm.h5",
+                           "measured")
+
+
+def test_decision_with_several_pairs_plots_the_statistic_that_decided(xy_open_crack: tuple) -> None:
+    """8 channel pairs (the bundled x/y open crack at standstill, the detection of the test above): a point is a
+    fault when any pair (or the damage-direction test) exceeds its allowance; the plotted ratio is that largest
+    one, so red points are exactly those above 1, grey ones at or below; the largest pair ratio computed here from
+    the distances and radii is never above the plotted one."""
+    _, out = xy_open_crack
+    rep = out.report()  # type: ignore[attr-defined]
+    assert len(rep["channel_pairs"]) == 8 and rep["n_fault_points"] > 0
+    figs = workflow.detection_figures(out)  # type: ignore[arg-type]
+    ax = figs["detection_decision"].axes[0]
+    f = out.run.frequency_hz  # type: ignore[attr-defined]
+    m = out.measured  # type: ignore[attr-defined]
+    pair_ratio = np.max(m.distance / m.radius, axis=1)
+    n_red = 0
+    for ln in ax.get_lines():
+        key = ln.get_gid() or str(ln.get_label())
+        if key != "fault_points" and not key.startswith("explained"):
+            continue
+        x, y = np.asarray(ln.get_xdata()), np.asarray(ln.get_ydata())
+        idx = np.searchsorted(f, x)
+        assert np.all(pair_ratio[idx] <= y * (1 + 1e-9))
+        if key == "fault_points":
+            assert np.all(y > 1.0)
+            n_red = len(x)
+        else:
+            assert np.all(y <= 1.0)
+    assert n_red == rep["n_fault_points"]
+    bode = figs["detection_bode"].axes[0]
+    assert any("in any of the 8 pairs" in str(ln.get_label()) for ln in bode.get_lines())
+    assert "(1 of 8 channel pairs)" in bode.get_title()
 
 
 LOSS_X4 = 2.0e5  # N/m: a stiffness loss at station 4 in x only (the damage port's station)

@@ -1,16 +1,17 @@
 """End to end: fit-noise, validate, detect on the bundled samples; false alarms; bad input.
 
-Independent references: the golden file (explicit `make golden` only), the FE model of the nominal
+Independent references: the golden file (explicit `make golden` only; test_golden.py), the FE model of the nominal
 rig with the open crack (the damage a noise-free, model-error-free world would identify), the
 three-mass table of rigs.md section 2, and the dissertation's detection counts (section 5.6-5.7).
 """
 
 from __future__ import annotations
 
-import copy
 import hashlib
 import json
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -24,20 +25,23 @@ from rotorcheck.fe.frf import receptance
 from rotorcheck.nominal import nominal_model
 from rotorcheck.report.reports import REPORT_FILES
 from rotorcheck.robust.identify import damage_dynamics
-from tools import golden
+from tests.shared_runs import CliRun
 
 ROOT = Path(__file__).resolve().parents[1]
 CONFIGS, SAMPLES = ROOT / "configs", ROOT / "data_samples"
 CR = SAMPLES / "crack_rig"
+Pipeline = Callable[..., tuple[Any, Any]]
 
 
-def _pipeline(healthy: Path, new: Path, enclose: str, rig: str = "crack_rig.yaml"):
-    cfg = load_config(CONFIGS / rig)
-    run_h = workflow.load_run(healthy, cfg)
-    noise = workflow.fit_noise(run_h)
-    val = workflow.validate(cfg, [run_h], noise, enclose=enclose)
-    run_n = workflow.load_run(new, cfg)
-    return val, workflow.detect(cfg, val.baseline, run_n)
+@pytest.fixture
+def pipeline(sample_pipeline: Pipeline) -> Callable[..., tuple[Any, Any]]:
+    """fit-noise, validate (``enclose``), detect through the library: (validation, detection), shared with the
+    other tests of this worker (conftest.sample_pipeline)."""
+
+    def run(healthy: Path, new: Path, enclose: str, rig: str = "crack_rig.yaml") -> tuple[Any, Any]:
+        return sample_pipeline(CONFIGS / rig, healthy, new, enclose)
+
+    return run
 
 
 def _json(capsys: pytest.CaptureFixture) -> dict:
@@ -49,42 +53,24 @@ def _digest(folder: Path) -> dict[str, str]:
 
 
 # --------------------------------------------------------------------------------------------
-# the CI regression of the design card
-
-
-def test_golden_regression() -> None:
-    reference = json.loads(golden.GOLDEN.read_text())
-    problems = golden.compare(golden.compute(), reference)
-    assert not problems, "\n".join(problems[:20])
-
-
-def test_golden_compare_catches_a_change() -> None:
-    reference = json.loads(golden.GOLDEN.read_text())
-    changed = copy.deepcopy(reference)
-    changed["breathing_1000rpm_system"]["n_fault_points"] += 1
-    changed["open_crack_0rpm_system"]["probe_damage_re"][0] *= 1 + 1e-3
-    assert len(golden.compare(changed, reference)) == 2
-
-
-# --------------------------------------------------------------------------------------------
 # the crack rig
 
 
 @pytest.mark.parametrize("enclose", ["system", "data"])
 @pytest.mark.parametrize("sweep", ["healthy_0rpm.h5", "healthy_1000rpm.h5"])
-def test_healthy_data_never_invalidated_by_its_own_baseline(sweep: str, enclose: str) -> None:
-    val, det = _pipeline(CR / sweep, CR / sweep, enclose)
+def test_healthy_data_never_invalidated_by_its_own_baseline(sweep: str, enclose: str, pipeline: Pipeline) -> None:
+    val, det = pipeline(CR / sweep, CR / sweep, enclose)
     assert val.n_not_enclosed == 0
     assert int(np.count_nonzero(det.detection.fault)) == 0
     assert det.verdict.verdict == "healthy"
 
 
-def test_false_alarm_table() -> None:
+def test_false_alarm_table(pipeline: Pipeline) -> None:
     """Fault points on the repeat healthy sweep and on the breathing crack, both enclose modes."""
     table = {}
     for enclose in ("system", "data"):
         for new in ("healthy_1000rpm_repeat.h5", "breathing_crack_1000rpm.h5"):
-            _, det = _pipeline(CR / "healthy_1000rpm.h5", CR / new, enclose)
+            _, det = pipeline(CR / "healthy_1000rpm.h5", CR / new, enclose)
             table[(enclose, new)] = (int(np.count_nonzero(det.detection.fault)), det.verdict.verdict)
     # 'system' encloses every system consistent with the data: a repeat with fresh noise raises nothing
     assert table[("system", "healthy_1000rpm_repeat.h5")] == (0, "healthy")
@@ -96,9 +82,9 @@ def test_false_alarm_table() -> None:
     assert table[("data", "breathing_crack_1000rpm.h5")][0] > n_sys
 
 
-def test_breathing_crack_fault_points_where_the_dissertation_saw_them() -> None:
+def test_breathing_crack_fault_points_where_the_dissertation_saw_them(pipeline: Pipeline) -> None:
     """Section 5.6: faults before the first resonance and near the second (21 of 262 in simulation)."""
-    _, det = _pipeline(CR / "healthy_1000rpm.h5", CR / "breathing_crack_1000rpm.h5", "system")
+    _, det = pipeline(CR / "healthy_1000rpm.h5", CR / "breathing_crack_1000rpm.h5", "system")
     f = det.run.frequency_hz[np.asarray(det.detection.fault, bool)]
     assert f.size >= 10
     # leading up to (and through) the first resonance, and around the second
@@ -106,9 +92,9 @@ def test_breathing_crack_fault_points_where_the_dissertation_saw_them() -> None:
     assert np.count_nonzero(near_modes) >= 0.9 * f.size
 
 
-def test_open_crack_detected_below_the_second_resonance() -> None:
-    _, det_sys = _pipeline(CR / "healthy_0rpm.h5", CR / "open_crack_0rpm.h5", "system")
-    _, det_dat = _pipeline(CR / "healthy_0rpm.h5", CR / "open_crack_0rpm.h5", "data")
+def test_open_crack_detected_below_the_second_resonance(pipeline: Pipeline) -> None:
+    _, det_sys = pipeline(CR / "healthy_0rpm.h5", CR / "open_crack_0rpm.h5", "system")
+    _, det_dat = pipeline(CR / "healthy_0rpm.h5", CR / "open_crack_0rpm.h5", "data")
     f = det_sys.run.frequency_hz
     fault_sys = np.asarray(det_sys.detection.fault, bool)
     fault_dat = np.asarray(det_dat.detection.fault, bool)
@@ -118,9 +104,9 @@ def test_open_crack_detected_below_the_second_resonance() -> None:
     assert det_sys.verdict.verdict == "damage"
 
 
-def test_identified_damage_below_first_resonance_is_a_flat_stiffness_loss() -> None:
+def test_identified_damage_below_first_resonance_is_a_flat_stiffness_loss(pipeline: Pipeline) -> None:
     """D_u (anchored at the healthy data) vs the FE reference: nominal rig with E of element 4 at 46 %."""
-    _, det = _pipeline(CR / "healthy_0rpm.h5", CR / "open_crack_0rpm.h5", "system")
+    _, det = pipeline(CR / "healthy_0rpm.h5", CR / "open_crack_0rpm.h5", "system")
     f = det.run.frequency_hz
     low = f <= 50.0
     d = det.anchored[low]
@@ -181,18 +167,21 @@ def test_three_mass_end_to_end(tmp_path: Path, capsys: pytest.CaptureFixture) ->
 # bad input and failures: exit codes, messages, nothing partial
 
 
-def _baseline(tmp_path: Path, sweep: Path = CR / "healthy_1000rpm.h5") -> Path:
-    out = tmp_path / "out"
-    assert main(["validate", str(sweep), "--out", str(out), "--no-plots"]) == EXIT_OK
-    return out
+@pytest.fixture
+def validated_1000rpm(cli_once: Callable[[str, list[list[str]]], CliRun], tmp_path: Path) -> Path:
+    """`validate --no-plots` of healthy_1000rpm.h5 (run once per pytest run, conftest.cli_once): a copy to write
+    into, ``tmp_path/out``."""
+    run = cli_once("validated_1000rpm", [["validate", str(CR / "healthy_1000rpm.h5"), "--out", "{out}", "--no-plots"]])
+    assert run.codes == (EXIT_OK,)
+    return run.copy_to(tmp_path / "out")
 
 
 def _no_reports(folder: Path) -> bool:
     return not any((folder / name).exists() for name in REPORT_FILES)
 
 
-def test_detect_refuses_another_grid(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
-    out = _baseline(tmp_path)
+def test_detect_refuses_another_grid(tmp_path: Path, validated_1000rpm: Path, capsys: pytest.CaptureFixture) -> None:
+    out = validated_1000rpm
     other = tmp_path / "other_grid.h5"
     assert main(["simulate", str(other), "--speed", "1000", "--points", "200", "--periods", "8"]) == EXIT_OK
     capsys.readouterr()
@@ -242,8 +231,9 @@ def test_resampling_is_linear_interpolation_with_its_variance() -> None:
         resample_run(run, np.array([29.0, 35.0]))
 
 
-def test_detect_refuses_a_baseline_of_another_rig(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
-    out = _baseline(tmp_path)
+def test_detect_refuses_a_baseline_of_another_rig(tmp_path: Path, validated_1000rpm: Path,
+                                                  capsys: pytest.CaptureFixture) -> None:
+    out = validated_1000rpm
     data = yaml.safe_load((CONFIGS / "crack_rig.yaml").read_text())
     data["bearings"][0]["kxx"] = 1.6e7  # same rig_id, another description
     other = tmp_path / "other_rig.yaml"
@@ -303,8 +293,8 @@ def test_solver_failure_at_one_point_is_reported_not_a_number(tmp_path: Path, ca
     assert "--fail-at" in capsys.readouterr().err
 
 
-def test_outputs_are_never_overwritten_silently(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
-    out = _baseline(tmp_path)
+def test_outputs_are_never_overwritten_silently(validated_1000rpm: Path, capsys: pytest.CaptureFixture) -> None:
+    out = validated_1000rpm
     args = ["detect", str(CR / "breathing_crack_1000rpm.h5"), "--out", str(out), "--no-plots"]
     assert main(args) == EXIT_DAMAGE
     before = _digest(out)
@@ -316,8 +306,8 @@ def test_outputs_are_never_overwritten_silently(tmp_path: Path, capsys: pytest.C
     assert main([*args, "--force"]) == EXIT_DAMAGE
 
 
-def test_detect_json_and_files(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
-    out = _baseline(tmp_path)
+def test_detect_json_and_files(validated_1000rpm: Path, capsys: pytest.CaptureFixture) -> None:
+    out = validated_1000rpm
     capsys.readouterr()
     assert main(["detect", str(CR / "breathing_crack_1000rpm.h5"), "--out", str(out), "--json"]) == EXIT_DAMAGE
     cap = capsys.readouterr()

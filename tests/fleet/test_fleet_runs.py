@@ -1,24 +1,20 @@
-"""Running a fleet: growing cracks alarmed and the others not; serial == processes == Dask; a worker killed
-mid-run loses and duplicates nothing; a second run with no new sweep detects nothing, fast."""
+"""Running a fleet: growing cracks alarmed and the others not; a second run with no new sweep detects nothing,
+fast. (serial == processes == Dask: test_fleet_executors.py; a worker killed mid-run: test_fleet_dask_kill.py,
+files of their own so that xdist runs them beside this one.)"""
 
 from __future__ import annotations
 
-import csv
-import io
 import json
 import time
 from pathlib import Path
 from typing import Any
 
 import pytest
+from fleet_helpers import summary_rows
 
 from rotorcheck.cli import main
 from rotorcheck.fleet.runner import FleetOptions, run_fleet
 from rotorcheck.fleet.summary import read_hdf5
-
-
-def _rows(out: Path) -> list[dict[str, str]]:
-    return list(csv.DictReader(io.StringIO((out / "summary.csv").read_text())))
 
 
 @pytest.fixture(scope="module")
@@ -36,7 +32,7 @@ def test_cracks_alarmed_others_not(full_run: tuple[Path, Any], small_fleet: tupl
     alarmed = {a["machine"] for a in res.alerts if a["level"] == "alarm"}
     cracked = {m for m, d in truth.items() if d["kind"].startswith("crack")}
     assert alarmed == cracked
-    rows = _rows(out)
+    rows = summary_rows(out)
     assert len(rows) == sum(len(d["sweeps"]) for d in truth.values())
     for r in rows:  # no damage verdict on an uncracked sweep (healthy machines, the benign drift, before onset)
         loss = next(e["loss"] for e in truth[r["machine"]]["sweeps"] if e["time"] == r["time"])
@@ -70,54 +66,3 @@ def test_second_run_does_no_work(full_run: tuple[Path, Any], small_fleet: tuple[
     rc = main(["fleet", str(small_fleet[0]), "--out", str(out), "--locate", "none", "--limit", "3000", "--json"])
     doc = json.loads(capsys.readouterr().out)
     assert rc == 1 and doc["n_detected"] == 0 and doc["up_to_date"]
-
-
-def _h5_text(out: Path) -> dict[str, list[str]]:
-    """summary.h5's columns with every value as its repr (NaN equal to NaN)."""
-    return {k: [repr(x) for x in v] for k, v in read_hdf5(out / "summary.h5").items()}
-
-
-def _manifest(root: Path, truth: dict[str, Any], path: Path, picks: dict[str, list[int]]) -> Path:
-    lines = ["machine,rig,baseline,sweep"]
-    for m, ks in picks.items():
-        for k in ks:
-            lines.append(f"{m},{root / m / 'rig.yaml'},{root / m / 'baseline.h5'},"
-                         f"{root / truth['machines'][m]['sweeps'][k]['file']}")
-    path.write_text("\n".join(lines) + "\n")
-    return path
-
-
-def test_serial_processes_dask_same_summary(small_fleet: tuple[Path, dict[str, Any]], tmp_path: Path) -> None:
-    root, truth = small_fleet
-    man = _manifest(root, truth, tmp_path / "fleet.csv", {"machine-00": [3], "machine-01": [2, 3],
-                                                          "machine-03": [3]})
-    texts = {}
-    for how, opts in (("serial", FleetOptions(executor="serial")), ("processes", FleetOptions(workers=2)),
-                      ("dask", FleetOptions(executor="dask", workers=2))):
-        opts.out, opts.locate = tmp_path / how, "none"
-        res = run_fleet(man, opts)
-        assert res.n_detected == 4
-        texts[how] = (tmp_path / how / "summary.csv").read_text()
-        assert _h5_text(tmp_path / how) == _h5_text(tmp_path / "serial")
-    assert texts["processes"] == texts["serial"] and texts["dask"] == texts["serial"]
-    assert [r["verdict"] for r in _rows(tmp_path / "serial")] == ["healthy", "damage", "damage", "damage"]
-
-
-def test_worker_killed_mid_dask_run(small_fleet: tuple[Path, dict[str, Any]], tmp_path: Path) -> None:
-    """The first task attempt kills its Dask worker (os._exit) after writing half a result: Dask restarts
-    the worker and runs the task again; every sweep once in the summary, no partial result folder."""
-    root, truth = small_fleet
-    man = _manifest(root, truth, tmp_path / "fleet.csv", {"machine-00": [0], "machine-02": [3], "machine-03": [3]})
-    marker = tmp_path / "killed"
-    out = tmp_path / "out"
-    res = run_fleet(man, FleetOptions(out=out, executor="dask", workers=2, locate="none", kill_marker=str(marker)))
-    assert marker.exists()  # a worker did die
-    rows = _rows(out)
-    assert sorted((r["machine"], r["time"]) for r in rows) == sorted(
-        (m, truth["machines"][m]["sweeps"][k]["time"]) for m, k in (("machine-00", 0), ("machine-02", 3),
-                                                                     ("machine-03", 3)))
-    assert len({r["sweep_sha256"] for r in rows}) == 3
-    dirs = [p for m in out.iterdir() if m.is_dir() and m.name.startswith("machine") for p in m.iterdir()]
-    assert len(dirs) == 3 and all((d / "DONE").exists() and (d / "row.json").exists() for d in dirs)
-    assert all(json.loads((d / "report.json").read_text())["verdict"] for d in dirs)  # complete reports
-    assert res.n_detected == 3

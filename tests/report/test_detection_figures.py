@@ -4,12 +4,13 @@ Each figure is built from a real detection on the bundled samples and inspected:
 where its legend sits, how many fault markers it carries against the report's count, that no phase band
 is wider than 360 degrees, that the plotted ratio is the distance of the new data from the set computed
 here a second way, and that the damage figure's reference is the port's static stiffness from a static
-FE solve (not the frequency-response path the figure uses).
+FE solve (not the frequency-response path the figure uses). (The decision figure with several channel pairs:
+test_multichannel.py, beside the x/y standstill detection it shares.)
 """
 
 from __future__ import annotations
 
-from pathlib import Path
+from collections.abc import Callable
 
 import numpy as np
 import pytest
@@ -25,31 +26,17 @@ CR = samples_dir() / "crack_rig"
 TM = samples_dir() / "three_mass"
 
 
-def _outcome(rig: Path, healthy: Path, new: Path, enclose: str) -> tuple[object, object]:
-    cfg = load_config(rig)
-    run_h = workflow.load_run(healthy, cfg)
-    val = workflow.validate(cfg, [run_h], workflow.fit_noise(run_h), enclose=enclose)
-    return val, workflow.detect(cfg, val.baseline, workflow.load_run(new, cfg))
-
-
 @pytest.fixture(scope="module")
-def breathing() -> tuple[object, object]:
+def breathing(sample_pipeline: Callable[..., tuple[object, object]]) -> tuple[object, object]:
     """The breathing crack at 1000 rpm against the measured baseline (joint test)."""
-    return _outcome(configs_dir() / "crack_rig.yaml", CR / "healthy_1000rpm.h5", CR / "breathing_crack_1000rpm.h5",
-                    "measured")
+    return sample_pipeline(configs_dir() / "crack_rig.yaml", CR / "healthy_1000rpm.h5",
+                           CR / "breathing_crack_1000rpm.h5", "measured")
 
 
 @pytest.fixture(scope="module")
-def xy_open_crack() -> tuple[object, object]:
-    """The open crack at standstill with x and y probes (8 channel pairs), measured baseline."""
-    xy = samples_dir() / "crack_rig_xy"
-    return _outcome(configs_dir() / "crack_rig.yaml", xy / "healthy_0rpm.h5", xy / "open_crack_0rpm.h5", "measured")
-
-
-@pytest.fixture(scope="module")
-def three_mass() -> tuple[object, object]:
+def three_mass(sample_pipeline: Callable[..., tuple[object, object]]) -> tuple[object, object]:
     """Three-mass trial 1 (a lumped rig that does not rotate) with the set enclosing every system."""
-    return _outcome(configs_dir() / "three_mass_trial1.yaml", TM / "healthy.h5", TM / "damaged.h5", "system")
+    return sample_pipeline(configs_dir() / "three_mass_trial1.yaml", TM / "healthy.h5", TM / "damaged.h5", "system")
 
 
 def _drawn(fig: Figure) -> None:
@@ -139,37 +126,6 @@ def test_decision_ratio_is_the_distance_from_the_set(breathing: tuple) -> None:
     assert bar.get_width() == pytest.approx(rep["joint_statistic"] / rep["joint_threshold"], rel=1e-12)
     assert any(np.allclose(ln.get_xdata(), 1.0) for ln in fig.axes[1].get_lines())
     assert "Rule" in ax.get_title() and "joint GLR" in ax.get_title()
-
-
-def test_decision_with_several_pairs_plots_the_statistic_that_decided(xy_open_crack: tuple) -> None:
-    """8 channel pairs: a point is a fault when any pair (or the damage-direction test) exceeds its allowance; the
-    plotted ratio is that largest one, so red points are exactly those above 1, grey ones at or below; the largest
-    pair ratio computed here from the distances and radii is never above the plotted one."""
-    _, out = xy_open_crack
-    rep = out.report()  # type: ignore[attr-defined]
-    assert len(rep["channel_pairs"]) == 8 and rep["n_fault_points"] > 0
-    figs = workflow.detection_figures(out)  # type: ignore[arg-type]
-    ax = figs["detection_decision"].axes[0]
-    f = out.run.frequency_hz  # type: ignore[attr-defined]
-    m = out.measured  # type: ignore[attr-defined]
-    pair_ratio = np.max(m.distance / m.radius, axis=1)
-    n_red = 0
-    for ln in ax.get_lines():
-        key = ln.get_gid() or str(ln.get_label())
-        if key != "fault_points" and not key.startswith("explained"):
-            continue
-        x, y = np.asarray(ln.get_xdata()), np.asarray(ln.get_ydata())
-        idx = np.searchsorted(f, x)
-        assert np.all(pair_ratio[idx] <= y * (1 + 1e-9))
-        if key == "fault_points":
-            assert np.all(y > 1.0)
-            n_red = len(x)
-        else:
-            assert np.all(y <= 1.0)
-    assert n_red == rep["n_fault_points"]
-    bode = figs["detection_bode"].axes[0]
-    assert any("in any of the 8 pairs" in str(ln.get_label()) for ln in bode.get_lines())
-    assert "(1 of 8 channel pairs)" in bode.get_title()
 
 
 def _vertical_extents(coll: PolyCollection) -> list[float]:

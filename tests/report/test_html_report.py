@@ -17,6 +17,7 @@ import pytest
 from rotorcheck import __version__, workflow
 from rotorcheck.cli import EXIT_DAMAGE, main
 from rotorcheck.resources import samples_dir
+from tests.shared_runs import CliRun
 
 CR = samples_dir() / "crack_rig"
 CHROMIUM_FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
@@ -86,14 +87,13 @@ def test_markdown_shows_the_plots_and_the_whole_fault_table(detected: Path) -> N
     assert "anchored at the healthy data" in headline  # the headline D_u is the anchored one
 
 
-def test_locate_writes_its_own_html(tmp_path: Path) -> None:
-    """`locate` writes location.html beside location.json: the figure embedded, every candidate element."""
+def test_locate_writes_its_own_html(located_open_crack: CliRun) -> None:
+    """`locate` writes location.html beside location.json: the figure embedded, every candidate element (the
+    shared `fit-noise`, `validate`, `locate --elements 1,4,9` of the open crack: conftest.located_open_crack)."""
     import json
 
-    out = tmp_path / "loc"
-    assert main(["fit-noise", str(CR / "healthy_0rpm.h5"), "--out", str(out)]) == 0
-    assert main(["validate", str(CR / "healthy_0rpm.h5"), "--out", str(out)]) == 0
-    assert main(["locate", str(CR / "open_crack_0rpm.h5"), "--out", str(out), "--elements", "3,4,5"]) == EXIT_DAMAGE
+    out = located_open_crack.out
+    assert located_open_crack.codes == (0, 0, EXIT_DAMAGE)  # fit-noise, validate, locate
     doc = json.loads((out / "location.json").read_text())
     text = (out / "location.html").read_text()
     srcs = re.findall(r'(?:src|href)="([^"]*)"', text)

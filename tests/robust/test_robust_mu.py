@@ -3,6 +3,9 @@ blocks), polynomial roots (repeated scalar), and its failure / pre-check behavio
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from typing import Any
+
 import numpy as np
 import pytest
 from robust_helpers import gamma_methodmd_exact
@@ -73,12 +76,25 @@ def cases() -> dict[str, np.ndarray]:
     return c
 
 
+@pytest.fixture(scope="module")
+def point_by_point(cases: dict[str, np.ndarray]) -> Callable[[str], list[Any]]:
+    """``point_by_point(backend)``: the 500 SISO cases in 500 calls of one point each, made once per backend for
+    the tests that check them (against the closed form, against the stacked call)."""
+    done: dict[str, list[Any]] = {}
+
+    def calls(backend: str) -> list[Any]:
+        if backend not in done:
+            done[backend] = [mu.required_gamma(cases["me"][i:i + 1], cases["W"][i:i + 1], cases["Zt"][i:i + 1],
+                                               cases["V"][i], backend=backend) for i in range(500)]
+        return done[backend]
+
+    return calls
+
+
 @pytest.mark.parametrize("backend", ["cvxpy", "clarabel"])
-def test_lmi_matches_closed_form_on_500_siso_cases(cases: dict[str, np.ndarray], backend: str
-                                                   ) -> None:
-    per_point = [mu.required_gamma(cases["me"][i:i + 1], cases["W"][i:i + 1],
-                                    cases["Zt"][i:i + 1], cases["V"][i], backend=backend)
-                 for i in range(500)]
+def test_lmi_matches_closed_form_on_500_siso_cases(cases: dict[str, np.ndarray], backend: str,
+                                                   point_by_point: Callable[[str], list[Any]]) -> None:
+    per_point = point_by_point(backend)
     lo = np.array([r.gamma_lower[0] for r in per_point])
     up = np.array([r.gamma_upper[0] for r in per_point])
     st = np.array([r.status[0] for r in per_point])
@@ -350,15 +366,14 @@ def test_implicit_lmi_bound_on_a_hand_built_lft() -> None:
 
 @pytest.mark.parametrize("backend", ["cvxpy", "clarabel"])
 def test_stacked_call_matches_closed_form_and_point_by_point_calls(
-        cases: dict[str, np.ndarray], backend: str) -> None:
+        cases: dict[str, np.ndarray], backend: str, point_by_point: Callable[[str], list[Any]]) -> None:
     """All 500 SISO cases in ONE call (the first SDP pass of all points evaluated as one stack,
     then the per-point driver) against 500 calls of one point each: same tolerances against the
     closed form, same statuses, methods and solver calls, bounds equal to rounding of the solver's
     iterates."""
     args = (cases["me"], cases["W"], cases["Zt"], cases["V"])
     r = mu.required_gamma(*args, backend=backend)
-    per_point = [mu.required_gamma(cases["me"][i:i + 1], cases["W"][i:i + 1], cases["Zt"][i:i + 1],
-                                   cases["V"][i], backend=backend) for i in range(500)]
+    per_point = point_by_point(backend)
     p_status = np.array([q.status[0] for q in per_point])
     p_method = np.array([q.method[0] for q in per_point])
     p_lower = np.array([q.gamma_lower[0] for q in per_point])

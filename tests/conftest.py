@@ -1,0 +1,128 @@
+"""Suite-wide: the order the files run in under xdist, and artefacts that several test files share.
+
+Order. ``pytest -n 2 --dist loadfile`` hands each worker whole files. xdist sorts the files by their number
+of tests (``loadscopereorder``), which puts the few slow end-to-end files last, where one worker ends up
+running them alone while the other idles. Here xdist's reorder is off and the files known to be slow
+(:data:`SLOW_FIRST`, measured CPU time, longest first) run first; the rest keep the collection's order and
+fill in behind them, so the two workers finish together (longest processing time first).
+
+Shared artefacts. A sequence of ``rotorcheck`` commands on the bundled samples that several files need (a
+validated baseline, a location) runs once per pytest run (:func:`cli_once`): its output folder is kept under
+the run's base temporary folder, which every xdist worker of the run sees, keyed by the sha256 of the
+commands and of their input files. The first worker that needs it makes it, holding a lock file created
+with ``O_EXCL``; another waits for it. The folder is read only for the tests: copy it (:meth:`CliRun.copy_to`)
+before writing into it. Library pipelines (fit-noise, validate, detect in-process) are memoised per worker
+(:func:`sample_pipeline`): their outcomes are shared objects, to read, never to change.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from tests.shared_runs import CliRun, cli_run, crack_rig_sample, shared_root, validate_0rpm_steps
+
+#: the slowest test files, longest first (CPU seconds of a whole-suite run on 2026-11-27 with the machine shared,
+#: rounded): scheduled first under xdist. test_locate.py makes the shared open-crack location
+#: (conftest.located_open_crack) that report/test_html_report.py reads later on.
+SLOW_FIRST: tuple[str, ...] = (
+    "tests/test_multichannel.py",  # 47: x/y end to end, the x/y standstill detection
+    "tests/faults/test_faults_time_sim.py",  # 36: harmonic balance against time integration
+    "tests/test_locate.py",  # 29: the shared locate; detect and locate one element
+    "tests/fleet/test_fleet_executors.py",  # 29: serial, processes, Dask
+    "tests/test_pipeline.py",  # 27
+    "tests/robust/test_damage_block.py",  # 26
+    "tests/robust/test_robust_mu.py",  # 26: brute-force references
+    "tests/test_measured_detection.py",  # 24: Monte Carlo coverage
+    "tests/sweep/test_sweep_simulator.py",  # 20: ODE time integration
+    "tests/test_sigkill.py",  # 20: commands in subprocesses, killed at four moments each
+    "tests/report/test_model_figures.py",  # 20
+    "tests/fleet/test_fleet_runs.py",  # 20
+    "tests/test_golden.py",  # 17: 14 cases through the command line
+    "tests/test_compressor_rig.py",  # 15
+    "tests/test_detectability.py",  # 15
+    "tests/fleet/test_fleet_dask_kill.py",  # 14
+    "tests/test_samples.py",  # 13: regenerates every bundled sample
+    "tests/test_rig_features.py",  # 12
+    "tests/test_install.py",  # 11: builds and installs the wheel
+    "tests/robust/test_robust_defects.py",  # 10
+    "tests/test_uff_detect.py",  # 9
+    "tests/report/test_html_report.py",  # 6
+    "tests/test_baseline_digest.py",  # 6
+    "tests/test_multirun.py",  # 6
+    "tests/robust/test_mixed_mu.py",  # 5
+    "tests/robust/test_joint.py",  # 5
+    "tests/report/test_detection_figures.py",  # 5
+    "tests/robust/test_severity.py",  # 4
+    "tests/fe/test_fe_plots.py",  # 4
+    "tests/robust/test_robust_identify.py",  # 4
+    "tests/test_own_rig.py",  # 4
+)
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    if hasattr(config.option, "loadscopereorder"):  # xdist: keep the order below, not "most tests first"
+        config.option.loadscopereorder = False
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    rank = {path: k for k, path in enumerate(SLOW_FIRST)}
+    items.sort(key=lambda item: rank.get(item.nodeid.split("::", 1)[0], len(rank)))  # stable: files stay whole
+
+
+@pytest.fixture(scope="session")
+def cli_once(tmp_path_factory: pytest.TempPathFactory) -> Callable[[str, Sequence[Sequence[str]]], CliRun]:
+    """``cli_once(name, steps)``: the ``rotorcheck`` commands ``steps`` (argument lists; ``{out}`` stands for
+    the output folder) run once per pytest run in-process, shared by every test and worker (read only)."""
+    root = shared_root(tmp_path_factory)
+
+    def run(name: str, steps: Sequence[Sequence[str]]) -> CliRun:
+        return cli_run(root, name, steps)
+
+    return run
+
+
+@pytest.fixture(scope="session")
+def validated_0rpm(cli_once: Callable[[str, Sequence[Sequence[str]]], CliRun]) -> CliRun:
+    """`rotorcheck fit-noise` and `validate --no-plots` on crack_rig/healthy_0rpm.h5: ``out/baseline.h5``."""
+    run = cli_once("validated_0rpm", validate_0rpm_steps())
+    assert run.codes == (0, 0)
+    return run
+
+
+@pytest.fixture(scope="session")
+def located_open_crack(cli_once: Callable[[str, Sequence[Sequence[str]]], CliRun]) -> CliRun:
+    """:func:`validated_0rpm`'s commands, then `rotorcheck locate` of crack_rig/open_crack_0rpm.h5 with the
+    candidate elements 1, 4 and 9 and ``--json`` (plots on): ``out/location.{json,html,png}``."""
+    return cli_once("located_open_crack", [*validate_0rpm_steps(), [
+        "locate", crack_rig_sample("open_crack_0rpm.h5"), "--out", "{out}", "--elements", "1,4,9", "--json"]])
+
+
+@pytest.fixture(scope="session")
+def sample_pipeline() -> Callable[..., tuple[Any, Any]]:
+    """``sample_pipeline(rig, healthy, new, enclose)``: fit-noise, validate (``enclose``) and detect through the
+    library (paths to a rig file and two sweeps): the validation and detection outcomes, memoised in this worker
+    (a validation shared by every new sweep against it; the outcomes hold closures: no pickling them for the
+    other worker). Shared objects: read them, never change them."""
+    from rotorcheck import workflow
+    from rotorcheck.config import load_config
+
+    validations: dict[tuple[str, str, str], Any] = {}
+    detections: dict[tuple[str, str, str, str], Any] = {}
+
+    def run(rig: str | Path, healthy: str | Path, new: str | Path, enclose: str = "measured") -> tuple[Any, Any]:
+        key = (str(Path(rig).resolve()), str(Path(healthy).resolve()), enclose)
+        if key not in validations:
+            cfg = load_config(rig)
+            run_h = workflow.load_run(healthy, cfg)
+            validations[key] = cfg, workflow.validate(cfg, [run_h], workflow.fit_noise(run_h), enclose=enclose)
+        cfg, val = validations[key]
+        dkey = (*key, str(Path(new).resolve()))
+        if dkey not in detections:
+            detections[dkey] = workflow.detect(cfg, val.baseline, workflow.load_run(new, cfg))
+        return val, detections[dkey]
+
+    return run
