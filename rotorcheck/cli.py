@@ -309,19 +309,6 @@ def _fail_at(spec: str) -> tuple[int, ...]:
         raise InputError(None, "--fail-at", f"expected comma-separated point indices, got {spec!r}") from None
 
 
-def _known_elements(els: tuple[int, ...] | None, cfg: Any) -> tuple[int, ...] | None:
-    """``--elements`` checked against the rig's shaft elements (an InputError naming the valid range)."""
-    from rotorcheck.signatures import candidate_elements
-
-    known = candidate_elements(cfg)
-    bad = [e for e in els or () if e not in known]
-    if bad:
-        valid = f"{min(known)}-{max(known)}" if known else "none: the rig is lumped"
-        raise InputError(None, "--elements", f"no shaft element {', '.join(map(str, bad))} in rig {cfg.rig_id!r} "
-                         f"(elements {valid})")
-    return els
-
-
 FailAtOpt = Annotated[str, typer.Option("--fail-at", hidden=True, help="Testing: fail the solver at these points.")]
 
 
@@ -834,7 +821,7 @@ def detectability(
     in_open_unit(false_alarm, "--false-alarm")
     rig_path = rig if rig is not None else default_rig_path("crack_rig")
     cfg = workflow.load_rig(rig_path)
-    els = _known_elements(_element_list(elements), cfg)
+    els = workflow.check_elements(cfg, _element_list(elements))
     split = lambda t: [x for x in t.replace(" ", "").split(",") if x]  # noqa: E731
     formats = workflow.plot_formats(plot_format)
     targets = [out / "detectability.json"] + (workflow.plot_paths(out, ("detectability",), formats) if plots else [])

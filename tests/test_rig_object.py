@@ -51,3 +51,15 @@ def test_benign_gain_and_speed_offset() -> None:
         pytest.skip("the rig has no speed tolerance")
     moved = rig.with_benign({speed: 15.0})
     np.testing.assert_allclose(moved.receptance(F)[:, 0], _direct(cfg, 1015.0), rtol=1e-9)
+
+
+def test_elements_outside_the_rig_are_refused_by_the_library() -> None:
+    """--elements is checked where detectability and locate take it (the library), not only in the CLI."""
+    from rotorcheck import workflow
+    from rotorcheck.errors import InputError
+
+    cfg = load_config(configs_dir() / "crack_rig.yaml")
+    for bad in ((0,), (99,), (4, 10)):
+        with pytest.raises(InputError, match=r"--elements.*elements 1-9"):
+            workflow.detectability_for_rig(cfg, noise_std_m=2e-7, elements=bad)
+    assert workflow.check_elements(cfg, [4, 6]) == (4, 6)

@@ -78,6 +78,7 @@ from rotorcheck.workflow.outputs import PLOT_FORMATS, plot_formats, plot_paths
 from rotorcheck.workflow.prediction import DETECTABILITY_POINTS, detectability_for_rig, sensor_ranking_for_rig
 from rotorcheck.workflow.rigs import (
     baseline_updates,
+    check_elements,
     load_rig,
     port_static_stiffness,
     rig_for,
@@ -127,6 +128,7 @@ __all__ = [
     "benign_table",
     "certify_beyond_benign",
     "check_baseline",
+    "check_elements",
     "check_frf_unit",
     "check_sweep",
     "crack_report",

@@ -15,7 +15,7 @@ from rotorcheck.variability import benign_at
 from rotorcheck.workflow.benign import KAPPA_NOMINAL, benign_model
 from rotorcheck.workflow.detection import healthy_frf_of
 from rotorcheck.workflow.measured import MeasuredRun, frf_estimate, per_pair
-from rotorcheck.workflow.rigs import baseline_updates, updated_rig
+from rotorcheck.workflow.rigs import baseline_updates, check_elements, updated_rig
 
 
 def locate_damage(rig: RigConfig, baseline: Baseline, run: MeasuredRun, false_alarm: float = 0.01,
@@ -45,11 +45,7 @@ def locate_run(rig: RigConfig, run: MeasuredRun, healthy_frf: np.ndarray, health
         raise InputError(None, "--rig", "locating needs a rotor's shaft elements; this rig is lumped")
     if not 0.0 < false_alarm < 1.0:
         raise InputError(None, "--false-alarm", f"must be in (0, 1), got {false_alarm}")
-    if elements is not None:
-        known = {e.start for e in rig.shaft}
-        bad = [e for e in elements if e not in known]
-        if bad:
-            raise InputError(None, "--elements", f"no shaft element {bad} in this rig (elements {sorted(known)})")
+    elements = check_elements(rig, elements)
     f = run.frequency_hz
     est = frf_estimate(run)
     n_pairs = est.frf.shape[1]

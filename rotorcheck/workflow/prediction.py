@@ -19,6 +19,7 @@ from rotorcheck.errors import InputError
 from rotorcheck.nominal import ChannelPair, parse_port
 from rotorcheck.signatures import io_frf
 from rotorcheck.workflow.benign import KAPPA_NOMINAL, benign_model
+from rotorcheck.workflow.rigs import check_elements
 
 DETECTABILITY_POINTS = 262  # grid of a prediction from stated noise without analysis.n_points
 
@@ -86,6 +87,7 @@ def detectability_for_rig(
     the rig's ``measurement``), else the rig's own ``measurement.output_noise_std``; none of them: an
     :class:`~rotorcheck.errors.InputError`. Sensors and actuators: ports as ``6x``, ``s2.y`` (default: the
     rig's); every sensor with every actuator is one channel pair."""
+    elements = check_elements(config, elements)
 
     sens, acts, _ = _prediction_ports(config, sensors, actuators, source)
     if not sens:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
@@ -12,6 +13,7 @@ from rotorcheck.errors import InputError
 from rotorcheck.faults.compliance import with_crack_depth
 from rotorcheck.nominal import NominalModel, nominal_model
 from rotorcheck.resources import default_rig_path
+from rotorcheck.signatures import candidate_elements
 from rotorcheck.variability import benign_parameters, with_benign
 
 
@@ -99,3 +101,17 @@ def nominal_for(rig: RigConfig, freq_hz: np.ndarray, speed_rpm: float) -> Nomina
     _MODEL_MEMO.clear()
     _MODEL_MEMO[key] = (rig, model)
     return model
+
+
+def check_elements(config: RigConfig, elements: Sequence[int] | None) -> tuple[int, ...] | None:
+    """``elements`` (``--elements``) when each is a shaft element of the rig; an InputError naming the valid
+    range otherwise (None: every element)."""
+    if elements is None:
+        return None
+    known = candidate_elements(config)
+    bad = [e for e in elements if e not in known]
+    if bad:
+        valid = f"{min(known)}-{max(known)}" if known else "none: the rig is lumped"
+        raise InputError(None, "--elements", f"no shaft element {', '.join(map(str, bad))} in rig "
+                         f"{config.rig_id!r} (elements {valid})")
+    return tuple(elements)
