@@ -53,7 +53,7 @@ def make_seeds(folder: Path) -> dict[str, list[Path]]:
     """Seed files of every reader in ``folder`` (built from the bundled samples)."""
     import numpy as np
 
-    from rotorcheck.baseline import Baseline, write_baseline
+    from rotorcheck.baseline import Baseline, HealthyData, ModelBound, NoiseFit, Provenance, write_baseline
     from rotorcheck.resources import configs_dir, samples_dir
     from rotorcheck.sweep import read_sweep
     from rotorcheck.sweep.convert import ConvertOptions, read_any, write_any
@@ -70,12 +70,12 @@ def make_seeds(folder: Path) -> dict[str, list[Path]]:
     (run,) = sw.runs.values()
     f = np.asarray(run.frequency)
     frf = np.asarray(run.frf[:, :, 0])
-    base = Baseline(rig_id=sw.rig_id, rig_sha256="0" * 64, sweep_sha256=["1" * 64], run_id=run.run_id,
-                    speed_rpm=float(run.speed_rpm), noise_bound_m=1e-7, noise_method="pooled", noise_confidence=0.99,
-                    uncertainty="additive", enclose="measured", stage="validated", created_utc="2026-01-01T00:00:00Z",
-                    frequency_hz=f, gamma=np.full(f.size, 1e-8), gamma_lower=np.zeros(f.size),
-                    gamma_status=np.array(["ok"] * f.size), model_frf=frf[:, :, None], healthy_frf=frf,
-                    healthy_frf_var=np.full(frf.shape, 1e-16), healthy_frf_dof=np.full(frf.shape, 10.0))
+    base = Baseline(
+        Provenance(sw.rig_id, "0" * 64, ["1" * 64], run.run_id, float(run.speed_rpm), "2026-01-01T00:00:00Z"),
+        NoiseFit(1e-7, "pooled", 0.99, None, "additive", ""),
+        ModelBound("measured", "additive", "", f, np.full(f.size, 1e-8), frf[:, :, None], np.zeros(f.size),
+                   np.array(["ok"] * f.size)),
+        HealthyData(frf, np.full(frf.shape, 1e-16), np.full(frf.shape, 10.0)))
     write_baseline(base, folder / "baseline.h5")
     shutil.copy(configs_dir() / "crack_rig.yaml", folder / "rig.yaml")
     ross = sorted((REPO / "tests" / "data" / "ross").glob("*.toml"))

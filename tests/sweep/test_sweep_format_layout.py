@@ -14,7 +14,7 @@ SWEEP_DIR = Path(pkg.__file__).parent
 #: module -> the rotorcheck modules it may import (lower layers only)
 ALLOWED = {
     "format": {"rotorcheck.errors"},  # SweepFormatError is a UserInputError (exit 2 by class, not by name)
-    "validation": {"rotorcheck.sweep.format"},
+    "validation": {"rotorcheck.errors", "rotorcheck.sweep.format"},  # check_rig_id: a rig id is a name
     "hdf5io": {"rotorcheck.fileio", "rotorcheck.sweep.format", "rotorcheck.sweep.validation"},
     "compare": {"rotorcheck.sweep.format", "rotorcheck.sweep.hdf5io"},
     "uff": {"rotorcheck.fileio", "rotorcheck.sweep.format", "rotorcheck.sweep.validation"},
