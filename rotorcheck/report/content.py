@@ -39,3 +39,14 @@ def headline_damage(report: DetectionReport) -> list[str]:
     return [f"Damage dynamics at {report.damage_port} ({kind}), {where}: Re D_u = {np.nanmedian(re):.4g} N/m "
             f"(positive: a stiffness loss); |D_u| within [{np.nanmedian(lo):.4g}, {np.nanmedian(hi):.4g}] N/m "
             f"(medians of the bound); the bound excludes 0 at {significant} of {re.size} points.", ""]
+
+
+def best_candidate(report: DetectionReport) -> str | None:
+    """The joint test's best candidate element and its loss with the interval, in words; None unless the verdict
+    is damage (a healthy verdict shows no finding) and the report holds one."""
+    interval, loss = report.stiffness_loss_interval, report.stiffness_loss
+    if report.verdict != "damage" or report.best_element is None or not interval or loss is None:
+        return None
+    lo, hi = interval
+    return (f"element {report.best_element}: stiffness loss {100 * loss:.3g} % [{100 * lo:.3g}, {100 * hi:.3g}] "
+            "(95 %, linearized)")

@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from rotorcheck.report.content import damage_columns, headline_damage
+from rotorcheck.report.content import best_candidate, damage_columns, headline_damage
 from rotorcheck.report.schema import DetectionReport
 
 VERDICT_COLOUR = {"damage": "#b00020", "healthy": "#1b7a2f", "inconclusive": "#a66a00", "located": "#b00020",
@@ -156,12 +156,9 @@ def _key_numbers(report: DetectionReport) -> list[tuple[str, str]]:
         rows.append(("joint statistic T", f"{_num(report.joint_statistic)} against threshold "
                                           f"{_num(report.joint_threshold)} (p = {p}, "
                                           f"false alarm {report.false_alarm:g} per sweep)"))
-    interval, fraction = report.stiffness_loss_interval, report.stiffness_loss
-    if report.best_element is not None and interval and fraction is not None and report.verdict == "damage":
-        lo, hi = interval  # a healthy verdict shows no finding
-        loss = 100 * fraction
-        rows.append(("best candidate element", f"element {report.best_element}: stiffness loss "
-                                               f"{loss:.3g} % [{100 * lo:.3g}, {100 * hi:.3g}] (95 %, linearized)"))
+    best = best_candidate(report)
+    if best is not None:
+        rows.append(("best candidate element", best))
     if report.channel_pairs:
         rows.append(("channel pairs (output<-input)", ", ".join(report.channel_pairs)))
     return rows

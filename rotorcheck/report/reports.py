@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from rotorcheck.fileio import atomic_write_text
-from rotorcheck.report.content import headline_damage
+from rotorcheck.report.content import best_candidate, headline_damage
 from rotorcheck.report.schema import DetectionReport
 
 REPORT_FILES = ("report.json", "report.md", "fault_points.csv", "report.html")
@@ -147,11 +147,9 @@ def _joint_section(report: DetectionReport) -> list[str]:
              f"{report.false_alarm:g} (p = {report.joint_p_value:.3g}); model-error fraction kappa = "
              f"{report.benign_model_error:g}; {report.learned_benign_directions} benign directions learned "
              "from healthy sweeps.", ""]
-    interval, loss = report.stiffness_loss_interval, report.stiffness_loss
-    if report.best_element is not None and interval and loss is not None and report.verdict == "damage":
-        lo, hi = interval  # a healthy verdict shows no finding
-        lines += [f"Best candidate: element {report.best_element}, stiffness loss "
-                  f"{100 * loss:.3g} % [{100 * lo:.3g}, {100 * hi:.3g}] (95 %, linearized).", ""]
+    best = best_candidate(report)
+    if best is not None:
+        lines += [f"Best candidate: {best}.", ""]
     if report.benign_parameters:
         lines += ["| benign parameter | estimate | 95 % interval | at range edge |", "|---|---:|---|---|"]
         for b in report.benign_parameters:
