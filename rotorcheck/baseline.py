@@ -305,17 +305,19 @@ def write_baseline(baseline: Baseline, path: str | Path, others: list[Baseline] 
 
 def stored_rig(path: str | Path) -> tuple[str | None, str | None]:
     """``(rig_id, rig file)`` a baseline file at ``path`` was made with, without checking the rest of it;
-    ``(None, None)`` when there is no such file or it is no HDF5 (its reader then says what is wrong)."""
-    if not Path(path).exists():
+    ``(None, None)`` when there is no such file, it is no HDF5 or those attributes are not safe text (its
+    reader then says what is wrong). Read with the reader's own safeguards (heaps walked first, each
+    attribute's datatype checked before it is read)."""
+    p = Path(path)
+    if not p.exists():
         return None, None
+    check_hdf5_global_heaps(p)  # before the HDF5 library can loop on a corrupt heap
     try:
-        with h5py.File(path, "r") as h5:
-            rig_id, rig_path = h5.attrs.get("rig_id"), h5.attrs.get("x_rig_path")
-    except OSError:
+        with h5py.File(p, "r") as h5:
+            return tuple(  # type: ignore[return-value]
+                _attr_text(h5, p, f"/@{name}", name) if name in h5.attrs else None for name in ("rig_id", "x_rig_path"))
+    except (OSError, InputError):
         return None, None
-    def text(v: object) -> str | None:
-        return None if v is None else (v.decode() if isinstance(v, bytes) else str(v))
-    return text(rig_id), text(rig_path)
 
 
 def read_baseline(path: str | Path) -> Baseline:
