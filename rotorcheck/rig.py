@@ -14,7 +14,8 @@ lost or benign parameters applied, its ports and candidate elements follow from 
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -37,14 +38,11 @@ class Rig:
     speed_offset_rpm: float = 0.0
     sensor_gain: float = 1.0
     actuator_gain: float = 1.0
-    _system: list[MechanicalSystem] = field(default_factory=list, init=False, repr=False, compare=False)
 
-    @property
+    @cached_property
     def system(self) -> MechanicalSystem:
         """The assembled mechanical system (built on first use, then kept)."""
-        if not self._system:
-            self._system.append(build_system(self.config))
-        return self._system[0]
+        return build_system(self.config)
 
     @property
     def ports(self) -> Ports | None:
