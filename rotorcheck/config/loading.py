@@ -16,7 +16,7 @@ from rotorcheck.config.errors import first_error
 from rotorcheck.config.resolve import resolve_benign
 from rotorcheck.config.rig import RigConfig
 from rotorcheck.fileio import read_bounded_text
-from rotorcheck.safeload import load_yaml
+from rotorcheck.safeload import load_yaml, yaml_error_message
 
 
 def parse_config(data: Any, source: str | Path = "<config>") -> RigConfig:
@@ -93,10 +93,8 @@ def load_config(path: str | Path) -> RigConfig:
     try:
         data = load_yaml(text, StrictLoader)  # bounded: aliases, nesting and expanded nodes (issue 32)
     except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f"line {mark.line + 1}, column {mark.column + 1}: " if mark else ""
-        problem = getattr(exc, "problem", None) or str(exc)
-        raise ConfigError(p, "", f"malformed YAML: {where}{problem}") from None
+        where, problem = yaml_error_message(exc)
+        raise ConfigError(p, "", f"malformed YAML: {where + ': ' if where else ''}{problem}") from None
     except RecursionError:
         raise ConfigError(p, "", "nested too deeply to be a rig file") from None
     bad = _non_finite(data)

@@ -217,8 +217,7 @@ def _rotor_structure(config: RigConfig, modulus_factors: Mapping[int, float] | N
     n_dof = n_shaft + 2 * n_sup
 
     def xy(station: int) -> np.ndarray:
-        """The x and y DOF of a shaft station or a support node."""
-        return np.array([rotor_dof(station_node, positions.size, n_sup, station, d) for d in ("x", "y")])
+        return _xy(station_node, positions.size, n_sup, station)
 
     M, G, K0 = assemble_beams(infos + layers, n_dof)
     damping = config.damping
@@ -257,6 +256,11 @@ def _rotor_structure(config: RigConfig, modulus_factors: Mapping[int, float] | N
     return out
 
 
+def _xy(station_node: tuple[int, ...], n_nodes: int, n_sup: int, station: int) -> np.ndarray:
+    """The x and y DOF of a shaft station or a support node."""
+    return np.array([rotor_dof(station_node, n_nodes, n_sup, station, d) for d in ("x", "y")])
+
+
 def build_rotor(config: RigConfig, modulus_factors: Mapping[int, float] | None = None) -> MechanicalSystem:
     """Timoshenko FE model of a ``kind: rotor`` config (see module docstring)."""
     n_sup = config.n_support_nodes
@@ -269,8 +273,7 @@ def build_rotor(config: RigConfig, modulus_factors: Mapping[int, float] | None =
     damping = config.damping
 
     def xy(station: int) -> np.ndarray:
-        """The x and y DOF of a shaft station or a support node."""
-        return np.array([rotor_dof(station_node, positions.size, n_sup, station, d) for d in ("x", "y")])
+        return _xy(station_node, positions.size, n_sup, station)
 
     bearing_dofs: list[tuple[np.ndarray, np.ndarray | None]] = []
     for b in config.bearings:

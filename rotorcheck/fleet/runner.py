@@ -26,7 +26,7 @@ from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
 
-from rotorcheck.errors import InputError, check_choice, finite_positive
+from rotorcheck.errors import InputError, check_choice, finite_positive, in_open_unit
 from rotorcheck.fileio import atomic_write_text
 from rotorcheck.fleet.index import HashIndex
 from rotorcheck.fleet.layout import Fleet, discover
@@ -101,8 +101,7 @@ def check_options(opts: FleetOptions) -> None:
     s = opts.settings
     for name, v in (("--confidence", s.confidence), ("--false-alarm", s.false_alarm),
                     ("--trend-confidence", opts.trend_confidence)):
-        if not 0.0 < v < 1.0:
-            raise InputError(None, name, f"must be in (0, 1), got {v}")
+        in_open_unit(v, name)
     finite_positive(s.low_band_hz, "--low-band")
     parse_limit(opts.limit)
     if opts.executor == "dask" or opts.scheduler:
