@@ -222,15 +222,15 @@ def _analyse_step(seg: TimeRecord, plan: StepPlan, cmap: ChannelMap, scales: np.
     if good.sum() >= 3:  # slow drift from the DC of the clean periods (see periodfit)
         ph = remove_drift(ph, np.concatenate(dcs, axis=1)[:, good], t_mid[good], des, t_all=t_mid)
     # the driven input (largest force): its residual says whether the force is a sine
-    amp_all = np.concatenate(amp, axis=1) * np.abs(scales[: len(ins)])[:, None]
+    amp_cat = np.concatenate(amp, axis=1)
+    amp_all = amp_cat * np.abs(scales[: len(ins)])[:, None]
     drv = int(np.argmax(np.median(amp_all, axis=1)))
     res_f = np.concatenate(resid, axis=1)[drv]
-    amp_f = np.concatenate(amp, axis=1)[drv]
+    amp_f = amp_cat[drv]
     t_win = seg.t0_s + starts / fs
     w = 2.0 * np.pi * f
     # a force that is not a sine: the fit residual against the fitted amplitude (RMS)
-    ok = ~bad.any(axis=0)
-    chk = ok & np.isfinite(res_f)
+    chk = good & np.isfinite(res_f)
     dist = float(np.median(res_f[chk] / np.maximum(amp_f[chk] / np.sqrt(2.0), 1e-300))) if chk.any() else 0.0
     if dist > cmap.analysis.max_distortion:
         raise InputError(seg.path, f"channel {ins[drv].channel!r}",
@@ -239,14 +239,14 @@ def _analyse_step(seg: TimeRecord, plan: StepPlan, cmap: ChannelMap, scales: np.
     if bad.any():
         chans = [names[c] for c in np.flatnonzero(bad.any(axis=1))]
         first = float(t_win[np.flatnonzero(bad.any(axis=0))[0]])
-        n_bad = int((~ok).sum())
+        n_bad = int((~good).sum())
         if cmap.analysis.clipping == "refuse" or n_bad > plan.n_periods // 2:
             raise InputError(seg.path, f"channel {chans[0]!r}",
                              f"t = {first:.6f} s (step at {f:.6g} Hz): clipped samples (flat at the rails) in "
                              f"{n_bad} of {plan.n_periods} periods: refusing")
         notes.append(f"{f:.6g} Hz: {n_bad} of {plan.n_periods} periods dropped for clipping "
                      f"({', '.join(chans)}, first at t = {first:.6f} s)")
-    keep = np.flatnonzero(ok)
+    keep = np.flatnonzero(good)
     if keep.size < cmap.analysis.min_periods:
         _short(seg, plan, cmap, keep.size, notes)
         return None

@@ -19,7 +19,7 @@ from __future__ import annotations
 import io
 import itertools
 import os
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -127,8 +127,6 @@ def _from_time(path: str, time: Column, cols: dict[str, Column], closers: list[C
     n = len(time)
     if n < 2:
         raise InputError(path, "time", "fewer than 2 samples")
-    first = float(np.asarray(time[0:1])[0])
-    last = float(np.asarray(time[n - 1 : n])[0])
     # median step of the first block: the nominal dt; gaps are steps > 1.5 dt
     head = np.asarray(time[0 : min(n, block)], dtype=np.float64)
     dt = float(np.median(np.diff(head)))
@@ -152,7 +150,6 @@ def _from_time(path: str, time: Column, cols: dict[str, Column], closers: list[C
         fs = (b - a - 1) / (t1 - t0) if b - a > 1 else 1.0 / dt
         seg = cols if (a, b) == (0, n) else {k: _Slice(c, a, b) for k, c in cols.items()}
         out.append(TimeRecord(path, fs, t0, seg, closers if a == 0 else []))
-    del first, last
     return out
 
 
@@ -404,8 +401,3 @@ def _hdf5(path: str, fs_given: float | None, group: str | None) -> TimeRecord:
         return recs[0]
     return TimeRecord(path, _rate(path, fs_found, fs_given, "sample_rate_hz"), t0, cols, [f.close])
 
-
-def iter_blocks(rec: TimeRecord, names: list[str], block: int) -> Iterator[tuple[int, np.ndarray]]:
-    """``(start, samples (len(names), n))`` blocks of ``block`` samples over the whole record."""
-    for s in range(0, rec.n_samples, block):
-        yield s, rec.read(names, s, s + block)
