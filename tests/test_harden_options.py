@@ -16,18 +16,18 @@ from rotorcheck.resources import default_rig_path, samples_dir
 HEALTHY = samples_dir() / "crack_rig" / "healthy_0rpm.h5"
 
 CASES = [  # (argv with OUT for the output folder, the option the message names)
-    (["model", "--speed", "nan", "--out", "OUT"], "--speed"),
-    (["model", "--speed", "inf", "--out", "OUT"], "--speed"),
-    (["model", "--speed", "1e308", "--out", "OUT"], "--speed"),
+    (["model", "--demo", "--speed", "nan", "--out", "OUT"], "--speed"),
+    (["model", "--demo", "--speed", "inf", "--out", "OUT"], "--speed"),
+    (["model", "--demo", "--speed", "1e308", "--out", "OUT"], "--speed"),
     (["info", str(HEALTHY), "--confidence", "nan"], "--confidence"),
     (["info", str(HEALTHY), "--confidence", "2"], "--confidence"),
     (["simulate", "OUT/s.h5", "--f-max", "inf"], "--f-max"),
     (["simulate", "OUT/s.h5", "--periods", "0"], "--periods"),
     (["simulate", "OUT/s.h5", "--seed", "-1"], "--seed"),
-    (["crack", "--unbalance", "nan", "--out", "OUT"], "--unbalance"),
-    (["detectability", "--noise-std", "nan", "--out", "OUT"], "--noise-std"),
-    (["detectability", "--noise-std", "0", "--out", "OUT"], "--noise-std"),
-    (["detectability", "--speed", "nan", "--out", "OUT"], "--speed"),
+    (["crack", "--demo", "--unbalance", "nan", "--out", "OUT"], "--unbalance"),
+    (["detectability", "--demo", "--noise-std", "nan", "--out", "OUT"], "--noise-std"),
+    (["detectability", "--demo", "--noise-std", "0", "--out", "OUT"], "--noise-std"),
+    (["detectability", "--demo", "--speed", "nan", "--out", "OUT"], "--speed"),
     (["locate", str(HEALTHY), "--crack-section-length", "0", "--out", "OUT"], "--crack-section-length"),
     (["locate", str(HEALTHY), "--crack-section-length", "nan", "--out", "OUT"], "--crack-section-length"),
     (["locate", str(HEALTHY), "--crack-section-length", "inf", "--out", "OUT"], "--crack-section-length"),
@@ -54,7 +54,7 @@ def test_bad_option_is_refused_naming_it(tmp_path: Path, capsys: pytest.CaptureF
 @pytest.mark.parametrize("elements", ["0", "99", "3,0"])
 def test_detectability_elements_outside_the_rig_are_refused(tmp_path: Path, capsys: pytest.CaptureFixture[str],
                                                             elements: str) -> None:
-    assert main(["detectability", "--elements", elements, "--out", str(tmp_path / "o")]) == 2
+    assert main(["detectability", "--demo", "--elements", elements, "--out", str(tmp_path / "o")]) == 2
     msg = capsys.readouterr().err
     assert "error: --elements: no shaft element" in msg and "(elements 1-9)" in msg
     assert not (tmp_path / "o").exists()

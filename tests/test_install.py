@@ -148,8 +148,8 @@ def test_the_installed_wheel_runs_the_samples_outside_the_checkout(wheel: Path, 
     assert samples.is_relative_to(venv)
     assert {str(p.relative_to(samples)) for p in samples.rglob("*.h5")} >= set(CLI_MD_SAMPLES)
 
-    # the README's sequence: fit-noise with no flags uses the bundled healthy sweep and its bundled rig
-    _run([exe, "fit-noise"], run, env)
+    # the README's sequence: fit-noise --demo uses the bundled healthy sweep and its bundled rig
+    _run([exe, "fit-noise", "--demo"], run, env)
     _run([exe, "validate", str(samples / "crack_rig" / "healthy_1000rpm.h5"), "--no-plots"], run, env)
     proc = _run([exe, "detect", str(samples / "crack_rig" / "breathing_crack_1000rpm.h5"), "--no-plots", "--json"],
                 run, env, ok=(1,))

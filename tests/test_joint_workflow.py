@@ -82,10 +82,10 @@ def test_model_without_speed_reports_every_configured_speed(capsys: pytest.Captu
     each equals the single-speed run."""
     import json
 
-    assert main(["model", "--no-plots", "--json"]) == 0
+    assert main(["model", "--demo", "--no-plots", "--json"]) == 0
     doc = json.loads(capsys.readouterr().out)
     assert [a["speed_rpm"] for a in doc["at_speeds"]] == [0.0, 1000.0] and doc["speed_rpm"] == 0.0
-    assert main(["model", "--no-plots", "--json", "--speed", "1000"]) == 0
+    assert main(["model", "--demo", "--no-plots", "--json", "--speed", "1000"]) == 0
     one = json.loads(capsys.readouterr().out)
     got = [m["frequency_hz"] for m in doc["at_speeds"][1]["modes"]]
     np.testing.assert_allclose(got, [m["frequency_hz"] for m in one["modes"]], rtol=1e-12)

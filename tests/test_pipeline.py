@@ -351,7 +351,7 @@ def test_lmi_equals_closed_form_on_sample_points(sweep: str) -> None:
 
 
 def test_crack_command_reproduces_section_5_3(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
-    assert main(["crack", "--out", str(tmp_path), "--json", "--plot-format", "both"]) == EXIT_OK
+    assert main(["crack", "--demo", "--out", str(tmp_path), "--json", "--plot-format", "both"]) == EXIT_OK
     doc = _json(capsys)
     h = doc["harmonics"]
     x1000 = np.asarray(h["cracked_1000rpm"]["x_m"])

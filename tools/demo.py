@@ -4,7 +4,7 @@ Each case runs in its own folder under ``demo/`` so that the commands need no fl
 names (``--rig`` defaults to the bundled rig named by the sweep, ``--out`` to ``rotorcheck-out/``):
 
     rotorcheck model configs/crack_rig.yaml --speed 1000
-    rotorcheck crack                       (Fig. 56-58: the breathing crack's stiffness, orbit, spectra)
+    rotorcheck crack --demo                (Fig. 56-58: the breathing crack's stiffness, orbit, spectra)
     rotorcheck fit-noise  <healthy sweep>
     rotorcheck validate   <healthy sweep>
     rotorcheck detect     <new sweep>
@@ -65,7 +65,7 @@ def main(root: str | Path = "demo") -> int:
     model_dir.mkdir()
     if _run(["model", str(configs_dir() / "crack_rig.yaml"), "--speed", "1000"], model_dir) != 0:
         return 2
-    if _run(["crack"], model_dir) != 0:  # the cracked rotor of section 5.3: Fig. 56-58
+    if _run(["crack", "--demo"], model_dir) != 0:  # the cracked rotor of section 5.3: Fig. 56-58
         return 2
     for name, healthy, new in CASES:
         work = base / name

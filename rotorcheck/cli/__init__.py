@@ -86,6 +86,7 @@ def _run(command: Any, argv: list[str] | None) -> int:
         return EXIT_INPUT
     except Exception as exc:  # the contract: an unexpected exception is 2, never 1
         if hasattr(exc, "show") and hasattr(exc, "exit_code"):  # click/typer usage errors
+            _hint_positional(exc)
             exc.show(file=sys.stderr)
             return EXIT_INPUT if exc.exit_code else EXIT_OK
         if os.environ.get("ROTORCHECK_DEBUG"):
@@ -100,6 +101,20 @@ def _run(command: Any, argv: list[str] | None) -> int:
         err.print(f"[bold red]internal error:[/] {type(exc).__name__}: {escape(str(exc))}")
         return EXIT_INPUT
     return rc if isinstance(rc, int) else EXIT_OK
+
+
+def _hint_positional(exc: Any) -> None:
+    """``rotorcheck model --rig x.yaml``: an unknown option named like one of the command's arguments gets the
+    hint that it is positional (the usage error says only "No such option")."""
+    name = str(getattr(exc, "option_name", "") or "").lstrip("-").replace("-", "_")
+    ctx = getattr(exc, "ctx", None)
+    if not name or ctx is None:
+        return
+    for param in ctx.command.params:
+        if getattr(param, "param_type_name", "") == "argument" and param.name == name:
+            exc.message += (f" ({name.upper()} is an argument here, given without an option: "
+                            f"rotorcheck {ctx.info_name} <{name}> ...)")
+            return
 
 
 def run() -> None:

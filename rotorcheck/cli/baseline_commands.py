@@ -12,6 +12,7 @@ from rotorcheck.cli.common import (
     DEFAULT_OUT,
     EXIT_INCONCLUSIVE,
     EXIT_OK,
+    DemoOpt,
     FailAtOpt,
     ForceOpt,
     FrfUnitOpt,
@@ -21,6 +22,7 @@ from rotorcheck.cli.common import (
     RigOpt,
     RunOpt,
     app,
+    bundled_or_given,
     emit_json,
     err,
     fail_at_points,
@@ -32,7 +34,8 @@ from rotorcheck.errors import in_open_unit
 
 @app.command("fit-noise")
 def fit_noise(
-    sweep: Annotated[Path | None, typer.Argument(help="Healthy sweep (default: bundled healthy_1000rpm).")] = None,
+    sweep: Annotated[Path | None, typer.Argument(help="Healthy sweep (--demo: the bundled healthy_1000rpm).")] = None,
+    demo: DemoOpt = False,
     rig: RigOpt = None,
     out: OutOpt = DEFAULT_OUT,
     method: Annotated[str, typer.Option(help="pooled | per-point | max | floor | manual")] = "pooled",
@@ -48,7 +51,8 @@ def fit_noise(
     from rotorcheck.fileio import check_writable
     from rotorcheck.resources import samples_dir
 
-    sweep_path = sweep if sweep is not None else samples_dir() / "crack_rig" / "healthy_1000rpm.h5"
+    sweep_path = bundled_or_given(sweep, demo, samples_dir() / "crack_rig" / "healthy_1000rpm.h5", "healthy sweep",
+                                  "SWEEP")
     in_open_unit(confidence, "--confidence")
     target = out / "baseline.h5"
     check_writable([target], force)

@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import Annotated, Any
 
 import typer
+import typer.core
 from rich.console import Console
 
 from rotorcheck.errors import InputError, finite_positive
@@ -17,6 +18,36 @@ EXIT_OK, EXIT_DAMAGE, EXIT_INPUT, EXIT_INCONCLUSIVE = 0, 1, 2, 3
 DEFAULT_POINTS = 262
 #: the largest spin speed an option accepts, rpm (1e308 rpm overflows every frequency computed from it)
 MAX_SPEED_RPM = 1e6
+
+
+def split_list(values: list[str] | str | None) -> list[str]:
+    """A list option given as repeats (``--sensor 6x --sensor 6y``), commas (``--sensor 6x,6y``) or both."""
+    if values is None:
+        return []
+    items = [values] if isinstance(values, str) else values
+    return [x for v in items for x in v.replace(" ", "").split(",") if x]
+
+
+def _context() -> Any:
+    """The running command's click context (usage line and help hint of its errors), if any."""
+    import click
+
+    return click.get_current_context(silent=True)
+
+
+def bundled_or_given(given: Path | None, demo: bool, bundled: Path, what: str, argument: str) -> Path:
+    """The file the user named, or with ``--demo`` the bundled one (said on stderr); neither: a usage error.
+
+    A forgotten argument never runs a bundled file silently (issue 31)."""
+    if given is not None:
+        if demo:
+            raise typer.BadParameter(f"give {argument} or --demo, not both", ctx=_context(), param_hint="--demo")
+        return given
+    if not demo:
+        raise typer.BadParameter(f"missing {argument} ({what}); --demo uses the bundled {bundled.name}",
+                                 ctx=_context(), param_hint=argument)
+    err.print(f"--demo: using the bundled {what} {bundled}")
+    return bundled
 
 
 def check_speed(value: float | None, option: str = "--speed") -> float | None:
@@ -33,6 +64,15 @@ def at_least(value: int | None, minimum: int, option: str) -> int | None:
 #: the order ``rotorcheck --help`` lists the commands in: the pipeline's (rig, sweep, baseline, new sweep), then tools
 COMMAND_ORDER = ("model", "info", "simulate", "convert", "ingest", "fit-noise", "validate", "detect", "locate",
                  "detectability", "fleet", "crack", "schema", "import-ross")
+
+
+def _flag_type(self: Any, ctx: Any) -> str | None:
+    """The help's type column: none for an on/off flag (Typer prints ``<bool>`` after every flag)."""
+    return None if getattr(self, "is_flag", False) else _TYPE_COLUMN(self, ctx)
+
+
+_TYPE_COLUMN = typer.core.TyperOption.display_type_rich
+typer.core.TyperOption.display_type_rich = _flag_type  # type: ignore[method-assign]
 
 
 class _PipelineOrder(typer.core.TyperGroup):
@@ -60,6 +100,7 @@ def progress(text: str) -> Any:
 
     return err.status(text, spinner="dots") if err.is_terminal else contextlib.nullcontext()
 
+DemoOpt = Annotated[bool, typer.Option("--demo", help="Use the bundled sample file when the argument is not given.")]
 RigOpt = Annotated[
     Path | None,
     typer.Option("--rig", help="Rig YAML (default: the bundled rig named by the sweep's rig_id)."),
@@ -124,12 +165,14 @@ def _top_level(
 
 
 
-def element_list(text: str) -> tuple[int, ...] | None:
-    """``--elements 3,4,5`` as element numbers (None: every element)."""
+def element_list(values: list[str] | str | None) -> tuple[int, ...] | None:
+    """``--elements 3,4,5`` (or repeated) as element numbers (None: every element)."""
+    items = split_list(values)
     try:
-        return tuple(int(x) for x in text.replace(" ", "").split(",") if x) or None
+        return tuple(int(x) for x in items) or None
     except ValueError:
-        raise InputError(None, "--elements", f"{text!r} is no list of element numbers (e.g. 3,4,5)") from None
+        raise InputError(None, "--elements", f"{','.join(items)!r} is no list of element numbers (e.g. 3,4,5)"
+                         ) from None
 
 
 def fail_at_points(spec: str) -> tuple[int, ...]:

@@ -133,8 +133,9 @@ def locate(
     out: OutOpt = DEFAULT_OUT,
     baseline: Annotated[Path | None, typer.Option("--baseline", help="Baseline (default <out>/baseline.h5).")] = None,
     run: RunOpt = None,
-    elements: Annotated[str, typer.Option(
-        "--elements", help="Candidate shaft elements, e.g. 3,4,5 (default: every element).")] = "",
+    elements: Annotated[list[str] | None, typer.Option(
+        "--elements", "--element", help="Candidate shaft elements, e.g. 3,4,5 or repeated (default: every element).")
+    ] = None,
     section_length: Annotated[float | None, typer.Option(
         "--crack-section-length", help="Breathing crack section length for depths, m (default: the rig's crack's, "
                                        "else the element's diameter).")] = None,

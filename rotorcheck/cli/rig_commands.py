@@ -14,26 +14,30 @@ from rich.table import Table
 from rotorcheck.cli.common import (
     DEFAULT_OUT,
     EXIT_OK,
+    DemoOpt,
     ForceOpt,
     JsonOpt,
     OutOpt,
     PlotFormatOpt,
     app,
     at_least,
+    bundled_or_given,
     check_speed,
     element_list,
     emit_json,
     err,
     progress,
+    split_list,
 )
 from rotorcheck.errors import InputError, finite_positive, in_open_unit
 
 
 @app.command()
 def model(
-    rig: Annotated[Path | None, typer.Argument(help="Rig YAML (default: configs/crack_rig.yaml).")] = None,
+    rig: Annotated[Path | None, typer.Argument(help="Rig YAML (--demo: the bundled configs/crack_rig.yaml).")] = None,
     speed: Annotated[float | None, typer.Option(
         "--speed", help="Spin speed, rpm (default: every speed of the rig's analysis.speeds_rpm).")] = None,
+    demo: DemoOpt = False,
     out: OutOpt = DEFAULT_OUT,
     as_json: JsonOpt = False,
     force: ForceOpt = False,
@@ -47,7 +51,7 @@ def model(
     from rotorcheck.workflow import model_report
 
     check_speed(speed)
-    rig_path = rig if rig is not None else default_rig_path("crack_rig")
+    rig_path = bundled_or_given(rig, demo, default_rig_path("crack_rig"), "rig", "RIG")
     from rotorcheck.workflow import plot_formats
 
     with progress(f"solving the model of {rig_path}" + (" and plotting" if plots else "")):
@@ -75,7 +79,8 @@ def model(
 
 @app.command()
 def crack(
-    rig: Annotated[Path | None, typer.Argument(help="Rig YAML (default: the truth rig).")] = None,
+    rig: Annotated[Path | None, typer.Argument(help="Rig YAML (--demo: the bundled truth rig).")] = None,
+    demo: DemoOpt = False,
     fault: Annotated[str, typer.Option("--fault", help="Breathing crack in the rig.")] = "breathing_crack",
     unbalance: Annotated[float, typer.Option("--unbalance", help="Unbalance at the first disc, g m.")] = 0.2,
     out: OutOpt = DEFAULT_OUT,
@@ -88,7 +93,7 @@ def crack(
     from rotorcheck.workflow import crack_report, plot_formats
 
     finite_positive(unbalance, "--unbalance", allow_zero=True)
-    rig_path = rig if rig is not None else configs_dir() / "crack_rig_truth.yaml"
+    rig_path = bundled_or_given(rig, demo, configs_dir() / "crack_rig_truth.yaml", "truth rig", "RIG")
     with progress(f"the cracked rotor ({fault}): harmonic balance, orbits, spectra"):
         doc = crack_report(rig_path, fault=fault, unbalance_g_m=unbalance, out_dir=out, force=force,
                            formats=plot_formats(plot_format))
@@ -123,7 +128,10 @@ def schema(
 
 @app.command()
 def detectability(
-    rig: Annotated[Path | None, typer.Argument(help="Rig YAML (default: configs/crack_rig.yaml).")] = None,
+    rig: Annotated[Path | None, typer.Argument(
+        help="Rig YAML (default: the rig --baseline was made with; --demo: the bundled configs/crack_rig.yaml).")
+    ] = None,
+    demo: DemoOpt = False,
     baseline: Annotated[Path | None, typer.Option(
         "--baseline", help="Noise, grid and speed from this baseline (its healthy variance per point).")] = None,
     noise_std: Annotated[float | None, typer.Option(
@@ -132,14 +140,17 @@ def detectability(
         "--periods", help="Periods averaged per frequency point (default: the rig's measurement).")] = None,
     speed: Annotated[float | None, typer.Option(
         "--speed", help="Spin speed, rpm (default: the baseline's, else the rig's first analysis speed).")] = None,
-    sensors: Annotated[str, typer.Option(
-        "--sensors", help="Sensor ports, e.g. 6x,6y,2x (default: the rig's sensor).")] = "",
-    actuators: Annotated[str, typer.Option(
-        "--actuators", help="Actuator ports, e.g. 8x,8y (default: the rig's actuator).")] = "",
-    elements: Annotated[str, typer.Option("--elements", help="Shaft elements, e.g. 3,4,6 (default: all).")] = "",
+    sensors: Annotated[list[str] | None, typer.Option(
+        "--sensor", "--sensors", help="Sensor ports, e.g. 6x,6y,2x or repeated (default: the rig's sensor).")] = None,
+    actuators: Annotated[list[str] | None, typer.Option(
+        "--actuator", "--actuators", help="Actuator ports, e.g. 8x,8y or repeated (default: the rig's actuator).")
+    ] = None,
+    elements: Annotated[list[str] | None, typer.Option(
+        "--elements", "--element", help="Shaft elements, e.g. 3,4,6 or repeated (default: all).")] = None,
     false_alarm: Annotated[float, typer.Option("--false-alarm", help="False-alarm rate per sweep.")] = 0.01,
-    candidate_sensors: Annotated[str, typer.Option(
-        "--candidate-sensors", help="Rank sensor sets from these ports, e.g. 2x,2y,4x,6x,6y (stated noise).")] = "",
+    candidate_sensors: Annotated[list[str] | None, typer.Option(
+        "--candidate-sensors", "--candidate-sensor",
+        help="Rank sensor sets from these ports, e.g. 2x,2y,4x,6x,6y or repeated (stated noise).")] = None,
     max_sensors: Annotated[int, typer.Option(
         "--max-sensors", help="Largest sensor set ranked (exact up to 64 sets, greedy beyond).")] = 2,
     out: OutOpt = DEFAULT_OUT,
@@ -152,7 +163,7 @@ def detectability(
     the default detector finds with 90 % power (noise only, and with the rig's benign ranges), beside the
     likelihood-ratio limit. Writes <out>/detectability.json (and detectability.png)."""
     from rotorcheck import workflow
-    from rotorcheck.baseline import read_baseline
+    from rotorcheck.baseline import read_baseline, stored_rig
     from rotorcheck.fileio import atomic_write_text, check_writable
     from rotorcheck.report.reports import render_json
     from rotorcheck.resources import default_rig_path
@@ -162,10 +173,12 @@ def detectability(
     at_least(periods, 1, "--periods")
     at_least(max_sensors, 1, "--max-sensors")
     in_open_unit(false_alarm, "--false-alarm")
-    rig_path = rig if rig is not None else default_rig_path("crack_rig")
+    stored = stored_rig(baseline)[1] if baseline is not None and rig is None and not demo else None
+    rig_path = Path(stored) if stored else bundled_or_given(rig, demo, default_rig_path("crack_rig"), "rig", "RIG")
+    if stored:
+        err.print(f"rig {rig_path} (the one {baseline} was made with)")
     cfg = workflow.load_rig(rig_path)
     els = workflow.check_elements(cfg, element_list(elements))
-    split = lambda t: [x for x in t.replace(" ", "").split(",") if x]  # noqa: E731
     formats = workflow.plot_formats(plot_format)
     targets = [out / "detectability.json"] + (workflow.plot_paths(out, ("detectability",), formats) if plots else [])
     check_writable(targets, force)
@@ -173,17 +186,17 @@ def detectability(
     if base is not None and base.rig_id != cfg.rig_id:
         raise InputError(baseline, "/@rig_id", f"baseline for rig {base.rig_id!r}, not {cfg.rig_id!r}")
     with progress(f"predicting what {cfg.rig_id} can detect, element by element"):
-        det = workflow.detectability_for_rig(cfg, speed, base, noise_std, periods, split(sensors), split(actuators),
-                                             false_alarm, els, source=str(baseline or rig_path))
+        det = workflow.detectability_for_rig(cfg, speed, base, noise_std, periods, split_list(sensors),
+                                             split_list(actuators), false_alarm, els, source=str(baseline or rig_path))
     doc = {"rig": str(rig_path), **det.to_dict()}
     if candidate_sensors:
         if base is not None:
             raise InputError(None, "--candidate-sensors", "ranking sensors needs stated noise (--noise-std), "
                              "not a baseline's channels")
-        with progress(f"ranking sensor sets of up to {max_sensors} from {candidate_sensors}"):
+        with progress(f"ranking sensor sets of up to {max_sensors} from {', '.join(split_list(candidate_sensors))}"):
             doc["sensor_sets"] = workflow.sensor_ranking_for_rig(
-                cfg, split(candidate_sensors), max_sensors, speed, noise_std, periods, split(sensors),
-                split(actuators), false_alarm, source=str(rig_path))
+                cfg, split_list(candidate_sensors), max_sensors, speed, noise_std, periods, split_list(sensors),
+                split_list(actuators), false_alarm, source=str(rig_path))
         ss = doc["sensor_sets"]
         for k, s_ in enumerate(ss["best"], 1):
             d_ = s_["worst_breathing_depth_min"]

@@ -21,6 +21,7 @@ from rotorcheck.cli.common import (
     emit_json,
     err,
     progress,
+    split_list,
     utc_now,
 )
 from rotorcheck.errors import InputError, finite_positive, in_open_unit
@@ -155,7 +156,8 @@ def ingest(
 def simulate(
     output: Annotated[Path, typer.Argument(help="Sweep file to write (HDF5).")],
     rig: Annotated[Path | None, typer.Option("--rig", help="Truth rig (default configs/crack_rig_truth.yaml).")] = None,
-    speed: Annotated[float, typer.Option("--speed", help="Spin speed, rpm.")] = 0.0,
+    speed: Annotated[float | None, typer.Option(
+        "--speed", help="Spin speed, rpm (default: the rig's first analysis.speeds_rpm, said on stderr).")] = None,
     fault: Annotated[str | None, typer.Option("--fault", help="A fault named in the rig's faults section.")] = None,
     f_min: Annotated[float | None, typer.Option(
         "--f-min", help="First frequency, Hz (default: the rig's analysis.band_hz).")] = None,
@@ -175,10 +177,11 @@ def simulate(
         "--crack-depth", help="Depth of the --fault crack as a fraction of the shaft diameter (e.g. 0.1).")] = None,
     keep_periods: Annotated[bool, typer.Option(help="Store the per-period phasors.")] = True,
     actuator: Annotated[list[str] | None, typer.Option(
-        "--actuator", help="A force input at a station and direction, e.g. 8x (repeat for several; driven one at a "
-                           "time). Default: the rig's actuator.")] = None,
+        "--actuator", "--actuators", help="A force input at a station and direction, e.g. 8x (several: repeat or "
+                                         "8x,8y; driven one at a time). Default: the rig's actuator.")] = None,
     sensor: Annotated[list[str] | None, typer.Option(
-        "--sensor", help="A displacement output, e.g. 6y (repeat for several). Default: the rig's sensor.")] = None,
+        "--sensor", "--sensors", help="A displacement output, e.g. 6y (several: repeat or 6x,6y). Default: the rig's "
+                                     "sensor.")] = None,
     force: ForceOpt = False,
     as_json: JsonOpt = False,
 ) -> int:
@@ -202,7 +205,12 @@ def simulate(
     at_least(harmonics, 1, "--harmonics")
     check_writable([output], force)
     rig_path = rig if rig is not None else configs_dir() / "crack_rig_truth.yaml"
+    if rig is None:
+        err.print(f"no --rig: simulating the bundled truth rig {rig_path}")
     cfg = workflow.load_rig(rig_path)
+    if speed is None:
+        speed = float(cfg.analysis.speeds_rpm[0])
+        err.print(f"no --speed: simulating at {speed:g} rpm (the rig's first analysis speed)")
     if (f_min is None or f_max is None) and "band_hz" not in cfg.analysis.model_fields_set:
         err.print(f"{rig_path}: no analysis.band_hz; simulating {cfg.analysis.band_hz[0]:g}-"
                   f"{cfg.analysis.band_hz[1]:g} Hz (default)")
@@ -233,9 +241,10 @@ def simulate(
             from rotorcheck.nominal import parse_port
             from rotorcheck.sim.rig_sim import simulate_rig_patterns
 
-            acts = ([parse_port(a, "--actuator") for a in actuator] if actuator
+            acts = ([parse_port(a, "--actuator") for a in split_list(actuator)] if actuator
                     else [cfg.io_ports("simulate").actuator])
-            sens = [parse_port(x, "--sensor") for x in sensor] if sensor else [cfg.io_ports("simulate").sensor]
+            sens = ([parse_port(x, "--sensor") for x in split_list(sensor)] if sensor
+                    else [cfg.io_ports("simulate").sensor])
             sw = simulate_rig_patterns(cfg, grid, acts, sens, speed_rpm=speed, fault=fault, seed=seed,
                                        n_harmonics=harmonics, settings=st, created_utc=utc_now(),
                                        shaft_angle_rad=angle)

@@ -217,6 +217,7 @@ class RigConfig(Strict):
         tables that do not cover the analysed speeds, and how they are extended; more modes asked than
         the model has degrees of freedom: clamped)."""
         out = [n for k, m in self.materials.items() if (n := m.consistency_note(k)) is not None]
+        out += [n for k, f in self.faults.items() if isinstance(f, Crack) and (n := f.note(k)) is not None]
         top = max(self.analysis.campbell_max_rpm, *self.analysis.speeds_rpm)
         for i, b in enumerate(self.bearings):
             tables = [t for t in (getattr(b, k) for k in BEARING_TERMS) if isinstance(t, SpeedTable)]
@@ -289,6 +290,11 @@ class RigConfig(Strict):
         if data.get("analysis", {}).get("n_points") is None:  # likewise the simulation grid's point count
             data.get("analysis", {}).pop("n_points", None)
         _prune_defaults(data, _LATER_KEYS)  # keys added later hash as if absent while at their defaults
+        for fault in (data.get("faults") or {}).values():  # a crack's depth hashes as the older depth_ratio
+            if isinstance(fault, dict) and "depth" in fault:
+                depth = fault.pop("depth")
+                if depth is not None:
+                    fault["depth_ratio"] = 2.0 * depth
         doc = json.dumps(data, sort_keys=True)
         return hashlib.sha256(doc.encode()).hexdigest()
 

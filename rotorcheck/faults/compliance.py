@@ -185,9 +185,10 @@ def crack_compliances(crack: Crack) -> tuple[float, float]:
     """``(F_xi, F_eta)`` of a ``mayes_davies``/``gasch`` config crack: as given, else from its depth."""
     if crack.compliance_xi is not None and crack.compliance_eta is not None:
         return float(crack.compliance_xi), float(crack.compliance_eta)
-    if crack.depth_ratio is None:
-        raise ValueError("the crack gives neither compliance_xi/compliance_eta nor depth_ratio")
-    f_xi, f_eta = mayes_davies_compliances(crack.depth_ratio)
+    alpha = crack.depth_over_radius
+    if alpha is None:
+        raise ValueError("the crack gives neither compliance_xi/compliance_eta nor a depth")
+    f_xi, f_eta = mayes_davies_compliances(alpha)
     return float(f_xi), float(f_eta)
 
 
@@ -206,7 +207,7 @@ def open_crack_modulus_factor(depth_ratio: float, radius: float, length: float, 
 def with_crack_depth(config: RigConfig, fault: str, depth_fraction_of_diameter: float) -> RigConfig:
     """A copy of ``config`` with crack ``fault`` at ``depth_fraction_of_diameter`` (depth / diameter).
 
-    ``mayes_davies``/``gasch``: ``depth_ratio = 2 d`` (depth / radius) replaces the crack's depth or
+    ``mayes_davies``/``gasch``: ``depth = d`` (depth / diameter) replaces the crack's depth or
     compliances, which are then computed by :func:`mayes_davies_compliances`. ``open``:
     ``modulus_factor`` from :func:`open_crack_modulus_factor` with the crack's ``section_length``
     (else the element's length) and ``poisson`` (else the material's). ``jun`` is not a function of
@@ -229,7 +230,7 @@ def with_crack_depth(config: RigConfig, fault: str, depth_fraction_of_diameter: 
         raise ValueError(f"fault {fault!r}: the strip relation needs a solid shaft (element {crack.element} is hollow)")
     data = crack.model_dump()
     if crack.model in ("mayes_davies", "gasch"):
-        data.update(depth_ratio=2.0 * d, compliance_xi=None, compliance_eta=None)
+        data.update(depth=d, depth_ratio=None, compliance_xi=None, compliance_eta=None)
     elif crack.model == "open":
         radius = 0.5 * shaft.outer_diameter
         length = crack.section_length

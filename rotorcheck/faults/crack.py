@@ -18,7 +18,7 @@ exactly like ``(u, v)`` under eq. 5.26, so the fixed-frame matrix is the same co
 ``S(t) = T2(phi) R(theta) T2(phi)^T`` (2x2) in place of ``R``.
 
 ``F_xi, F_eta`` of eq. 5.25 are the crack's ``compliance_xi/compliance_eta`` or, when it gives
-``depth_ratio``, the strip-method values of :mod:`rotorcheck.faults.compliance`.
+a depth (``depth``, or the older ``depth_ratio``), the strip-method values of :mod:`rotorcheck.faults.compliance`.
 
 ``form`` of the reduction matrix:
 
@@ -321,7 +321,7 @@ def crack_stiffness(
         nu = crack.poisson if crack.poisson is not None else e0.poisson
         radius = 0.5 * e0.outer_diameter
         if crack.compliance_xi is None and e0.inner_diameter > 0:
-            raise ValueError(f"element {crack.element} is hollow: depth_ratio needs a solid shaft (strip method)")
+            raise ValueError(f"element {crack.element} is hollow: a depth needs a solid shaft (strip method)")
         f_xi, f_eta = crack_compliances(crack)
         assert crack.section_length is not None
         d_xi = delta_i_ratio(f_xi, radius, crack.section_length, nu)

@@ -137,7 +137,8 @@ def _truth_dict() -> dict:
 def test_truth_rig_gives_depth_only() -> None:
     crack = load_config(TRUTH).faults["breathing_crack"]
     assert isinstance(crack, Crack)
-    assert crack.depth_ratio == 0.8 and crack.compliance_xi is None and crack.compliance_eta is None
+    assert crack.depth == 0.4 and crack.depth_ratio is None  # fraction of the diameter, the reports' convention
+    assert crack.depth_over_radius == 0.8 and crack.compliance_xi is None and crack.compliance_eta is None
     assert crack_compliances(crack) == mayes_davies_compliances(0.8)
 
 
@@ -147,9 +148,11 @@ def test_truth_rig_gives_depth_only() -> None:
         ({"compliance_xi": 3.0}, "compliance_xi"),
         ({"compliance_eta": 0.47}, "compliance_eta"),
         ({"compliance_xi": 3.0, "compliance_eta": 0.47}, "compliance_xi"),
-        ({"depth_ratio": 1.2}, "depth_ratio"),
-        ({"depth_ratio": None, "compliance_xi": 3.0}, "compliance_eta"),
-        ({"depth_ratio": None}, "compliance_xi"),
+        ({"depth": 0.6}, "depth"),
+        ({"depth": None, "depth_ratio": 1.2}, "depth_ratio"),
+        ({"depth_ratio": 0.8}, "depth_ratio"),  # both keys: refused, not one silently preferred
+        ({"depth": None, "compliance_xi": 3.0}, "compliance_eta"),
+        ({"depth": None}, "compliance_xi"),
         ({"section_length": None}, "section_length"),
     ],
 )
@@ -177,6 +180,21 @@ def test_depth_ratio_is_refused_where_unused(model: str) -> None:
         Crack(element=4, model=model, depth_ratio=0.5, **kw)
 
 
+def test_the_older_depth_key_reads_as_twice_the_depth_and_is_noted() -> None:
+    """``depth_ratio`` (depth / radius) is still read: the same crack, the same rig hash, and ``model`` notes it."""
+    d = _truth_dict()
+    crack = d["faults"]["breathing_crack"]
+    crack.pop("depth")
+    crack["depth_ratio"] = 0.8
+    old, new = parse_config(d, "old.yaml"), load_config(TRUTH)
+    assert old.faults["breathing_crack"].depth_over_radius == new.faults["breathing_crack"].depth_over_radius == 0.8
+    assert crack_compliances(old.faults["breathing_crack"]) == crack_compliances(new.faults["breathing_crack"])
+    assert old.sha256() == new.sha256()
+    notes = [n for n in old.notes() if "depth_ratio" in n]
+    assert len(notes) == 1 and "depth 0.4 of the diameter" in notes[0]
+    assert not [n for n in new.notes() if "depth" in n]
+
+
 def test_depth_crack_stiffness_equals_the_explicit_compliances() -> None:
     sys_ = small_rotor()
     f_xi, f_eta = mayes_davies_compliances(0.8)
@@ -199,16 +217,16 @@ def test_with_crack_depth_breathing() -> None:
     new = with_crack_depth(truth, "breathing_crack", 0.1)
     crack = new.faults["breathing_crack"]
     assert isinstance(crack, Crack)
-    assert crack.depth_ratio == pytest.approx(0.2) and crack.compliance_xi is None
+    assert crack.depth == 0.1 and crack.depth_over_radius == pytest.approx(0.2) and crack.compliance_xi is None
     assert crack.section_length == 0.020 and crack.angle == 0.0 and crack.model == "mayes_davies"
     assert new.faults["open_crack"] == truth.faults["open_crack"]
-    assert truth.faults["breathing_crack"].depth_ratio == 0.8  # the input is not touched
+    assert truth.faults["breathing_crack"].depth == 0.4  # the input is not touched
     assert new.shaft == truth.shaft and new.bearings == truth.bearings
     # explicit compliances are replaced by the depth on request
     explicit = Crack(element=4, model="gasch", compliance_xi=3.0, compliance_eta=0.47, section_length=0.02)
     rig = truth.model_copy(update={"faults": {"g": explicit}})
     g = with_crack_depth(rig, "g", 0.25).faults["g"]
-    assert isinstance(g, Crack) and g.depth_ratio == 0.5 and g.compliance_eta is None
+    assert isinstance(g, Crack) and g.depth_over_radius == 0.5 and g.compliance_eta is None
 
 
 def test_with_crack_depth_open_is_the_element_with_the_mean_compliance_added() -> None:

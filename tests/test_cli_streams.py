@@ -1,0 +1,126 @@
+"""One stream rule for every command (issue 31): human text on stderr, data on stdout; `--help` lists no type
+after an on/off flag; a missing argument fails with the usage (exit 2) unless ``--demo`` asks for the bundled
+file; list options take repeats and commas alike; a positional argument given as an option gets a hint; a
+normal run raises no third-party warning."""
+
+from __future__ import annotations
+
+import json
+import shutil
+import warnings
+from pathlib import Path
+
+import pytest
+import typer
+
+from rotorcheck.cli import EXIT_DAMAGE, EXIT_INPUT, EXIT_OK, app, main
+from rotorcheck.cli.common import element_list, split_list
+from rotorcheck.resources import configs_dir, samples_dir
+
+COMMANDS = sorted(typer.main.get_command(app).commands)  # type: ignore[attr-defined]
+#: commands that need an argument (a file) and refuse to run without one
+NEEDS_ARGUMENT = ("model", "info", "simulate", "convert", "ingest", "fit-noise", "validate", "detect", "locate",
+                  "detectability", "crack", "import-ross", "fleet")
+CR = samples_dir() / "crack_rig"
+
+
+def test_every_command_is_covered() -> None:
+    assert set(NEEDS_ARGUMENT) | {"schema"} == set(COMMANDS)
+
+
+@pytest.mark.parametrize("command", COMMANDS)
+def test_help_is_data_on_stdout_with_no_flag_types(command: str, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main([command, "--help"]) == EXIT_OK
+    out, err = capsys.readouterr()
+    assert "Usage: rotorcheck " + command in " ".join(out.split()) and err == ""
+    assert "<bool>" not in out  # Typer prints the type of every option; an on/off flag has none to say
+
+
+@pytest.mark.parametrize("command", NEEDS_ARGUMENT)
+def test_a_missing_argument_fails_with_the_usage(command: str, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main([command]) == EXIT_INPUT
+    out, err = capsys.readouterr()
+    assert out == ""
+    assert "Usage: rotorcheck " + command in err and f"Try 'rotorcheck {command} -h' for help." in err
+
+
+def test_demo_is_said_and_not_mixed_with_a_file(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["model", "--demo", "--no-plots", "--out", str(tmp_path / "o")]) == EXIT_OK
+    out, err = capsys.readouterr()
+    assert out == "" and f"--demo: using the bundled rig {configs_dir() / 'crack_rig.yaml'}" in err
+    assert main(["model", str(configs_dir() / "crack_rig.yaml"), "--demo", "--no-plots"]) == EXIT_INPUT
+    assert "give RIG or --demo, not both" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(("argv", "argument"), [(["model", "--rig", "x.yaml"], "RIG"),
+                                                (["detect", "--sweep", "x.h5"], "SWEEP")])
+def test_an_argument_given_as_an_option_gets_a_hint(argv: list[str], argument: str,
+                                                    capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(argv) == EXIT_INPUT
+    err = capsys.readouterr().err
+    assert f"No such option: {argv[1]}" in err and f"{argument} is an argument here" in err
+
+
+def test_list_options_take_repeats_and_commas() -> None:
+    want = ["6x", "6y", "2x"]
+    assert split_list(["6x,6y", "2x"]) == split_list(["6x", "6y", "2x"]) == split_list("6x, 6y,2x") == want
+    assert split_list(None) == []
+    assert element_list(["3,4", "5"]) == element_list("3,4,5") == (3, 4, 5)
+    assert element_list(None) is None
+
+
+def test_simulate_sensors_by_commas_equal_repeats(tmp_path: Path) -> None:
+    """The same x/y sweep from ``--sensor 6x --sensor 6y`` and ``--sensors 6x,6y`` (the files' FRFs equal)."""
+    from rotorcheck.sweep.hdf5io import read_sweep
+
+    common = ["--speed", "0", "--points", "4", "--periods", "2", "--f-min", "20", "--f-max", "40"]
+    assert main(["simulate", str(tmp_path / "a.h5"), *common, "--sensor", "6x", "--sensor", "6y"]) == EXIT_OK
+    assert main(["simulate", str(tmp_path / "b.h5"), *common, "--sensors", "6x,6y"]) == EXIT_OK
+    a, b = read_sweep(tmp_path / "a.h5"), read_sweep(tmp_path / "b.h5")
+    assert [c.name for c in a.channels] == [c.name for c in b.channels]
+    assert len([c for c in a.channels if c.role == "output"]) == 2
+    import numpy as np
+
+    for ra, rb in zip(a.runs.values(), b.runs.values()):
+        np.testing.assert_array_equal(ra.frf, rb.frf)
+        assert ra.frf.shape[-2:] == (2, 1)  # (frequency, outputs, inputs)
+
+
+def _no_foreign_warnings(caught: list[warnings.WarningMessage]) -> list[str]:
+    """Warnings raised from outside rotorcheck (matplotlib, numpy, scipy, h5py, ...)."""
+    return [f"{w.filename}:{w.lineno}: {w.category.__name__}: {w.message}" for w in caught
+            if "rotorcheck" not in w.filename]
+
+
+def test_normal_runs_print_data_only_and_no_third_party_warning(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str], validated_0rpm: object) -> None:
+    """model, info, schema, simulate, convert, detect (plots on) and locate: stdout is empty, or one JSON
+    document with --json, or the schema; no warning from a third-party library on the way."""
+    out = validated_0rpm.copy_to(tmp_path / "run")  # type: ignore[attr-defined]
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        steps: list[tuple[list[str], int, str]] = [
+            (["model", str(configs_dir() / "crack_rig.yaml"), "--speed", "0", "--no-plots"], EXIT_OK,
+             "empty"),
+            (["info", str(CR / "healthy_0rpm.h5"), "--json"], EXIT_OK, "json"),
+            (["schema"], EXIT_OK, "json"),
+            (["simulate", str(tmp_path / "s.h5"), "--speed", "0", "--points", "4", "--periods", "2"], EXIT_OK, "empty"),
+            (["convert", str(tmp_path / "s.h5"), str(tmp_path / "s.csv")], EXIT_OK, "empty"),
+            (["detect", str(CR / "open_crack_0rpm.h5"), "--out", str(out)], EXIT_DAMAGE, "empty"),
+            (["detect", str(CR / "open_crack_0rpm.h5"), "--out", str(out), "--no-plots", "--json", "--force"],
+             EXIT_DAMAGE, "json"),
+            (["locate", str(CR / "open_crack_0rpm.h5"), "--out", str(out), "--elements", "4", "--no-plots"], None,
+             "empty"),
+        ]
+        for argv, code, stdout_kind in steps:
+            rc = main(argv)
+            stdout, stderr = capsys.readouterr()
+            assert code is None or rc == code, (argv, rc, stderr)
+            assert rc != EXIT_INPUT, (argv, stderr)
+            if stdout_kind == "empty":
+                assert stdout == "", argv
+            else:
+                json.loads(stdout)  # one strict JSON document, nothing else
+            assert "Warning" not in stderr, (argv, stderr)
+    assert _no_foreign_warnings(caught) == []
+    shutil.rmtree(tmp_path / "run")
