@@ -39,6 +39,7 @@ import numpy as np
 from rotorcheck.config import RigConfig
 from rotorcheck.location import _relation, depth_of_loss
 from rotorcheck.nominal import ChannelPair
+from rotorcheck.progress import Progress, report
 from rotorcheck.robust.joint import POWER_Z, BenignModel, joint_test
 from rotorcheck.signatures import crack_signatures, io_frf, stacked, unstacked
 
@@ -177,20 +178,30 @@ class _BenignSearch:
         return _smallest(lambda a: self.margin(a, i), start)
 
 
-def _map(job: Any, tasks: list[Any], workers: int | None) -> list[Any]:
+def _map(job: Any, tasks: list[Any], workers: int | None, progress: Progress | None = None,
+         labels: Sequence[str] | None = None) -> list[Any]:
     """``[job(t) for t in tasks]``, over ``workers`` forked processes where that helps (Linux; default:
-    up to 2, one per core); in order, deterministic (every task is)."""
+    up to 2, one per core); in order, deterministic (every task is). ``progress`` hears of each task
+    done (``labels[k]`` names task k)."""
     import multiprocessing
     import os
 
+    names = list(labels) if labels is not None else [f"task {k + 1}" for k in range(len(tasks))]
     n = min(len(tasks), workers if workers is not None else min(2, os.cpu_count() or 1))
+    out: list[Any] = []
     if n <= 1 or "fork" not in multiprocessing.get_all_start_methods():
-        return [job(t) for t in tasks]
+        for k, task in enumerate(tasks):
+            out.append(job(task))
+            report(progress, k + 1, len(tasks), names[k])
+        return out
     global _FORKED_JOB
     _FORKED_JOB = job  # inherited by the forked workers (the job holds closures: not picklable)
     try:
         with multiprocessing.get_context("fork").Pool(n) as pool:
-            return pool.map(_run_forked, tasks, chunksize=1)
+            for k, result in enumerate(pool.imap(_run_forked, tasks, chunksize=1)):  # in order, as they finish
+                out.append(result)
+                report(progress, k + 1, len(tasks), names[k])
+        return out
     finally:
         _FORKED_JOB = None
 
@@ -218,6 +229,7 @@ def detectability(
     workers: int | None = None,
     candidates: Sequence[int] | None = None,
     model_frf: np.ndarray | None = None,
+    progress: Progress | None = None,
 ) -> Detectability:
     """The detectability table (module docstring). ``var_new``, ``var_base``: (f, P) or (f,) variances of
     one FRF point of the new sweep and of the baseline (m^2/N^2), P = len(pairs); ``healthy_frf`` (f, P):
@@ -226,7 +238,8 @@ def detectability(
     :func:`rotorcheck.workflow.benign_model`); ``workers``: processes for the benign-case searches
     (default: up to 2); ``elements``: the elements reported (default: all); ``candidates``: the joint test's
     candidate elements (default: every element the channels see, as ``detect`` has); ``model_frf``: the
-    model's own receptance (:func:`rotorcheck.signatures.io_frf`) when the caller has it."""
+    model's own receptance (:func:`rotorcheck.signatures.io_frf`) when the caller has it; ``progress``
+    hears of each element's benign-case search done."""
 
     f = np.asarray(freq_hz, dtype=float)
     P = len(pairs)
@@ -268,7 +281,8 @@ def detectability(
         todo = [i for i, a in enumerate(a_noise_all) if a is not None and els[i] in wanted]
         job = _BenignSearch(var, S, els, bm, false_alarm)
         starts = [max(float(a_noise_all[i] or 0.0), float(min(start[i], MAX_LOSS))) for i in todo]
-        for i, a in zip(todo, _map(job, list(zip(todo, starts)), workers)):
+        found = _map(job, list(zip(todo, starts)), workers, progress, [f"element {els[i]}" for i in todo])
+        for i, a in zip(todo, found):
             a_benign_all[i] = a
     for i, e in enumerate(els):
         if e not in wanted:

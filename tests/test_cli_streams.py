@@ -124,3 +124,37 @@ def test_normal_runs_print_data_only_and_no_third_party_warning(
             assert "Warning" not in stderr, (argv, stderr)
     assert _no_foreign_warnings(caught) == []
     shutil.rmtree(tmp_path / "run")
+
+
+def test_progress_lines_say_item_elapsed_and_remaining(monkeypatch: pytest.MonkeyPatch,
+                                                       capsys: pytest.CaptureFixture[str]) -> None:
+    """Without a terminal: a line per update once PLAIN_EVERY_S has passed, remaining = elapsed x left / done
+    (a linear rate); nothing when quiet."""
+    import itertools
+
+    from rotorcheck.cli import common
+
+    clock = itertools.count(0.0, 3.0)  # every call to the clock: 3 s later
+    monkeypatch.setattr("time.monotonic", lambda: next(clock))
+    with common.Steps("locating") as tick:  # start at t = 0
+        tick(1, 4, "element 2")  # t = 3: 1 of 4 done in 3 s -> 9 s left
+        tick(4, 4, "element 9")  # t = 6: done, no remaining time
+    assert capsys.readouterr().err.splitlines() == [
+        "locating: element 2 (1 of 4), 3 s elapsed, about 9 s left",
+        "locating: element 9 (4 of 4), 6 s elapsed"]
+    with common.Steps("locating", quiet=True) as tick:
+        tick(1, 4, "element 2")
+    monkeypatch.setitem(common.QUIET, "on", True)  # -q
+    with common.Steps("locating") as tick:
+        tick(1, 4, "element 2")
+    assert capsys.readouterr().err == ""
+
+
+def test_quiet_is_accepted_before_and_after_the_command(capsys: pytest.CaptureFixture[str]) -> None:
+    from rotorcheck.cli import common
+
+    assert main(["-q", "schema"]) == EXIT_OK and common.QUIET["on"]
+    json.loads(capsys.readouterr().out)
+    assert main(["schema", "--quiet"]) == EXIT_OK and common.QUIET["on"]
+    capsys.readouterr()
+    assert main(["schema"]) == EXIT_OK and not common.QUIET["on"]  # one run, one setting

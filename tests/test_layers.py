@@ -16,7 +16,7 @@ ROOT = Path(__file__).resolve().parents[1] / "rotorcheck"
 
 #: lowest first; a module's layer is that of its longest matching prefix
 LAYERS: tuple[tuple[str, ...], ...] = (
-    ("rotorcheck", "rotorcheck.errors", "rotorcheck.units"),
+    ("rotorcheck", "rotorcheck.errors", "rotorcheck.units", "rotorcheck.progress"),
     ("rotorcheck.fileio", "rotorcheck.resources"),
     ("rotorcheck.safeload",),  # bounded YAML/TOML parsing over fileio's bounded reading; below config
     ("rotorcheck.config",),

@@ -25,6 +25,7 @@ from rotorcheck.cli.common import (
     EXIT_INCONCLUSIVE,
     EXIT_INPUT,
     EXIT_OK,
+    QUIET,
     app,
     err,
     package_version,
@@ -51,11 +52,13 @@ _register_fleet()
 def main(argv: list[str] | None = None) -> int:
     """Run the CLI and return its exit code; every failure maps to the documented codes."""
     command = typer.main.get_command(app)
-    version_opt = next(p for p in command.params if p.name == "version")
-    for sub in getattr(command, "commands", {}).values():  # `rotorcheck <command> --version` too (cli.md)
-        opt = copy.copy(version_opt)
-        opt.expose_value = False  # eager: prints and exits; never passed to the command
-        sub.params.append(opt)
+    shared = [p for p in command.params if p.name in ("version", "quiet")]
+    for sub in getattr(command, "commands", {}).values():  # `rotorcheck <command> --version` / -q too (cli.md)
+        for top in shared:
+            opt = copy.copy(top)
+            opt.expose_value = False  # handled by its callback; never passed to the command
+            sub.params.append(opt)
+    QUIET["on"] = False  # one run of main, one setting (tests call main many times in one process)
     try:
         return _run(command, argv)
     finally:

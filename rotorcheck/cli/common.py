@@ -94,11 +94,75 @@ app = typer.Typer(
 err = Console(stderr=True, highlight=False, soft_wrap=True)  # never break paths in messages
 
 
+#: ``-q``/``--quiet`` given (any command): no progress on stderr
+QUIET = {"on": False}
+#: seconds before a step's first progress line when stderr is no terminal, and between lines
+PLAIN_EVERY_S = 2.0
+
+
 def progress(text: str) -> Any:
-    """A spinner with ``text`` on stderr while a step runs (rich); nothing when stderr is not a terminal."""
+    """A spinner with ``text`` on stderr while a step runs (rich); nothing when stderr is not a terminal
+    or ``-q`` was given."""
     import contextlib
 
-    return err.status(text, spinner="dots") if err.is_terminal else contextlib.nullcontext()
+    return (err.status(text, spinner="dots") if err.is_terminal and not QUIET["on"]
+            else contextlib.nullcontext())
+
+
+class Steps:
+    """Progress of a long step over items on stderr (a :data:`rotorcheck.progress.Progress` callback):
+    a rich bar with elapsed and remaining time on a terminal; otherwise a plain line after the first
+    :data:`PLAIN_EVERY_S` seconds and then at most every :data:`PLAIN_EVERY_S`; nothing with ``-q`` or
+    ``quiet`` (the commands pass ``--json``).
+
+    ``with Steps("locating") as tick: library_call(..., progress=tick)``"""
+
+    def __init__(self, text: str, quiet: bool = False) -> None:
+        self.text, self.quiet = text, quiet or QUIET["on"]
+        self._bar: Any = None
+        self._task: Any = None
+        self._start = self._last = 0.0
+
+    def __enter__(self) -> Steps:
+        import time
+
+        self._start = self._last = time.monotonic()
+        if not self.quiet and err.is_terminal:
+            from rich.progress import (
+                BarColumn,
+                MofNCompleteColumn,
+                Progress,
+                TextColumn,
+                TimeElapsedColumn,
+                TimeRemainingColumn,
+            )
+
+            self._bar = Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
+                                 TextColumn("{task.fields[label]}"), TimeElapsedColumn(), TimeRemainingColumn(),
+                                 console=err, transient=True)
+            self._bar.start()
+            self._task = self._bar.add_task(self.text, total=None, label="")
+        return self
+
+    def __call__(self, done: int, total: int, label: str) -> None:
+        import time
+
+        if self.quiet:
+            return
+        if self._bar is not None:
+            self._bar.update(self._task, completed=done, total=total, label=label)
+            return
+        now = time.monotonic()
+        if now - self._last < PLAIN_EVERY_S:
+            return
+        self._last = now
+        elapsed = now - self._start
+        left = f", about {elapsed * (total - done) / done:.0f} s left" if 0 < done < total else ""
+        err.print(f"{self.text}: {label} ({done} of {total}), {elapsed:.0f} s elapsed{left}")
+
+    def __exit__(self, *exc: object) -> None:
+        if self._bar is not None:
+            self._bar.stop()
 
 DemoOpt = Annotated[bool, typer.Option("--demo", help="Use the bundled sample file when the argument is not given.")]
 RigOpt = Annotated[
@@ -144,6 +208,11 @@ def _print_version(value: bool) -> None:
         raise typer.Exit(EXIT_OK)
 
 
+def _set_quiet(value: bool) -> None:
+    if value:
+        QUIET["on"] = True
+
+
 def _print_samples_dir(value: bool) -> None:
     if value:
         from rotorcheck.resources import samples_dir
@@ -159,6 +228,8 @@ def _top_level(
     samples: Annotated[bool, typer.Option(
         "--samples-dir", is_eager=True, callback=_print_samples_dir,
         help="Print the folder of the bundled sample sweeps (e.g. crack_rig/healthy_1000rpm.h5) and exit.")] = False,
+    quiet: Annotated[bool, typer.Option(
+        "--quiet", "-q", callback=_set_quiet, help="No progress on stderr (any command; --json implies it).")] = False,
 ) -> None:
     """Has this shaft changed, where in the spectrum, and what exactly changed?"""
 

@@ -19,6 +19,7 @@ from rotorcheck.cli.common import (
     JsonOpt,
     OutOpt,
     PlotFormatOpt,
+    Steps,
     app,
     at_least,
     bundled_or_given,
@@ -185,9 +186,10 @@ def detectability(
     base = read_baseline(baseline) if baseline is not None else None
     if base is not None and base.rig_id != cfg.rig_id:
         raise InputError(baseline, "/@rig_id", f"baseline for rig {base.rig_id!r}, not {cfg.rig_id!r}")
-    with progress(f"predicting what {cfg.rig_id} can detect, element by element"):
+    with Steps(f"predicting what {cfg.rig_id} can detect, element by element", quiet=as_json) as tick:
         det = workflow.detectability_for_rig(cfg, speed, base, noise_std, periods, split_list(sensors),
-                                             split_list(actuators), false_alarm, els, source=str(baseline or rig_path))
+                                             split_list(actuators), false_alarm, els, source=str(baseline or rig_path),
+                                             progress=tick)
     doc = {"rig": str(rig_path), **det.to_dict()}
     if candidate_sensors:
         if base is not None:

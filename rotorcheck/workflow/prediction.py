@@ -17,6 +17,7 @@ from rotorcheck.detectability import (
 )
 from rotorcheck.errors import InputError
 from rotorcheck.nominal import ChannelPair, parse_port
+from rotorcheck.progress import Progress
 from rotorcheck.signatures import io_frf
 from rotorcheck.workflow.benign import KAPPA_NOMINAL, benign_model
 from rotorcheck.workflow.rigs import check_elements
@@ -79,6 +80,7 @@ def detectability_for_rig(
     elements: Sequence[int] | None = None,
     workers: int | None = None,
     source: str = "",
+    progress: Progress | None = None,
 ) -> Any:
     """:func:`rotorcheck.detectability.detectability` with its inputs resolved the way the CLI does. Grid and speed: the
     baseline's (``baseline``, a :class:`rotorcheck.baseline.Baseline`), else the rig's ``analysis``
@@ -114,14 +116,14 @@ def detectability_for_rig(
         kappa = KAPPA_NOMINAL if baseline.benign_kappa is None else float(baseline.benign_kappa)
         bm = benign_model(config, f, speed, th[:, 0], kappa)
         return detectability(config, f, speed, var_n.reshape(f.size, -1), var_b.reshape(f.size, -1), pairs,
-                             th, false_alarm, bm, elements, None, noise, workers)
+                             th, false_alarm, bm, elements, None, noise, workers, progress=progress)
     f, speed, v, noise = _stated_prediction(config, speed_rpm, noise_std_m, periods, source)
     var = np.full((f.size, len(pairs)), v)
     multi = pairs if len(pairs) > 1 else None
     th = io_frf(config, f, speed, multi)
     bm = benign_model(config, f, speed, th, KAPPA_NOMINAL, 0.0, None, multi)
     return detectability(config, f, speed, var, var, pairs, th, false_alarm, bm, elements, None, noise, workers,
-                         model_frf=th)
+                         model_frf=th, progress=progress)
 
 
 def sensor_ranking_for_rig(
