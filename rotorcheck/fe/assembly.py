@@ -29,8 +29,9 @@ from collections.abc import Mapping
 import numpy as np
 import pydantic_core
 
-from rotorcheck.config import Material, ModalDamping, RayleighDamping, RigConfig, ShaftElement
+from rotorcheck.config import Material, ModalDamping, RayleighDamping, ShaftElement
 from rotorcheck.fe.damping import modal_damping_matrix, rayleigh_damping_matrix
+from rotorcheck.fe.description import MECHANICAL_FIELDS, MechanicalDescription
 from rotorcheck.fe.elements import RigidDisc, shear_coefficient
 from rotorcheck.fe.lumped import build_lumped
 from rotorcheck.fe.shaft import ShaftMatrices, shaft_matrices, shear_coefficient_by
@@ -41,7 +42,7 @@ _CACHE_SIZE = 64
 
 
 def build_system(
-    config: RigConfig,
+    config: MechanicalDescription,
     modulus_factors: Mapping[int, float] | None = None,
     stiffness_overrides: Mapping[str, float] | None = None,
 ) -> MechanicalSystem:
@@ -63,7 +64,7 @@ def build_system(
 # rotor
 
 
-def _element_kappa(config: RigConfig, e: ShaftElement, material: Material) -> float:
+def _element_kappa(config: MechanicalDescription, e: ShaftElement, material: Material) -> float:
     """Shear coefficient of a config element: its own value or method, else the rig's (by the mean
     diameters of the element, as ROSS)."""
     if e.shear_coefficient is not None:
@@ -77,7 +78,7 @@ def _element_kappa(config: RigConfig, e: ShaftElement, material: Material) -> fl
 
 
 def rotor_mesh(
-    config: RigConfig, modulus_factors: Mapping[int, float] | None = None
+    config: MechanicalDescription, modulus_factors: Mapping[int, float] | None = None
 ) -> tuple[np.ndarray, tuple[int, ...], tuple[BeamElementInfo, ...], tuple[BeamElementInfo, ...]]:
     """Mesh of a rotor config: (node positions (m), station -> node, shaft element infos, layer infos).
 
@@ -183,12 +184,16 @@ def _node_block(A: np.ndarray, node: int, block: np.ndarray) -> None:
     A[4 * node : 4 * node + 4, 4 * node : 4 * node + 4] += block
 
 
-def config_key(config: RigConfig, exclude: set[str] | None = None) -> bytes | None:
-    """The content of ``config`` (less the fields ``exclude``) as JSON bytes, equal for equal content: floats
-    to the last bit, infinities and NaN spelled out (not null, as ``model_dump_json`` would, like None);
-    None when something in it does not serialize (then nothing is cached by it)."""
+def config_key(config: object, exclude: set[str] | None = None,
+               fields: frozenset[str] | None = None) -> bytes | None:
+    """The content of ``config`` (its ``fields``, default all, less ``exclude``) as JSON bytes, equal for
+    equal content: floats to the last bit, infinities and NaN spelled out (not null, as ``model_dump_json``
+    would, like None); None when something in it does not serialize or it is no pydantic model (then
+    nothing is cached by it)."""
+    include = None if fields is None else set(fields - (exclude or set()))
     try:
-        return pydantic_core.to_json(config, exclude=exclude, inf_nan_mode="constants")
+        return pydantic_core.to_json(config, include=include, exclude=None if include else exclude,
+                                     inf_nan_mode="constants")
     except (pydantic_core.PydanticSerializationError, TypeError, ValueError):
         return None
 
@@ -198,7 +203,7 @@ _STRUCTURES: OrderedDict[tuple[object, ...], tuple[object, ...]] = OrderedDict()
 _STRUCTURES_SIZE = 32
 
 
-def _rotor_structure(config: RigConfig, modulus_factors: Mapping[int, float] | None, n_sup: int) -> tuple[
+def _rotor_structure(config: MechanicalDescription, modulus_factors: Mapping[int, float] | None, n_sup: int) -> tuple[
         np.ndarray, tuple[int, ...], tuple[BeamElementInfo, ...], tuple[BeamElementInfo, ...], np.ndarray,
         np.ndarray, np.ndarray, np.ndarray, tuple[tuple[str, str, int], ...], np.ndarray | None]:
     """Everything of a rotor but its bearings: the mesh, M, G, K0 (shaft, discs, point masses, springs), C0
@@ -206,7 +211,7 @@ def _rotor_structure(config: RigConfig, modulus_factors: Mapping[int, float] | N
     config's content without its bearings, the modulus factors, the support nodes): a rig re-solved at other
     bearing coefficients or speeds (benign change, issue 28) assembles its shaft once; the arrays are shared
     read-only and every system copies what it changes."""
-    content = config_key(config, exclude={"bearings"})
+    content = config_key(config, exclude={"bearings"}, fields=MECHANICAL_FIELDS)  # what the assembly reads
     key = (content, tuple(sorted((modulus_factors or {}).items())), n_sup)
     hit = _STRUCTURES.get(key) if content is not None else None
     if hit is not None:
@@ -226,7 +231,7 @@ def _rotor_structure(config: RigConfig, modulus_factors: Mapping[int, float] | N
           if isinstance(damping, RayleighDamping) and damping.scope == "shaft_elements" else np.zeros_like(M))
     features: list[tuple[str, str, int]] = []
     for d in config.discs:
-        m, ip, it = d.inertias(config.materials)
+        m, ip, it = d.inertias(dict(config.materials))
         disc = RigidDisc(m, it, ip)
         node = station_node[d.station - 1]
         _node_block(M, node, disc.mass_matrix())
@@ -261,7 +266,7 @@ def _xy(station_node: tuple[int, ...], n_nodes: int, n_sup: int, station: int) -
     return np.array([rotor_dof(station_node, n_nodes, n_sup, station, d) for d in ("x", "y")])
 
 
-def build_rotor(config: RigConfig, modulus_factors: Mapping[int, float] | None = None) -> MechanicalSystem:
+def build_rotor(config: MechanicalDescription, modulus_factors: Mapping[int, float] | None = None) -> MechanicalSystem:
     """Timoshenko FE model of a ``kind: rotor`` config (see module docstring)."""
     n_sup = config.n_support_nodes
     positions, station_node, infos, layers, M, G, K0, C0, features_so_far, rayleigh_rotor = _rotor_structure(

@@ -12,12 +12,13 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from rotorcheck.config import ModalDamping, RayleighDamping, RigConfig
+from rotorcheck.config import ModalDamping, RayleighDamping
 from rotorcheck.fe.damping import modal_damping_matrix, rayleigh_damping_matrix
+from rotorcheck.fe.description import MechanicalDescription
 from rotorcheck.fe.system import MechanicalSystem
 
 
-def _incidence(config: RigConfig, index: dict[str, int]) -> np.ndarray:
+def _incidence(config: MechanicalDescription, index: dict[str, int]) -> np.ndarray:
     """(n_springs, n_mass) incidence: +1 at the first end, -1 at the second, none for ground."""
     B = np.zeros((len(config.lumped_springs), len(index)))
     for i, s in enumerate(config.lumped_springs):
@@ -30,7 +31,7 @@ def _incidence(config: RigConfig, index: dict[str, int]) -> np.ndarray:
 
 
 def build_lumped(
-    config: RigConfig,
+    config: MechanicalDescription,
     stiffness_overrides: Mapping[str, float] | None = None,
     mass_overrides: Mapping[str, float] | None = None,
     damping_overrides: Mapping[str, float] | None = None,
