@@ -6,6 +6,7 @@ from pathlib import Path
 from typing import Annotated, Any
 
 import typer
+from rich.markup import escape
 
 from rotorcheck.cli.common import (
     DEFAULT_OUT,
@@ -28,6 +29,7 @@ from rotorcheck.cli.common import (
     record_run,
 )
 from rotorcheck.errors import InputError, finite_positive, in_open_unit
+from rotorcheck.report.content import fmt_p
 from rotorcheck.report.schema import DetectionReport
 
 
@@ -114,9 +116,9 @@ def print_outcome(outcome: Any, report: DetectionReport, prefix: str = "") -> No
 
     v = outcome.verdict
     colour = {"damage": "bold red", "healthy": "bold green", "inconclusive": "bold yellow"}[v.verdict]
-    err.print(f"{prefix}[{colour}]{v.verdict.upper()}[/]: {v.reason}")
-    err.print(f"{report.n_fault_points} of {report.n_points} points are fault points"
-              + (f" (sweep p-value {report.p_value:.3g}, {report.confidence:.0%} family-wise)"
+    err.print(f"{prefix}[{colour}]{v.verdict.upper()}[/]: {escape(report.conclusion or '')}")
+    err.print(f"details: {v.reason}; {report.n_fault_points} of {report.n_points} points are fault points"
+              + (f" (sweep p-value {fmt_p(report.p_value)}, {report.confidence:.0%} family-wise)"
                  if report.p_value is not None and report.confidence is not None else ""))
     damage = v.verdict == "damage"  # a healthy verdict shows no finding: no element, no damage estimate
     for line in (workflow.joint_summary(outcome), workflow.anchored_summary(outcome) if damage else ""):

@@ -3,6 +3,8 @@ the damage estimate to read and the headline damage figure, from a report docume
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
 from rotorcheck.report.schema import DetectionReport
@@ -50,3 +52,184 @@ def best_candidate(report: DetectionReport) -> str | None:
     lo, hi = interval
     return (f"element {report.best_element}: stiffness loss {100 * loss:.3g} % [{100 * lo:.3g}, {100 * hi:.3g}] "
             "(95 %, linearized)")
+
+
+def fmt_p(p: float | None) -> str:
+    """A p-value in words and figures: below the float resolution of its computation (1e-15) as "< 1e-15"."""
+    if p is None:
+        return "not computed"
+    v = float(p)
+    return "< 1e-15" if v < 1e-15 else format(v, ".3g")
+
+
+def fmt_interval(lo: float, hi: float, fmt: str = "+.4g") -> str:
+    """"[lo, hi]", or in words where it is not defined (a parameter at its range edge: NaN ends)."""
+    a, b = float(lo), float(hi)
+    if not (np.isfinite(a) and np.isfinite(b)):
+        return "not defined (at the range edge)"
+    return f"[{a:{fmt}}, {b:{fmt}}]"
+
+
+def element_span(report: DetectionReport, element: int | None) -> str:
+    """" (z = 0.295-0.335 m)" for a shaft element of the report's rig, "" when the report holds no stations."""
+    z = report.stations_m
+    if element is None or not z or not (1 <= element < len(z)):
+        return ""
+    return f" (z = {z[element - 1]:.3g}-{z[element]:.3g} m from the first station)"
+
+
+def _how_sure(report: DetectionReport) -> str:
+    if report.joint_statistic is not None and report.false_alarm is not None:
+        return (f"the joint test's p-value is {fmt_p(report.joint_p_value)} against a stated false-alarm rate of "
+                f"{report.false_alarm:.2g} per sweep")
+    if report.p_value is not None and report.confidence is not None:
+        return (f"{report.n_fault_points} of {report.n_points} points are certified at {report.confidence:.0%} "
+                f"family-wise confidence (sweep p-value {fmt_p(report.p_value)})")
+    return f"{report.n_fault_points} of {report.n_points} points are certified fault points"
+
+
+def _rests_on(report: DetectionReport) -> str:
+    if report.joint_statistic is not None:
+        kappa = report.benign_model_error
+        return ("Gaussian noise independent between frequency points with the healthy sweep's variance; benign "
+                "change is what the model predicts inside the rig's variability ranges"
+                + (f", wrong by at most {kappa:g} x its predicted size" if kappa else ""))
+    return ("the noise bound of the baseline at its confidence, and the model error within the healthy sweep's "
+            "gamma bound")
+
+
+def _where(report: DetectionReport) -> tuple[str, int | None]:
+    """Where, as far as the report says, and the element to name in the next step."""
+    loc = report.location
+    if loc and loc.get("best_element") is not None:
+        located = int(loc["best_element"])
+        return (f"located at element {located}{element_span(report, located)}: {loc.get('summary', '')}"
+                .rstrip(": "), located)
+    best = best_candidate(report)
+    if best is not None:
+        e = report.best_element
+        return f"the most likely place is {best.replace(':', element_span(report, e) + ':', 1)}", e
+    if report.n_fault_points:
+        return (f"the change shows at {report.n_fault_points} frequency points; the element is not estimated "
+                "with this rule (run rotorcheck locate)"), None
+    return "the element is not estimated with this rule (run rotorcheck locate)", None
+
+
+def conclusion(report: DetectionReport) -> str:
+    """The plain conclusion every rendering opens with: verdict, where and how big, how sure, what it rests on,
+    what to do next (one paragraph)."""
+    verdict = report.verdict
+    sure = _how_sure(report)
+    rests = _rests_on(report)
+    if verdict == "damage":
+        where, element = _where(report)
+        nxt = (f"inspect element {element}, or repeat the sweep to confirm and run rotorcheck locate for certified "
+               "intervals" if element is not None else "repeat the sweep to confirm, then run rotorcheck locate")
+        return (f"Damage: this sweep differs from the healthy baseline beyond noise and beyond every benign change "
+                f"inside the rig's ranges; {where}. How sure: {sure}. It rests on: {rests}. Next: {nxt}.")
+    if verdict == "healthy":
+        smallest = ""
+        rows = (report.detectability or {}).get("elements", [])  # with the benign ranges: what drift cannot hide
+        finite = [(float(r["open_loss_min"]), int(r["element"]), r.get("breathing_depth_min")) for r in rows
+                  if r.get("open_loss_min") is not None and np.isfinite(float(r["open_loss_min"]))]
+        if finite:
+            x, e, depth = min(finite)
+            crack = "" if depth is None else f" (a breathing crack {100 * float(depth):.3g} % of the diameter deep)"
+            smallest = (f" Despite the benign ranges this sweep could have revealed a stiffness loss of {100 * x:.3g} %"
+                        f"{crack} in element {e}{element_span(report, e)}, with 90 % power; smaller changes or "
+                        "other elements could pass unseen.")
+        return (f"Healthy: no change beyond noise and the benign ranges ({sure}).{smallest} It rests on: {rests}. "
+                "Next: nothing to do; keep sweeping at the usual interval.")
+    return (f"Inconclusive: {report.verdict_reason}. Nothing is claimed either way. It rests on: {rests}. Next: "
+            "repeat the sweep (check the excitation and the points without a decision), then detect again.")
+
+
+def benign_rows(report: DetectionReport) -> list[list[str]]:
+    """The benign parameters fitted (name, estimate, 95 % interval, unit, at range edge), as every rendering
+    shows them."""
+    return [[b["name"], f"{b['estimate']:+.4g}", fmt_interval(*b["interval"]), b["unit"],
+             "yes" if b.get("at_range_edge") else "no"] for b in (report.benign_parameters or [])]
+
+
+BENIGN_HEADER = ("benign parameter", "estimate", "95 % interval", "unit", "at range edge")
+
+
+def method_paragraphs(report: DetectionReport, ranges: Callable[[list[float]], str]) -> list[str]:
+    """The method section every rendering carries (the rule, the joint test's statistic, the benign change, the
+    points unexplained after it and certified beyond it, what the sweep could reveal); ``ranges`` writes a list
+    of frequencies as ranges."""
+    out = [f"Rule: {report.verdict_rule}"]
+    if report.joint_statistic is None:
+        return out
+    learned = report.learned_benign_directions or 0
+    out.append(f"Joint test: T = {report.joint_statistic:.4g}, threshold {report.joint_threshold:.4g} at false-alarm "
+               f"rate {report.false_alarm:g} (p = {fmt_p(report.joint_p_value)}); model-error fraction kappa = "
+               f"{report.benign_model_error:g}"
+               + (f"; {learned} benign directions learned from healthy sweeps." if learned else
+                  "; no benign directions learned from healthy sweeps."))
+    best = best_candidate(report)
+    if best is not None:
+        out.append(f"Best candidate: {best}.")
+    beyond = report.fault_beyond_benign_frequencies_hz
+    if beyond is not None:
+        out.append(f"{len(beyond)} points stay unexplained after the fitted benign change (per point, the noise "
+                   f"and the model-error allowance, Sidak at {report.false_alarm:g} over the points)"
+                   + (f": {ranges(list(beyond))}." if beyond else "."))
+    cert = report.certified_beyond_benign_frequencies_hz
+    if cert is not None:
+        out.append(f"{len(cert)} points are certified beyond every benign change inside the ranges (parameters "
+                   f"real, branch and bound; {report.n_undecided_beyond_benign} undecided; with each parameter a "
+                   f"complex disc instead: {report.n_certified_beyond_benign_complex})"
+                   + (f": {ranges(list(cert))}." if cert else "."))
+    els, det = report.candidate_elements or [], report.detectable_stiffness_loss or []
+    if els:
+        out.append("Smallest stiffness loss this sweep could reveal (90 % power at the stated rate): "
+                   + ", ".join(f"element {e}: {100 * x:.3g} %" for e, x in zip(els, det)) + ".")
+    return out
+
+
+def frequency_ranges(freqs: list[float], step: float) -> str:
+    """Frequencies (Hz) as ranges of consecutive grid points (``step`` the grid step, Hz): "12.0-14.5, 30.0 Hz"."""
+    if not freqs:
+        return "none"
+    out, start, prev = [], freqs[0], freqs[0]
+    for f in freqs[1:]:
+        if f - prev > 1.5 * step:
+            out.append((start, prev))
+            start = f
+        prev = f
+    out.append((start, prev))
+    return ", ".join(f"{a:.1f}" if a == b else f"{a:.1f}-{b:.1f}" for a, b in out) + " Hz"
+
+
+def fault_table(report: DetectionReport) -> tuple[list[str], list[list[str]]]:
+    """Every fault point: f, gamma healthy and required, their ratio, the damage estimate to read with its bound
+    (header, rows), as every rendering shows it."""
+    f = np.asarray(report.frequency_hz, dtype=float)
+    fault = np.asarray(report.fault, dtype=bool)
+    gh = np.asarray(report.gamma_healthy, dtype=float)
+    gr = np.asarray(report.gamma_required, dtype=float)
+    dre, dim, lo, hi, kind = damage_columns(report)
+    anchored = kind.startswith("anchored")
+    header = ["f (Hz)", "gamma healthy", "gamma required", "ratio",
+              f"D_u{' anchored' if anchored else ''} (N/m)", "min |D_u| (N/m)", "max |D_u| (N/m)"]
+    rows = []
+    for i in np.flatnonzero(fault):
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ratio = gr[i] / gh[i]
+        rows.append([format(f[i], ".2f"), format(gh[i], ".4e"), format(gr[i], ".4e"), format(ratio, ".4g"),
+                     f"{dre[i]:.4g}{float(dim[i]):+.3g}j", format(lo[i], ".4g"), format(hi[i], ".4g")])
+    return header, rows
+
+
+def where_paragraphs(report: DetectionReport, ranges: Callable[[list[float]], str]) -> list[str]:
+    """Where in the spectrum: the certified fault points as frequency ranges, and the points of every other
+    status (``ranges`` writes a list of frequencies as ranges)."""
+    f = np.asarray(report.frequency_hz, dtype=float)
+    fault = np.asarray(report.fault, dtype=bool)
+    out = [f"{report.n_fault_points} of {report.n_points} points are certified fault points (the healthy uncertain "
+           f"model cannot explain them): {ranges(list(f[fault]))}."]
+    status = np.asarray(report.status).astype(str)
+    for s in (s for s in np.unique(status) if s not in ("ok", "fault")):
+        out.append(f"{int(np.count_nonzero(status == s))} points with status '{s}': {ranges(list(f[status == s]))}.")
+    return out

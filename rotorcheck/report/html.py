@@ -18,7 +18,18 @@ from typing import Any
 
 import numpy as np
 
-from rotorcheck.report.content import best_candidate, damage_columns, headline_damage
+from rotorcheck.report.content import (
+    BENIGN_HEADER,
+    benign_rows,
+    best_candidate,
+    conclusion,
+    fault_table,
+    fmt_p,
+    frequency_ranges,
+    headline_damage,
+    method_paragraphs,
+    where_paragraphs,
+)
 from rotorcheck.report.schema import DetectionReport
 
 VERDICT_COLOUR = {"damage": "#b00020", "healthy": "#1b7a2f", "inconclusive": "#a66a00", "located": "#b00020",
@@ -128,20 +139,6 @@ def _verdict_badge(verdict: str) -> str:
     return f"<span class=\"verdict\" id=\"verdict\" style=\"background:{colour}\">{_e(verdict.upper())}</span>"
 
 
-def _interval(x: Sequence[Any]) -> str:
-    """"[lo, hi]" with signs, or a sentence where the interval is not defined (a parameter at its range edge)."""
-    lo, hi = (float(v) for v in x)
-    if not (np.isfinite(lo) and np.isfinite(hi)):
-        return "not defined (at the range edge)"
-    return f"[{lo:+.4g}, {hi:+.4g}]"
-
-
-def _p(p: Any) -> str:
-    """A p-value; 0 (below the float resolution of its computation) as "< 1e-15"."""
-    v = float(p)
-    return "< 1e-15" if v < 1e-15 else format(v, ".3g")
-
-
 def _key_numbers(report: DetectionReport) -> list[tuple[str, str]]:
     rows = [("fault points", f"{report.n_fault_points} of {report.n_points}"),
             ("band", f"{_num(report.band_hz[0], 'g')}-{_num(report.band_hz[1], 'g')} Hz"),
@@ -149,10 +146,10 @@ def _key_numbers(report: DetectionReport) -> list[tuple[str, str]]:
             ("noise bound (baseline)", f"{_num(report.noise_bound_m * 1e6)} um ({report.noise_method})"),
             ("baseline", f"uncertainty {report.uncertainty}, enclose {report.enclose}")]
     if report.p_value is not None:
-        rows.append(("sweep p-value (per-point test)", f"{_p(report.p_value)} at "
+        rows.append(("sweep p-value (per-point test)", f"{fmt_p(report.p_value)} at "
                                                         f"{report.confidence:.0%} family-wise confidence"))
     if report.joint_statistic is not None:
-        p = _p(report.joint_p_value)
+        p = fmt_p(report.joint_p_value)
         rows.append(("joint statistic T", f"{_num(report.joint_statistic)} against threshold "
                                           f"{_num(report.joint_threshold)} (p = {p}, "
                                           f"false alarm {report.false_alarm:g} per sweep)"))
@@ -164,24 +161,6 @@ def _key_numbers(report: DetectionReport) -> list[tuple[str, str]]:
     return rows
 
 
-def _fault_rows(report: DetectionReport) -> tuple[list[str], list[list[str]]]:
-    f = np.asarray(report.frequency_hz, dtype=float)
-    fault = np.asarray(report.fault, dtype=bool)
-    gh = np.asarray(report.gamma_healthy, dtype=float)
-    gr = np.asarray(report.gamma_required, dtype=float)
-    dre, dim, lo, hi, kind = damage_columns(report)
-    anchored = kind.startswith("anchored")
-    header = ["f (Hz)", "gamma healthy", "gamma required", "ratio",
-              f"D_u{' anchored' if anchored else ''} (N/m)", "min |D_u| (N/m)", "max |D_u| (N/m)"]
-    rows = []
-    for i in np.flatnonzero(fault):
-        with np.errstate(divide="ignore", invalid="ignore"):
-            ratio = gr[i] / gh[i]
-        rows.append([_num(f[i], ".2f"), _num(gh[i], ".4e"), _num(gr[i], ".4e"), _num(ratio, ".4g"),
-                     f"{_num(dre[i])}{float(dim[i]):+.3g}j", _num(lo[i]), _num(hi[i])])
-    return header, rows
-
-
 def render_detection_html(report: DetectionReport, plots: Sequence[str | Path],
                           baseline_path: str | Path | None = None) -> str:
     """report.html of a detection: verdict and rule, the numbers, the figures embedded, every fault point,
@@ -191,28 +170,26 @@ def render_detection_html(report: DetectionReport, plots: Sequence[str | Path],
              f"<p>Sweep <code>{_e(report.sweep)}</code> (run <code>{_e(report.run_id)}</code>) on rig "
              f"<code>{_e(report.rig_id)}</code> at {_num(report.speed_rpm, 'g')} rpm; damage port "
              f"{_e(report.damage_port)}.</p>",
-             f"<p id=\"reason\"><b>{_e(verdict)}</b>: {_e(report.verdict_reason)}.</p>",
-             f"<p class=\"rule\" id=\"rule\"><b>Rule.</b> {_e(report.verdict_rule)}</p>"]
+             f"<h2>Conclusion</h2><p id=\"conclusion\">{_e(report.conclusion or conclusion(report))}</p>",
+             f"<p id=\"reason\"><b>{_e(verdict)}</b>: {_e(report.verdict_reason)}.</p>"]
     parts += [f"<p>{_e(line)}</p>" for line in headline_damage(report) if line]
     parts.append("<h2>The numbers</h2>" + table(("quantity", "value"), _key_numbers(report)))
-    if report.benign_parameters:
-        rows = [[b["name"], f"{b['estimate']:+.4g}", _interval(b["interval"]), b["unit"],
-                 "yes" if b.get("at_range_edge") else "no"] for b in report.benign_parameters]
-        parts.append("<h2>Benign change fitted (inside the rig's variability ranges)</h2>"
-                     + table(("parameter", "estimate", "95 % interval", "unit", "at range edge"), rows,
-                             (False, True, False, False, False)))
+    step = float(np.median(np.diff(np.asarray(report.frequency_hz, dtype=float)))) if report.n_points > 1 else 1.0
+    where = where_paragraphs(report, lambda fs: frequency_ranges(fs, step))
+    parts.append("<h2>Where</h2>" + "".join(f"<p>{_e(para)}</p>" for para in where))
     parts.append("<h2>Figures</h2>" + figures_html(plots))
-    header, rows = _fault_rows(report)
+    header, rows = fault_table(report)
     parts.append(f"<h2>Fault points: all {len(rows)}</h2>"
                  + (table(header, rows, [True] * len(header)) if rows else "<p>None.</p>"))
-    status = np.asarray(report.status).astype(str)
-    other = [(s, int(np.count_nonzero(status == s))) for s in np.unique(status) if s not in ("ok", "fault")]
-    if other:
-        parts.append("<p>Points not decided: " + ", ".join(f"{n} with status <code>{_e(s)}</code>" for s, n in other)
-                     + ".</p>")
     loc = report.location
     if loc:
         parts.append("<h2>Location</h2>" + location_table(loc))
+    method = method_paragraphs(report, lambda fs: frequency_ranges(fs, step))
+    parts.append("<h2>Method</h2>" + f"<p class=\"rule\" id=\"rule\"><b>Rule.</b> {_e(report.verdict_rule)}</p>"
+                 + "".join(f"<p>{_e(para)}</p>" for para in method[1:]))
+    if report.benign_parameters:
+        parts.append("<h3>Benign change fitted (inside the rig's variability ranges)</h3>"
+                     + table(BENIGN_HEADER, benign_rows(report), (False, True, False, False, False)))
     if report.notes:
         parts.append("<h2>Notes</h2><ul>" + "".join(f"<li>{_e(n)}</li>" for n in report.notes) + "</ul>")
     inputs: list[tuple[str, str, str | None]] = [("sweep", str(report.sweep), report.sweep_sha256),

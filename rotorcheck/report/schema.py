@@ -98,6 +98,8 @@ class DetectionReport:
     detectability: dict[str, Any] | None = None  # what this sweep could have revealed (rotorcheck.detectability)
     channel_pairs: list[str] | None = None  # measured FRFs "output<-input" (port labels), the rig's io pair first
     baseline: str | None = None  # the baseline file the sweep was compared with
+    stations_m: list[float] | None = None  # the rig's station positions (m): element k spans [k-1, k]
+    conclusion: str | None = None  # the plain conclusion every rendering opens with (report.content.conclusion)
     # the joint test (verdict_rule names it when it decided)
     joint_statistic: float | None = None  # T = max_e T_e (chi-square units)
     joint_threshold: float | None = None  # T at which p = false_alarm

@@ -15,6 +15,7 @@ from rotorcheck.detectability import Detectability, detectability, linearized
 from rotorcheck.errors import InputError
 from rotorcheck.location import LocationResult
 from rotorcheck.nominal import NominalModel, primary_pair
+from rotorcheck.report.content import conclusion
 from rotorcheck.report.schema import DetectionReport
 from rotorcheck.robust import identify
 from rotorcheck.robust.identify import DamageSet
@@ -212,6 +213,7 @@ class DetectionOutcome:
             damage_bound_phase_max_deg=np.degrees(ds.phase_max),
         )
         rep.channel_pairs = [f"{o}<-{i}" for o, i in pair_keys(self.run)] or None
+        rep.stations_m = [float(z) for z in self.rig.stations] or None
         if m is not None:
             rep.confidence, rep.n_tests, rep.point_miss_probability = m.confidence, m.n_tests, m.point_miss
             rep.p_value, rep.point_p_value, rep.variance_dof = m.family_p_value, m.p_value, m.dof[:, 0]
@@ -271,6 +273,7 @@ class DetectionOutcome:
             rep.n_certified_beyond_benign = int(np.count_nonzero(c.unexplained))
             rep.n_undecided_beyond_benign = int(np.count_nonzero(c.undecided))
             rep.n_certified_beyond_benign_complex = int(np.count_nonzero(c.complex_unexplained))
+        rep.conclusion = conclusion(rep)
         return rep
 
 
