@@ -11,15 +11,18 @@ from __future__ import annotations
 import base64
 import html
 import platform
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from datetime import datetime, timezone
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from rotorcheck.report.content import best_candidate, damage_columns, headline_damage
-from rotorcheck.report.schema import DetectionReport
+from rotorcheck.report.schema import DetectionReport, LocationReport
+
+if TYPE_CHECKING:  # annotations only
+    from rotorcheck.location import LocationResult
 
 VERDICT_COLOUR = {"damage": "#b00020", "healthy": "#1b7a2f", "inconclusive": "#a66a00", "located": "#b00020",
                   "nothing to locate": "#1b7a2f"}
@@ -210,9 +213,8 @@ def render_detection_html(report: DetectionReport, plots: Sequence[str | Path],
     if other:
         parts.append("<p>Points not decided: " + ", ".join(f"{n} with status <code>{_e(s)}</code>" for s, n in other)
                      + ".</p>")
-    loc = report.location
-    if loc:
-        parts.append("<h2>Location</h2>" + location_table(loc))
+    if report.location is not None:
+        parts.append("<h2>Location</h2>" + location_table(report.location))
     if report.notes:
         parts.append("<h2>Notes</h2><ul>" + "".join(f"<li>{_e(n)}</li>" for n in report.notes) + "</ul>")
     inputs: list[tuple[str, str, str | None]] = [("sweep", str(report.sweep), report.sweep_sha256),
@@ -223,41 +225,74 @@ def render_detection_html(report: DetectionReport, plots: Sequence[str | Path],
     return page(f"rotorcheck: {verdict} - {Path(str(report.sweep)).name}", "\n".join(parts))
 
 
-def location_table(loc: dict[str, Any]) -> str:
-    """Every candidate element: status, rank, certified loss and depth intervals, what excluded it."""
-    def interval(x: Any, scale: float = 100.0) -> str:
-        if not x:
-            return ""
-        lo, hi = x
-        a = "" if lo is None else format(scale * float(lo), ".3g")
-        b = "50+" if hi is None else format(scale * float(hi), ".3g")
-        return f"[{a}, {b}]"
+def _percent_interval(lo: float | None, hi: float | None) -> str:
+    """A fraction interval in %: ``[lo, hi]``; an undefined (None or not finite) lower end left blank, an
+    undefined upper end "50+" (a depth beyond the strip relation's 50 % of the diameter)."""
+    def pct(x: float | None) -> str:
+        return "" if x is None or not np.isfinite(x) else format(100.0 * float(x), ".3g")
 
+    return f"[{pct(lo)}, {pct(hi) or '50+'}]"
+
+
+def location_table(loc: LocationResult) -> str:
+    """Every candidate element: status, rank, certified loss and depth intervals, what excluded it."""
     rows = []
-    for c in loc.get("candidates", []):
-        exc = c.get("excluding_frequencies_hz") or []
-        rows.append([c["element"], c["status"], "" if c.get("rank") is None else c["rank"],
-                     interval(c.get("loss_interval")), interval(c.get("depth_interval")),
+    for c in loc.candidates:
+        exc = [float(x) for x in c.excluding_frequencies_hz]
+        rows.append([c.element, c.status, "" if c.rank is None else c.rank, _percent_interval(*c.loss_interval),
+                     _percent_interval(*c.depth_interval),
                      ", ".join(f"{x:.1f}" for x in exc[:12]) + (f" (+{len(exc) - 12} more)" if len(exc) > 12 else "")])
-    best = loc.get("best_element")
-    head = f"<p>Best element: <b>{_e(best)}</b>.</p>" if best is not None else "<p>No element located.</p>"
+    best = loc.best
+    head = f"<p>Best element: <b>{_e(best.element)}</b>.</p>" if best is not None else "<p>No element located.</p>"
     return head + table(("element", "status", "rank", "stiffness loss (%)", "crack depth (% of diameter)",
                          "excluded by (Hz)"), rows, (True, False, True, False, False, False))
 
 
-def render_location_html(doc: dict[str, Any], plots: Sequence[str | Path], rig_sha256: str | None = None) -> str:
-    """location.html of a locate run: the summary, the figure, every candidate, inputs, software."""
-    best = doc.get("best_element")
+def render_location_html(report: LocationReport | Mapping[str, Any], plots: Sequence[str | Path],
+                         rig_sha256: str | None = None) -> str:
+    """location.html of a locate run: the summary, the figure, every candidate, inputs, software.
+
+    ``report``: the location document; a mapping (location.json's keys) is accepted only while cli.py still
+    builds the document as a dict (issue 28: it is to pass its :class:`LocationReport`)."""
+    if not isinstance(report, LocationReport):
+        report = _location_report_of(report)
+    res = report.result
+    best = res.best
     parts = [f"<h1>rotorcheck location: {_verdict_badge('located' if best is not None else 'nothing to locate')}</h1>",
-             f"<p>Sweep <code>{_e(doc['sweep'])}</code> on rig <code>{_e(doc['rig_id'])}</code> at "
-             f"{_num(doc['speed_rpm'], 'g')} rpm.</p>",
-             f"<p id=\"reason\">{_e(doc.get('summary', ''))}</p>"]
-    if doc.get("rule"):
-        parts.append(f"<p class=\"rule\" id=\"rule\"><b>Rule.</b> {_e(doc['rule'])}</p>")
+             f"<p>Sweep <code>{_e(report.sweep)}</code> on rig <code>{_e(report.rig_id)}</code> at "
+             f"{_num(report.speed_rpm, 'g')} rpm.</p>",
+             f"<p id=\"reason\">{_e(res.summary())}</p>"]
+    if res.rule:
+        parts.append(f"<p class=\"rule\" id=\"rule\"><b>Rule.</b> {_e(res.rule)}</p>")
     parts.append("<h2>Figure</h2>" + figures_html(plots))
-    parts.append("<h2>Candidates: all</h2>" + location_table(doc))
-    parts.append(provenance([("sweep", str(doc["sweep"]), doc.get("sweep_sha256")),
-                             ("rig", str(doc["rig_id"]), rig_sha256),
-                             ("baseline", str(doc.get("baseline", "")), sha256_or_none(doc["baseline"])
-                              if doc.get("baseline") else None)]))
-    return page(f"rotorcheck location - {Path(str(doc['sweep'])).name}", "\n".join(parts))
+    parts.append("<h2>Candidates: all</h2>" + location_table(res))
+    parts.append(provenance([("sweep", report.sweep, report.sweep_sha256),
+                             ("rig", report.rig_id, rig_sha256),
+                             ("baseline", report.baseline,
+                              sha256_or_none(report.baseline) if report.baseline else None)]))
+    return page(f"rotorcheck location - {Path(report.sweep).name}", "\n".join(parts))
+
+
+def _location_report_of(doc: Mapping[str, Any]) -> LocationReport:
+    """Transitional (issue 28), to be removed when cli.py passes its :class:`LocationReport`: the typed
+    document of a location.json mapping as cli.py builds it (``LocationReport.to_json`` inverted)."""
+    from rotorcheck.location import CandidateResult, LocationResult  # lazy: only this transitional path
+
+    def num(x: float | None) -> float:
+        return float("nan") if x is None else float(x)
+
+    def result(d: Mapping[str, Any]) -> LocationResult:
+        cands = [CandidateResult(
+            c["element"], c["z_start_m"], c["z_end_m"], c["status"], c["rank"],
+            (num(c["loss_interval"][0]), num(c["loss_interval"][1])),
+            (c["depth_interval"][0], c["depth_interval"][1]), tuple(c["excluding_frequencies_hz"]),
+            (num(c["loss_witness_interval"][0]), num(c["loss_witness_interval"][1])), c["witnessed"],
+            c["loss_estimate"], c["chi2"]) for c in d["candidates"]]
+        single = d.get("single_channel")
+        return LocationResult(d["hypothesis"], d["healthy_excluded"], cands, list(d["channels"]), d["points_used"],
+                              d["point_quantile_z"], d["rule"], list(d["notes"]),
+                              tuple(d["healthy_excluding_frequencies_hz"]),
+                              None if single is None else result(single))
+
+    return LocationReport(str(doc["sweep"]), doc["sweep_sha256"], str(doc.get("baseline", "")), str(doc["rig_id"]),
+                          doc["speed_rpm"], result(doc))
