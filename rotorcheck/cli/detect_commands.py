@@ -30,7 +30,7 @@ from rotorcheck.cli.common import (
 )
 from rotorcheck.errors import InputError, finite_positive, in_open_unit
 from rotorcheck.report.content import fmt_p
-from rotorcheck.report.schema import DetectionReport
+from rotorcheck.report.schema import DetectionReport, LocationReport
 
 
 @app.command()
@@ -174,8 +174,8 @@ def locate(
     base, mrun = pairs[0]
     with progress(f"locating the change of {sweep.name} (every candidate element, certified)"):
         res = workflow.locate_damage(cfg, base, mrun, false_alarm, els, section_length)
-    doc = {"sweep": str(sweep), "sweep_sha256": mrun.sha256, "baseline": str(base_path), "rig_id": cfg.rig_id,
-           "speed_rpm": mrun.speed_rpm, **res.to_dict()}
+    report = LocationReport(str(sweep), mrun.sha256, str(base_path), cfg.rig_id, mrun.speed_rpm, res)
+    doc = report.to_json()
     atomic_write_text(out / "location.json", render_json(doc))
     written = [out / "location.json"]
     if plots:
@@ -185,7 +185,7 @@ def locate(
         written += save_figure(location_figure(cfg, res, f"{sweep.name}: {res.summary()}"), out / "location", formats)
     from rotorcheck.report.html import render_location_html
 
-    atomic_write_text(out / "location.html", render_location_html(doc, [str(p) for p in written[1:]], cfg.sha256()))
+    atomic_write_text(out / "location.html", render_location_html(report, [str(p) for p in written[1:]], cfg.sha256()))
     written.append(out / "location.html")
     err.print(("[bold red]" if res.best is not None else "[bold green]") + res.summary() + "[/]")
     if res.single_channel is not None:

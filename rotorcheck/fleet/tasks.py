@@ -26,7 +26,7 @@ from typing import Any
 
 from rotorcheck.errors import UserInputError
 from rotorcheck.fileio import atomic_write_text, publish_dir, temp_dir_beside
-from rotorcheck.report.schema import DetectionReport
+from rotorcheck.report.schema import DetectionReport, LocationReport
 
 DONE = "DONE"
 ROW_FILE = "row.json"
@@ -284,16 +284,17 @@ def run_locate(task: SweepTask) -> dict[str, Any]:
         with one_blas_thread():
             cfg, _, base, mrun = _inputs(task)
             res = workflow.locate_damage(cfg, base, mrun, task.settings.false_alarm)
-        doc = {"sweep": task.sweep, "sweep_sha256": task.sweep_sha256, "baseline": task.baseline,
-               "rig_id": cfg.rig_id, "speed_rpm": mrun.speed_rpm, **res.to_dict()}
-        atomic_write_text(tmp / "location.json", render_json(doc))
+        report = LocationReport(task.sweep, task.sweep_sha256, task.baseline, cfg.rig_id, mrun.speed_rpm, res)
+        atomic_write_text(tmp / "location.json", render_json(report.to_json()))
         atomic_write_text(tmp / DONE, task.task_key + "\n")
         if not publish_dir(tmp, final, replace=task.force):
             return {"location": read_location(task.result_dir), "executed": False}
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
-    return {"location": {"best_element": doc["best_element"], "summary": doc["summary"]}, "executed": True}
+    best = res.best
+    return {"location": {"best_element": None if best is None else best.element, "summary": res.summary()},
+            "executed": True}
 
 
 def read_location(result_dir: Path) -> dict[str, Any] | None:

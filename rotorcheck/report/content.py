@@ -101,10 +101,8 @@ def _rests_on(report: DetectionReport) -> str:
 def _where(report: DetectionReport) -> tuple[str, int | None]:
     """Where, as far as the report says, and the element to name in the next step."""
     loc = report.location
-    if loc and loc.get("best_element") is not None:
-        located = int(loc["best_element"])
-        return (f"located at element {located}{element_span(report, located)}: {loc.get('summary', '')}"
-                .rstrip(": "), located)
+    if loc is not None and loc.best is not None:
+        return f"located: {loc.summary()}", loc.best.element
     best = best_candidate(report)
     if best is not None:
         e = report.best_element

@@ -14,7 +14,7 @@ import platform
 from collections.abc import Iterable, Sequence
 from datetime import datetime, timezone
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -30,7 +30,10 @@ from rotorcheck.report.content import (
     method_paragraphs,
     where_paragraphs,
 )
-from rotorcheck.report.schema import DetectionReport
+from rotorcheck.report.schema import DetectionReport, LocationReport
+
+if TYPE_CHECKING:  # annotations only
+    from rotorcheck.location import LocationResult
 
 VERDICT_COLOUR = {"damage": "#b00020", "healthy": "#1b7a2f", "inconclusive": "#a66a00", "located": "#b00020",
                   "nothing to locate": "#1b7a2f"}
@@ -181,9 +184,8 @@ def render_detection_html(report: DetectionReport, plots: Sequence[str | Path],
     header, rows = fault_table(report)
     parts.append(f"<h2>Fault points: all {len(rows)}</h2>"
                  + (table(header, rows, [True] * len(header)) if rows else "<p>None.</p>"))
-    loc = report.location
-    if loc:
-        parts.append("<h2>Location</h2>" + location_table(loc))
+    if report.location is not None:
+        parts.append("<h2>Location</h2>" + location_table(report.location))
     method = method_paragraphs(report, lambda fs: frequency_ranges(fs, step))
     parts.append("<h2>Method</h2>" + f"<p class=\"rule\" id=\"rule\"><b>Rule.</b> {_e(report.verdict_rule)}</p>"
                  + "".join(f"<p>{_e(para)}</p>" for para in method[1:]))
@@ -200,41 +202,43 @@ def render_detection_html(report: DetectionReport, plots: Sequence[str | Path],
     return page(f"rotorcheck: {verdict} - {Path(str(report.sweep)).name}", "\n".join(parts))
 
 
-def location_table(loc: dict[str, Any]) -> str:
-    """Every candidate element: status, rank, certified loss and depth intervals, what excluded it."""
-    def interval(x: Any, scale: float = 100.0) -> str:
-        if not x:
-            return ""
-        lo, hi = x
-        a = "" if lo is None else format(scale * float(lo), ".3g")
-        b = "50+" if hi is None else format(scale * float(hi), ".3g")
-        return f"[{a}, {b}]"
+def _percent_interval(lo: float | None, hi: float | None) -> str:
+    """A fraction interval in %: ``[lo, hi]``; an undefined (None or not finite) lower end left blank, an
+    undefined upper end "50+" (a depth beyond the strip relation's 50 % of the diameter)."""
+    def pct(x: float | None) -> str:
+        return "" if x is None or not np.isfinite(x) else format(100.0 * float(x), ".3g")
 
+    return f"[{pct(lo)}, {pct(hi) or '50+'}]"
+
+
+def location_table(loc: LocationResult) -> str:
+    """Every candidate element: status, rank, certified loss and depth intervals, what excluded it."""
     rows = []
-    for c in loc.get("candidates", []):
-        exc = c.get("excluding_frequencies_hz") or []
-        rows.append([c["element"], c["status"], "" if c.get("rank") is None else c["rank"],
-                     interval(c.get("loss_interval")), interval(c.get("depth_interval")),
+    for c in loc.candidates:
+        exc = [float(x) for x in c.excluding_frequencies_hz]
+        rows.append([c.element, c.status, "" if c.rank is None else c.rank, _percent_interval(*c.loss_interval),
+                     _percent_interval(*c.depth_interval),
                      ", ".join(f"{x:.1f}" for x in exc[:12]) + (f" (+{len(exc) - 12} more)" if len(exc) > 12 else "")])
-    best = loc.get("best_element")
-    head = f"<p>Best element: <b>{_e(best)}</b>.</p>" if best is not None else "<p>No element located.</p>"
+    best = loc.best
+    head = f"<p>Best element: <b>{_e(best.element)}</b>.</p>" if best is not None else "<p>No element located.</p>"
     return head + table(("element", "status", "rank", "stiffness loss (%)", "crack depth (% of diameter)",
                          "excluded by (Hz)"), rows, (True, False, True, False, False, False))
 
 
-def render_location_html(doc: dict[str, Any], plots: Sequence[str | Path], rig_sha256: str | None = None) -> str:
+def render_location_html(report: LocationReport, plots: Sequence[str | Path], rig_sha256: str | None = None) -> str:
     """location.html of a locate run: the summary, the figure, every candidate, inputs, software."""
-    best = doc.get("best_element")
+    res = report.result
+    best = res.best
     parts = [f"<h1>rotorcheck location: {_verdict_badge('located' if best is not None else 'nothing to locate')}</h1>",
-             f"<p>Sweep <code>{_e(doc['sweep'])}</code> on rig <code>{_e(doc['rig_id'])}</code> at "
-             f"{_num(doc['speed_rpm'], 'g')} rpm.</p>",
-             f"<p id=\"reason\">{_e(doc.get('summary', ''))}</p>"]
-    if doc.get("rule"):
-        parts.append(f"<p class=\"rule\" id=\"rule\"><b>Rule.</b> {_e(doc['rule'])}</p>")
+             f"<p>Sweep <code>{_e(report.sweep)}</code> on rig <code>{_e(report.rig_id)}</code> at "
+             f"{_num(report.speed_rpm, 'g')} rpm.</p>",
+             f"<p id=\"reason\">{_e(res.summary())}</p>"]
+    if res.rule:
+        parts.append(f"<p class=\"rule\" id=\"rule\"><b>Rule.</b> {_e(res.rule)}</p>")
     parts.append("<h2>Figure</h2>" + figures_html(plots))
-    parts.append("<h2>Candidates: all</h2>" + location_table(doc))
-    parts.append(provenance([("sweep", str(doc["sweep"]), doc.get("sweep_sha256")),
-                             ("rig", str(doc["rig_id"]), rig_sha256),
-                             ("baseline", str(doc.get("baseline", "")), sha256_or_none(doc["baseline"])
-                              if doc.get("baseline") else None)]))
-    return page(f"rotorcheck location - {Path(str(doc['sweep'])).name}", "\n".join(parts))
+    parts.append("<h2>Candidates: all</h2>" + location_table(res))
+    parts.append(provenance([("sweep", report.sweep, report.sweep_sha256),
+                             ("rig", report.rig_id, rig_sha256),
+                             ("baseline", report.baseline,
+                              sha256_or_none(report.baseline) if report.baseline else None)]))
+    return page(f"rotorcheck location - {Path(report.sweep).name}", "\n".join(parts))

@@ -1,6 +1,7 @@
-"""The documents other tools read, as typed classes: ``report.json`` (detect) and the ``--json``
-outputs of ``fit-noise`` and ``validate``. Each key comes from one field here (cli.md's contract
-keys plus context); ``to_dict`` gives the JSON document (optional groups left out when absent).
+"""The documents other tools read, as typed classes: ``report.json`` (detect), ``location.json`` (locate)
+and the ``--json`` outputs of ``fit-noise`` and ``validate``. Each key comes from one field here (cli.md's
+contract keys plus context); ``to_dict`` (``to_json`` of a location) gives the JSON document (optional
+groups left out when absent).
 
 Units: frequencies Hz, receptances m/N, damage dynamics N/m, noise bounds m, angles deg.
 """
@@ -8,11 +9,14 @@ Units: frequencies Hz, receptances m/N, damage dynamics N/m, noise bounds m, ang
 from __future__ import annotations
 
 from dataclasses import dataclass, fields
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-__all__ = ["CONTRACT_KEYS", "DetectionReport", "NoiseReport", "ValidationReport"]
+if TYPE_CHECKING:  # annotations only: the location model is not needed to build or render a report
+    from rotorcheck.location import LocationResult
+
+__all__ = ["CONTRACT_KEYS", "DetectionReport", "LocationReport", "NoiseReport", "ValidationReport"]
 
 #: report.json keys other tools rely on (../shared/spec/cli.md)
 CONTRACT_KEYS = (
@@ -94,7 +98,7 @@ class DetectionReport:
     damage_anchored_noise_min_abs: FloatArray | None = None
     damage_anchored_noise_max_abs: FloatArray | None = None
     damage_dynamics_by_direction: dict[str, dict[str, Any]] | None = None  # {"x"|"y": {"re", "im"} (f,)} N/m
-    location: dict[str, Any] | None = None  # rotorcheck.location.LocationResult.to_dict() (detect --locate)
+    location: LocationResult | None = None  # where and how big (detect --locate); JSON: its to_dict()
     detectability: dict[str, Any] | None = None  # what this sweep could have revealed (rotorcheck.detectability)
     channel_pairs: list[str] | None = None  # measured FRFs "output<-input" (port labels), the rig's io pair first
     baseline: str | None = None  # the baseline file the sweep was compared with
@@ -127,7 +131,28 @@ class DetectionReport:
 
     def to_dict(self) -> dict[str, Any]:
         """The report.json document (arrays as numpy; :func:`rotorcheck.report.reports.render_json`)."""
-        return _as_dict(self)
+        out = _as_dict(self)
+        if self.location is not None:
+            out["location"] = self.location.to_dict()
+        return out
+
+
+@dataclass(frozen=True)
+class LocationReport:
+    """``location.json`` of ``rotorcheck locate`` (and of the fleet's locate stage): the sweep and its
+    sha256, the baseline file, the rig, the sweep's speed (rpm) and where and how big the change is."""
+
+    sweep: str
+    sweep_sha256: str
+    baseline: str
+    rig_id: str
+    speed_rpm: float
+    result: LocationResult
+
+    def to_json(self) -> dict[str, Any]:
+        """The location.json document: the context keys, then :meth:`LocationResult.to_dict`'s."""
+        return {"sweep": self.sweep, "sweep_sha256": self.sweep_sha256, "baseline": self.baseline,
+                "rig_id": self.rig_id, "speed_rpm": self.speed_rpm, **self.result.to_dict()}
 
 
 @dataclass

@@ -248,7 +248,7 @@ class DetectionOutcome:
             rep.fault_beyond_benign = rem
             rep.fault_beyond_benign_frequencies_hz = [float(x) for x in f[rem]]
         if self.location is not None:
-            rep.location = self.location.to_dict()
+            rep.location = self.location
         if self.detectability is not None:
             rep.detectability = self.detectability.to_dict()
         dxy = self.damage_xy
