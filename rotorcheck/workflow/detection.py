@@ -212,6 +212,9 @@ class DetectionOutcome:
             damage_bound_phase_max_deg=np.degrees(ds.phase_max),
         )
         rep.channel_pairs = [f"{o}<-{i}" for o, i in pair_keys(self.run)] or None
+        h = self.found.harmonics
+        if h is not None and h.n_flagged:
+            rep.shaft_harmonic_points = h.points()
         if m is not None:
             rep.confidence, rep.n_tests, rep.point_miss_probability = m.confidence, m.n_tests, m.point_miss
             rep.p_value, rep.point_p_value, rep.variance_dof = m.family_p_value, m.p_value, m.dof[:, 0]
