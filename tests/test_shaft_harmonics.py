@@ -173,3 +173,30 @@ def test_grid_on_1x_flagged_and_a_healthy_repeat_stays_healthy(unbalanced_rig: t
     _, before = _validate_detect(*unbalanced_rig)
     old = before.typed_report()
     assert old.verdict == "damage" and 25.0 in (old.certified_beyond_benign_frequencies_hz or [])
+
+
+def test_cli_info_validate_detect_warn(unbalanced_rig: tuple[Path, Path, Path], tmp_path: Path,
+                                       capsys: pytest.CaptureFixture) -> None:
+    """info, validate and detect each print the warning naming 25 Hz as 1X; validate's --json and
+    report.json carry the points; validate's gamma line counts the 151 points left in the bound."""
+    import json
+
+    from rotorcheck.cli import EXIT_OK, main
+
+    rig, healthy, repeat = unbalanced_rig
+    out = tmp_path / "out"
+    assert main(["info", str(healthy), "--json"]) == EXIT_OK
+    cap = capsys.readouterr()
+    assert "25 Hz (1X = 25 Hz, 0 Hz off)" in cap.err
+    assert [p["order"] for p in json.loads(cap.out)["runs"][0]["shaft_harmonic_points"]] == [1, 2, 3, 4, 4, 4]
+    assert main(["fit-noise", str(healthy), "--rig", str(rig), "--out", str(out)]) == EXIT_OK
+    assert main(["validate", str(healthy), "--out", str(out), "--no-plots", "--json"]) == EXIT_OK
+    cap = capsys.readouterr()
+    assert "25 Hz (1X = 25 Hz, 0 Hz off)" in cap.err and "gamma over 151 points" in cap.err
+    assert json.loads(cap.out)["shaft_harmonic_points"][0]["frequency_hz"] == 25.0
+    assert main(["detect", str(repeat), "--out", str(out), "--no-plots", "--json"]) == EXIT_OK
+    cap = capsys.readouterr()
+    assert "HEALTHY" in cap.err and "25 Hz (1X = 25 Hz, 0 Hz off)" in cap.err
+    doc = json.loads(cap.out)
+    assert doc["shaft_harmonic_points"][0] == {"frequency_hz": 25.0, "order": 1, "harmonic_hz": 25.0,
+                                               "offset_hz": 0.0, "resolution_hz": 25.0 / 32}

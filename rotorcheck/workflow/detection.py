@@ -24,6 +24,7 @@ from rotorcheck.robust.real_box import BoxCertificate
 from rotorcheck.robust.validation import DetectionResult, Verdict
 from rotorcheck.workflow.benign import benign_table
 from rotorcheck.workflow.detectors import Detection, DetectorSettings, make_detector
+from rotorcheck.workflow.detectors.base import HARMONICS_KEPT_OUT
 from rotorcheck.workflow.directional import DirectionalDamage, damage_per_direction
 from rotorcheck.workflow.measured import (
     MeasuredRun,
@@ -166,6 +167,12 @@ class DetectionOutcome:
     def beyond_benign(self) -> BoxCertificate | None:
         """Per-point certificate beyond every benign change in the ranges (joint test)."""
         return self.found.beyond_benign
+
+    @property
+    def harmonics_warning(self) -> str:
+        """Which points sit on a shaft harmonic and what they were kept out of ('' when none)."""
+        h = self.found.harmonics
+        return "" if h is None else h.warning(HARMONICS_KEPT_OUT)
 
     @property
     def exit_code(self) -> int:

@@ -57,12 +57,15 @@ def locate_run(rig: RigConfig, run: MeasuredRun, healthy_frf: np.ndarray, health
     pairs = list(run.pairs)
     bm = benign_model(rig, f, speed, th, KAPPA_NOMINAL, run.speed_rpm - speed, None, pairs if n_pairs > 1 else None)
     env = np.zeros(f.size * n_pairs) if bm is None else np.asarray(bm.envelope, dtype=float)
-    out = run_harmonics([run], (speed,)).flagged
+    harmonics = run_harmonics([run], (speed,))
+    out = harmonics.flagged
     res = locate(rig, box, pairs, f, speed, est.frf, est.var, th, vh, env, false_alarm, elements,
                  crack_section_length=section_length, exclude=out, **options)
     if both and n_pairs > 1:
         res.single_channel = locate(rig, box.for_pair(pairs[0]), pairs[:1], f, speed, est.frf[:, :1],
                                     est.var[:, :1], th[:, :1], vh[:, :1], env[:f.size], false_alarm, elements,
                                     crack_section_length=section_length, exclude=out, **options)
+    if harmonics.n_flagged:
+        res.notes.append(harmonics.warning("the points the location uses"))
     return res
 

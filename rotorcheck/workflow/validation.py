@@ -46,10 +46,15 @@ class ValidationOutcome:
     harmonics: ShaftHarmonics | None = None  # points on a shaft harmonic: status 'excluded', in no claim
 
     @property
+    def not_enclosed(self) -> np.ndarray:
+        """(f,) bool: points where gamma_h could not be verified (unexplainable, solver failure, bad data);
+        points excluded (on a shaft harmonic) are not among them."""
+        return np.asarray(~np.isin(self.result.status, ["ok", STATUS_EXCLUDED]))
+
+    @property
     def n_not_enclosed(self) -> int:
-        """Points where gamma_h could not be verified (unexplainable, solver failure, bad data); points
-        excluded (on a shaft harmonic) are not counted."""
-        return int(np.count_nonzero(~np.isin(self.result.status, ["ok", STATUS_EXCLUDED])))
+        """The number of :attr:`not_enclosed` points."""
+        return int(np.count_nonzero(self.not_enclosed))
 
     @property
     def bounded(self) -> np.ndarray:
