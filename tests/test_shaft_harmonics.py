@@ -200,3 +200,18 @@ def test_cli_info_validate_detect_warn(unbalanced_rig: tuple[Path, Path, Path], 
     doc = json.loads(cap.out)
     assert doc["shaft_harmonic_points"][0] == {"frequency_hz": 25.0, "order": 1, "harmonic_hz": 25.0,
                                                "offset_hz": 0.0, "resolution_hz": 25.0 / 32}
+
+
+@pytest.mark.parametrize("name", ["healthy_1000rpm.h5", "healthy_2000rpm.h5"])
+def test_flagged_points_are_where_the_scatter_says_so(name: str) -> None:
+    """A second method: after the harmonics are fitted out of the per-period phasors, the points whose
+    scatter exceeds the pooled noise (fit-noise's F test) are flagged points (1000 rpm: 49.66 and 67.13 Hz;
+    2000 rpm: 67.13, 99.89 and 132.64 Hz of the flagged 67.13, 99.89, 132.64, 134.83 Hz)."""
+    from rotorcheck.config import load_config
+    from rotorcheck.workflow.measured import load_run, run_harmonics
+    from rotorcheck.workflow.noise import fit_noise
+
+    run = load_run(samples_dir() / "crack_rig" / name, load_config(configs_dir() / "crack_rig.yaml"))
+    excess = fit_noise(run).details["excess_scatter_hz"]
+    flagged = run.frequency_hz[run_harmonics([run]).flagged]
+    assert excess and set(excess) <= set(flagged.tolist())
