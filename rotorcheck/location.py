@@ -346,7 +346,8 @@ def locate(config: RigConfig, box: Any, pairs: Sequence[ChannelPair], freq_hz: n
            t_new: np.ndarray, var_new: np.ndarray, t_healthy: np.ndarray, var_healthy: np.ndarray,
            benign_envelope: np.ndarray, false_alarm: float = 0.01, elements: Sequence[int] | None = None,
            step: float = 0.01, slices: int = 12, max_boxes: int = 8, refine: int = 2,
-           refine_boxes: int = 48, crack_section_length: float | None = None) -> LocationResult:
+           refine_boxes: int = 48, crack_section_length: float | None = None,
+           exclude: np.ndarray | None = None) -> LocationResult:
     """Candidates per element (module docstring). ``box`` the benign parameters as a
     :class:`rotorcheck.signatures.BenignBox` (its model at ``speed_rpm``); ``t_*``, ``var_*`` (f, P) the
     new and healthy FRFs (m/N) and the variances of their means (m^2/N^2), one column per pair of
@@ -355,7 +356,8 @@ def locate(config: RigConfig, box: Any, pairs: Sequence[ChannelPair], freq_hz: n
     halved (loss, fraction); ``slices`` its first division; ``max_boxes`` the branch and bound's budget
     per slice for every candidate, ``refine_boxes`` for a second pass on the ``refine`` best ranked (a
     larger budget only narrows a certified interval); ``crack_section_length`` (m) the breathing crack's
-    section length for the depth relation (:func:`section_length`).
+    section length for the depth relation (:func:`section_length`); ``exclude`` (f,) bool: points never used
+    (on a shaft harmonic).
     ``false_alarm``: the chance that the true element is excluded when its hypothesis holds and the model
     errs within its stated bounds (Sidak over the points used)."""
     from rotorcheck.robust.measured import io_model_error
@@ -380,6 +382,8 @@ def locate(config: RigConfig, box: Any, pairs: Sequence[ChannelPair], freq_hz: n
     trusted = err <= MAX_MODEL_ERROR
     if hypothesis == "breathing":
         trusted &= ~_near_sideband(box.model, f, speed_rpm)[:, None]
+    if exclude is not None:
+        trusted &= ~np.asarray(exclude, dtype=bool).reshape(nf, 1)
     chosen = _select_points(np.where(trusted, change2, np.nan), N_TOP, N_SPREAD)
     m = chosen.size
     z = float(np.sqrt(-np.log1p(-(1.0 - false_alarm) ** (1.0 / max(m, 1)))))  # |r|^2/sigma^2 ~ Exp(1)

@@ -7,6 +7,7 @@ from typing import Annotated
 
 import numpy as np
 import typer
+from rich.markup import escape
 
 from rotorcheck.cli.common import (
     DEFAULT_OUT,
@@ -151,13 +152,16 @@ def validate(
                      if plots else [])
         res = outcome.result
         n_bad += outcome.n_not_enclosed
-        g = res.gamma[np.isfinite(res.gamma)]
+        g = res.gamma[outcome.bounded]
         unit = "m/N" if outcome.model.structure == "additive" else (
             "(relative)" if outcome.model.structure == "multiplicative" else f"({outcome.model.parameter})")
-        err.print(f"{f'run {first.run_id} ({first.speed_rpm:g} rpm): ' if several else ''}gamma over {res.gamma.size} "
-                  f"points ({enclose}): median {np.median(g):.3g}, max {np.max(g):.3g} {unit}")
+        err.print(f"{f'run {first.run_id} ({first.speed_rpm:g} rpm): ' if several else ''}gamma over {g.size} "
+                  f"points ({enclose}): median {np.median(g):.3g}, max {np.max(g):.3g} {unit}"
+                  if g.size else f"gamma: no point enclosed ({enclose})")
+        if outcome.harmonics_warning:
+            err.print(f"[yellow]warning[/]: {escape(outcome.harmonics_warning)}")
         if outcome.n_not_enclosed:
-            bad = np.flatnonzero(res.status != "ok")
+            bad = np.flatnonzero(outcome.not_enclosed)
             err.print(f"[yellow]{outcome.n_not_enclosed} points not enclosed[/]: " + ", ".join(
                 f"{runs[0].frequency_hz[i]:.1f} Hz ({res.status[i]})" for i in bad[:10]))
         for p_ in files:

@@ -120,6 +120,8 @@ def print_outcome(outcome: Any, report: DetectionReport, prefix: str = "") -> No
     err.print(f"details: {v.reason}; {report.n_fault_points} of {report.n_points} points are fault points"
               + (f" (sweep p-value {fmt_p(report.p_value)}, {report.confidence:.0%} family-wise)"
                  if report.p_value is not None and report.confidence is not None else ""))
+    if outcome.harmonics_warning:
+        err.print(f"[yellow]warning[/]: {escape(outcome.harmonics_warning)}")
     damage = v.verdict == "damage"  # a healthy verdict shows no finding: no element, no damage estimate
     for line in (workflow.joint_summary(outcome), workflow.anchored_summary(outcome) if damage else ""):
         if line:

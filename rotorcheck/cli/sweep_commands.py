@@ -4,7 +4,7 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import numpy as np
 import typer
@@ -25,6 +25,12 @@ from rotorcheck.cli.common import (
     utc_now,
 )
 from rotorcheck.errors import InputError, finite_positive, in_open_unit
+
+
+def _warn_harmonics(run: dict[str, Any]) -> None:
+    """The run's shaft-harmonic warning (summary's ``shaft_harmonics_warning``), if any."""
+    if run["shaft_harmonics_warning"]:
+        err.print(f"[yellow]warning[/]: run {run['run_id']}: {escape(run['shaft_harmonics_warning'])}")
 
 
 @app.command()
@@ -59,6 +65,7 @@ def info(
             spread = f"frf std median {sd['median']:.3g} m/N" if sd else "no frf variance"
             err.print(f"run {run['run_id']}: {run['speed_rpm']:g} rpm, {g['n']} points {g['min_hz']:g}-{g['max_hz']:g} "
                       f"Hz, FRF only (no phasors); {spread}; noise: {run['noise_source']}")
+            _warn_harmonics(run)
             continue
         patterns = f", {run['n_exc']} excitation patterns" if run["n_exc"] and run["n_exc"] > 1 else ""
         cleaned = ""
@@ -74,6 +81,7 @@ def info(
             f"{noise['pooled_bound_m']:.3g} m pooled ({noise['excess_scatter_points']} points with excess scatter)"
             + cleaned
         )
+        _warn_harmonics(run)
     if as_json:
         emit_json(doc)
     return EXIT_OK

@@ -228,6 +228,10 @@ def where_paragraphs(report: DetectionReport, ranges: Callable[[list[float]], st
     out = [f"{report.n_fault_points} of {report.n_points} points are certified fault points (the healthy uncertain "
            f"model cannot explain them): {ranges(list(f[fault]))}."]
     status = np.asarray(report.status).astype(str)
-    for s in (s for s in np.unique(status) if s not in ("ok", "fault")):
+    for s in (s for s in np.unique(status) if s not in ("ok", "fault", "excluded")):
         out.append(f"{int(np.count_nonzero(status == s))} points with status '{s}': {ranges(list(f[status == s]))}.")
+    for p in report.shaft_harmonic_points or []:
+        out.append(f"{p['frequency_hz']:.2f} Hz sits {abs(p['offset_hz']):.2g} Hz from {p['order']}X "
+                   f"({p['harmonic_hz']:.4g} Hz), inside the lock-in's resolution {p['resolution_hz']:.2g} Hz: it "
+                   "measures the shaft's own response there, not the FRF, and is left out of every certified claim.")
     return out

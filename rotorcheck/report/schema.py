@@ -128,6 +128,9 @@ class DetectionReport:
     n_certified_beyond_benign: int | None = None
     n_undecided_beyond_benign: int | None = None
     n_certified_beyond_benign_complex: int | None = None  # the same with each parameter a complex disc
+    # points on a shaft harmonic (rotorcheck.signal.harmonics): {frequency_hz, order, harmonic_hz, offset_hz,
+    # resolution_hz}; status 'excluded', kept out of every certified claim
+    shaft_harmonic_points: list[dict[str, Any]] | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """The report.json document (arrays as numpy; :func:`rotorcheck.report.reports.render_json`)."""
@@ -184,8 +187,10 @@ class ValidationReport:
     enclose: str
     uncertainty: str
     n_points: int
-    n_not_enclosed: int
+    n_not_enclosed: int  # points not 'ok' and not 'excluded'
     baseline: str
+    # points on a shaft harmonic (status 'excluded': no part of the bound); see DetectionReport
+    shaft_harmonic_points: list[dict[str, Any]] | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON document."""

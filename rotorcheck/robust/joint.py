@@ -199,14 +199,24 @@ def _max_one_sided(C: np.ndarray, draws: int, seed: int) -> np.ndarray:
 def joint_test(residual: np.ndarray, var_total: np.ndarray, signatures: np.ndarray,
                elements: Sequence[int], benign: BenignModel | None = None,
                learned: LearnedDirections | None = None, false_alarm: float = 0.01,
-               draws: int = MC_DRAWS, seed: int = MC_SEED) -> JointResult:
+               draws: int = MC_DRAWS, seed: int = MC_SEED, exclude: np.ndarray | None = None) -> JointResult:
     """The joint GLR test (module docstring). ``residual`` (n,) complex m/N; ``var_total`` (n,) m^2/N^2;
-    ``signatures`` (n_e, n) complex m/N per unit stiffness loss of each candidate element."""
+    ``signatures`` (n_e, n) complex m/N per unit stiffness loss of each candidate element. ``exclude`` (n,)
+    bool: points that carry no evidence (weight 0 in every fit and statistic, not counted in ``n_points``,
+    the per-point Sidak threshold or the dof; their ``point_statistic`` is 0), e.g. points on a shaft
+    harmonic."""
     if not 0.0 < false_alarm < 1.0:
         raise ValueError(f"false_alarm must be in (0, 1), got {false_alarm}")
     r = np.asarray(residual, dtype=complex).ravel()
     var = np.asarray(var_total, dtype=float).ravel()
     S = np.asarray(signatures, dtype=complex).reshape(len(elements), r.size)
+    used = np.ones(r.size, dtype=bool) if exclude is None else ~np.asarray(exclude, dtype=bool).ravel()
+    used2 = np.concatenate([used, used])
+    n_used = int(np.count_nonzero(used))
+
+    def weights(v: np.ndarray) -> np.ndarray:
+        """:func:`whitening` of the points used, 0 at the excluded ones."""
+        return np.where(used2, whitening(np.where(used, v, 1.0)), 0.0)
     notes: list[str] = []
     p = 0 if benign is None else len(benign.lo)
     q = 0 if learned is None else learned.U.shape[0]
@@ -267,7 +277,7 @@ def joint_test(residual: np.ndarray, var_total: np.ndarray, signatures: np.ndarr
         return optimize.least_squares(whitened, x, bounds=(lo, hi), jac=lambda y, wv: -jac_at(y, wv),
                                       x_scale="jac", method="trf", max_nfev=60, args=(ww,)).x
 
-    w = whitening(var)
+    w = weights(var)
     theta = x0
     allowance = np.zeros(r.size)
     if lo.size:
@@ -279,7 +289,7 @@ def joint_test(residual: np.ndarray, var_total: np.ndarray, signatures: np.ndarr
         for _ in range(2 if kappa > 0 else 1):  # refit once with the model-error variance
             theta = refine(theta, w)
             allowance = allowance_at(theta)
-            w = whitening(var + allowance**2)
+            w = weights(var + allowance**2)
     res0 = whitened(theta, w)
     chi2_h0 = float(res0 @ res0)
     J = jac_at(theta, w)
@@ -355,9 +365,9 @@ def joint_test(residual: np.ndarray, var_total: np.ndarray, signatures: np.ndarr
         damage=bool(p_value < false_alarm), elements=tuple(int(e) for e in elements), t_element=t_el,
         severity=sev, severity_se=se, detectable=detectable, best=best, theta=theta[:p],
         theta_se=theta_se, theta_names=benign.names if benign is not None else (),
-        theta_at_bound=at_bound[:p], chi2_h0=chi2_h0, dof_h0=int(2 * r.size - int(np.count_nonzero(~at_bound))),
-        learned=q, kappa=kappa, n_points=r.size, unexplained=r - model_ri(theta),
+        theta_at_bound=at_bound[:p], chi2_h0=chi2_h0, dof_h0=int(2 * n_used - int(np.count_nonzero(~at_bound))),
+        learned=q, kappa=kappa, n_points=n_used, unexplained=r - model_ri(theta),
         point_statistic=res0[: r.size] ** 2 + res0[r.size:] ** 2,
-        point_threshold=float(-2.0 * np.log(-np.expm1(np.log1p(-false_alarm) / max(r.size, 1)))),
+        point_threshold=float(-2.0 * np.log(-np.expm1(np.log1p(-false_alarm) / max(n_used, 1)))),
         model_error=allowance, notes=notes, benign=benign,
     )

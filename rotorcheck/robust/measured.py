@@ -45,7 +45,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rotorcheck.robust.noise import point_miss
-from rotorcheck.robust.validation import Verdict, longest_run
+from rotorcheck.robust.validation import STATUS_EXCLUDED, Verdict, longest_run
 
 __all__ = [
     "MEASURED_RULE",
@@ -237,11 +237,13 @@ def _f_isf(miss: float, nu: np.ndarray) -> np.ndarray:
 
 
 def measured_detect(new: FrfEstimate, healthy: FrfEstimate, confidence: float = 0.99,
-                    e21: np.ndarray | None = None) -> MeasuredDetection:
+                    e21: np.ndarray | None = None, exclude: np.ndarray | None = None) -> MeasuredDetection:
     """Certified fault points of ``new`` against the measured healthy ``healthy`` (module docstring).
 
     ``e21`` (f, n_out) complex: the model's damage-port to output receptances (used with several
     outputs for the directional test; ignored with one output, where the test is the same).
+    ``exclude`` (f,) bool: points not tested (status 'excluded', no fault, no p-value, not in the Sidak
+    family), e.g. points on a shaft harmonic.
     """
     if not 0.0 < confidence < 1.0:
         raise ValueError("confidence must be in (0, 1)")
@@ -253,6 +255,8 @@ def measured_detect(new: FrfEstimate, healthy: FrfEstimate, confidence: float = 
     nu = welch_dof([new.var, healthy.var], [new.dof, healthy.dof])
     good = (np.all(np.isfinite(d), axis=1) & np.all(np.isfinite(s), axis=1)
             & np.all(np.isfinite(healthy.frf), axis=1))
+    out = np.zeros(good.shape, dtype=bool) if exclude is None else np.asarray(exclude, dtype=bool).reshape(-1)
+    good = good & ~out
     use_dir = e21 is not None and n_out > 1
     n_tests = int(np.count_nonzero(good)) * (n_out + (1 if use_dir else 0))
     miss = point_miss(confidence, max(n_tests, 1), "sidak")
@@ -285,7 +289,8 @@ def measured_detect(new: FrfEstimate, healthy: FrfEstimate, confidence: float = 
         ratio = np.fmax(ratio, np.where(np.isfinite(dir_stat), dir_stat, 0.0))
         p_point = np.minimum(p_point, _f_sf(t, nu_min))
     fault = good & (ratio > 1.0)
-    status = np.where(~good, STATUS_UNDECIDED, np.where(fault, STATUS_FAULT, STATUS_OK)).astype("<U13")
+    status = np.where(out, STATUS_EXCLUDED, np.where(~good, STATUS_UNDECIDED, np.where(fault, STATUS_FAULT,
+                                                                                     STATUS_OK))).astype("<U13")
     p_point = np.where(good, np.minimum(p_point, 1.0), np.nan)
     ratio = np.where(good, ratio, np.nan)
     return MeasuredDetection(dist, radius, ratio, p_point, fault, status, nu, miss, confidence,
@@ -391,7 +396,7 @@ def measured_verdict(fault: np.ndarray, status: np.ndarray, confidence: float, n
     fault = np.asarray(fault, dtype=bool)
     n = fault.size
     n_fault = int(np.count_nonzero(fault))
-    undecided = int(np.count_nonzero(~np.isin(np.asarray(status), [STATUS_OK, STATUS_FAULT])))
+    undecided = int(np.count_nonzero(~np.isin(np.asarray(status), [STATUS_OK, STATUS_FAULT, STATUS_EXCLUDED])))
     if n_fault:
         why = (f"{n_fault} certified fault points at {confidence:.0%} family-wise confidence "
                f"(Sidak over {n_tests} tests)")

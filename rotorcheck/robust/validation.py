@@ -46,6 +46,7 @@ from rotorcheck.robust.mu.structure import (
 from rotorcheck.robust.noise import NoiseBound
 
 __all__ = [
+    "STATUS_EXCLUDED",
     "DetectionResult",
     "ValidationResult",
     "Verdict",
@@ -57,6 +58,9 @@ __all__ = [
 
 STATUS_FAULT = "fault"
 STATUS_NO_BASELINE = "no_baseline"
+#: a point the caller kept out of every claim (e.g. on a shaft harmonic): neither fault nor undecided, and not
+#: an enclosure failure of the healthy data
+STATUS_EXCLUDED = "excluded"
 _SEVERITY = {STATUS_OK: 0, STATUS_LOWER_ONLY: 1, STATUS_UNEXPLAINABLE: 2, STATUS_FAILED: 3,
              STATUS_BAD_DATA: 4}
 _UNDECIDED = (STATUS_FAILED, STATUS_NO_BASELINE, STATUS_BAD_DATA)
@@ -93,8 +97,13 @@ class ValidationResult:
 
     @property
     def enclosed(self) -> bool:
-        """True when every point has a finite, verified gamma_h."""
-        return bool(np.all(self.status == STATUS_OK))
+        """True when every point not excluded has a finite, verified gamma_h."""
+        return bool(np.all(np.isin(self.status, [STATUS_OK, STATUS_EXCLUDED])))
+
+    def exclude(self, points: np.ndarray) -> None:
+        """Mark ``points`` (f,) bool 'excluded': their gamma_h stays computed (figures) but is no part of the
+        bound (status not 'ok': detection and the verdict do not use it)."""
+        self.status = np.where(np.asarray(points, dtype=bool), STATUS_EXCLUDED, self.status).astype("<U13")
 
 
 def _as_list(x: np.ndarray | Sequence[np.ndarray]) -> list[np.ndarray]:
@@ -305,7 +314,8 @@ def verdict(fault: np.ndarray, status: np.ndarray, healthy_status: np.ndarray | 
     adjacent fault points is ``>= min_run`` (fault points are certified invalidations, so they count
     even when other points could not be decided); otherwise 'inconclusive' if any point is
     undecided (solver failure, bad data, no baseline) or the healthy data could not be enclosed somewhere
-    (``healthy_status`` not all 'ok'); otherwise 'healthy'.
+    (``healthy_status`` not all 'ok'); otherwise 'healthy'. Points of status 'excluded' (in either) are
+    neither undecided nor an enclosure failure; they are no fault points either (the caller clears them).
     """
     fault = np.asarray(fault, dtype=bool)
     status = np.asarray(status)
@@ -320,7 +330,7 @@ def verdict(fault: np.ndarray, status: np.ndarray, healthy_status: np.ndarray | 
         return Verdict("damage", why, n, n_fault, undecided, run, thr)
     bad_healthy = 0
     if healthy_status is not None:
-        bad_healthy = int(np.count_nonzero(np.asarray(healthy_status) != STATUS_OK))
+        bad_healthy = int(np.count_nonzero(~np.isin(np.asarray(healthy_status), [STATUS_OK, STATUS_EXCLUDED])))
     if undecided or bad_healthy:
         reasons: list[str] = []
         if undecided:

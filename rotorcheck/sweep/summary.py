@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 
 from rotorcheck.robust.noise import noise_bound_from_variance, noise_bound_pooled
+from rotorcheck.signal.harmonics import lockin_resolution_hz, shaft_harmonic_points
 from rotorcheck.signal.lockin import SHAFT_ORDERS, remove_shaft_harmonics
 from rotorcheck.sweep.format import Run, Sweep, sweep_schema_version
 
@@ -91,13 +92,27 @@ def _frf_only_noise(sweep: Sweep, run: Run, confidence: float) -> dict[str, Any]
     return out
 
 
+#: what ``info`` says the flagged points will be kept out of
+HARMONICS_KEPT_OUT = "every certified claim of validate, detect and locate"
+
+
+def _harmonics(run: Run) -> dict[str, Any]:
+    """The run's points on a shaft harmonic (:mod:`rotorcheck.signal.harmonics`): records and the warning."""
+    n = None if run.n_periods_exc is None else np.min(np.asarray(run.n_periods_exc), axis=1)
+    res, assumed = lockin_resolution_hz(run.frequency, n)
+    h = shaft_harmonic_points(run.frequency, float(run.speed_rpm), res, assumed_periods=assumed)
+    return {"shaft_harmonic_points": h.points(), "shaft_harmonics_warning": h.warning(HARMONICS_KEPT_OUT)}
+
+
 def summarize(sweep: Sweep, confidence: float = 0.99) -> dict[str, Any]:
     """Runs, speeds, grids, channels and noise estimates of a (validated) sweep.
 
     Per run: grid (min/max Hz, n), ``n_periods`` range, and ``noise``: per output channel and over
     all outputs together (family of ``f * n_out`` points) the median and max ``sqrt(output_var)``
     and the Sidak family-wise bound at ``confidence``; ``n_exc`` (patterns per frequency, None for
-    an FRF-only run), ``frf_only`` and ``noise_source``. ``shared_grid`` tells whether all runs
+    an FRF-only run), ``frf_only`` and ``noise_source``; ``shaft_harmonic_points`` (the points within the
+    lock-in's resolution of 1X..4X, :mod:`rotorcheck.signal.harmonics`) and ``shaft_harmonics_warning`` ('' when
+    none). ``shared_grid`` tells whether all runs
     share the frequency grid bit for bit; ``schema_version`` is the version the sweep is (or would
     be) written in.
     """
@@ -138,7 +153,7 @@ def summarize(sweep: Sweep, confidence: float = 0.99) -> dict[str, Any]:
             })
         entry.update({"n_exc": run.n_exc if not run.is_frf_only else None,
                       "frf_only": run.is_frf_only,
-                      "noise_source": run.noise_source})
+                      "noise_source": run.noise_source, **_harmonics(run)})
         runs.append(entry)
     shared = all(g.shape == grids[0].shape and np.array_equal(g, grids[0]) for g in grids)
     all_f = np.concatenate(grids)

@@ -3,6 +3,7 @@ the per-point certificate beyond benign change, and learning drift from several 
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -14,6 +15,7 @@ from rotorcheck.errors import InputError
 from rotorcheck.nominal import ChannelPair
 from rotorcheck.robust.joint import BenignModel, JointResult, LearnedDirections, joint_test, learn_directions
 from rotorcheck.robust.real_box import BoxCertificate, certify_points, merge_certificates
+from rotorcheck.robust.validation import STATUS_EXCLUDED
 from rotorcheck.signatures import SILENT, benign_box, benign_prediction, crack_signatures, io_frf, stacked
 from rotorcheck.variability import benign_at, benign_parameters
 from rotorcheck.workflow.measured import MeasuredRun, frf_estimate, per_pair
@@ -98,10 +100,12 @@ def benign_model(rig: RigConfig, f: np.ndarray, speed_rpm: float, Th: np.ndarray
 
 def joint_detection(rig: RigConfig, Th: np.ndarray, var_h: np.ndarray, run: MeasuredRun, kappa: float,
                     learned: LearnedDirections | None = None, false_alarm: float = 0.01,
-                    speed_rpm: float | None = None, correction: np.ndarray | None = None) -> JointResult:
+                    speed_rpm: float | None = None, correction: np.ndarray | None = None,
+                    exclude: np.ndarray | None = None) -> JointResult:
     """The joint test (:mod:`rotorcheck.robust.joint`) of ``run`` against the healthy FRF ``Th`` (f,) or
     (f, P), one column per channel pair, with the variance of its mean ``var_h`` (same shape), m^2/N^2;
-    every point of every pair enters one statistic. ``correction``: see :func:`learn_benign`."""
+    every point of every pair enters one statistic, but those of ``exclude`` (f,) bool (points on a shaft
+    harmonic: no weight in the benign fit or the statistic). ``correction``: see :func:`learn_benign`."""
 
     f = run.frequency_hz
     speed = run.speed_rpm if speed_rpm is None else speed_rpm
@@ -110,16 +114,20 @@ def joint_detection(rig: RigConfig, Th: np.ndarray, var_h: np.ndarray, run: Meas
     pairs = run.pairs if run.n_pairs > 1 else None
     els, S = crack_signatures(rig, f, speed, th, pairs=pairs)
     benign = benign_model(rig, f, speed, th, kappa, run.speed_rpm - speed, correction, pairs)
-    return joint_test(stacked(est.frf - th), stacked(est.var + vh), S, els, benign, learned, false_alarm)
+    out = None if exclude is None else np.tile(np.asarray(exclude, dtype=bool), est.frf.shape[1])
+    return joint_test(stacked(est.frf - th), stacked(est.var + vh), S, els, benign, learned, false_alarm,
+                      exclude=out)
 
 
 def certify_beyond_benign(rig: RigConfig, Th: np.ndarray, var_h: np.ndarray, run: MeasuredRun, joint: JointResult,
-                          speed_rpm: float | None = None, max_boxes: int = 200) -> tuple[Any, list[str]] | None:
+                          speed_rpm: float | None = None, max_boxes: int = 200, exclude: np.ndarray | None = None
+                          ) -> tuple[Any, list[str]] | None:
     """Per point: is the change certified beyond every benign change inside the ranges (the parameters
     real, branch and bound; :mod:`rotorcheck.robust.real_box`), given both sweeps' noise and the joint
     test's model-error allowance at that point? With several channel pairs each is certified on its own
-    and a point counts when any pair is (the quantile is Sidak over every point of every pair). None
-    without benign parameters that change the model. Returns the certificate and notes."""
+    and a point counts when any pair is (the quantile is Sidak over every point of every pair). Points of
+    ``exclude`` (f,) bool are not certified (status 'excluded'). None without benign parameters that change
+    the model. Returns the certificate and notes."""
 
     speed = run.speed_rpm if speed_rpm is None else speed_rpm
     params = benign_at(rig, speed) if rig.variability else ()
@@ -146,7 +154,12 @@ def certify_beyond_benign(rig: RigConfig, Th: np.ndarray, var_h: np.ndarray, run
     if joint.learned:
         notes.append("the per-point certificate beyond benign change uses the model's parameters only (the "
                      "learned benign directions are no parameters of the model)")
-    return merge_certificates(certs), notes
+    cert = merge_certificates(certs)
+    if exclude is not None and np.any(exclude):
+        out = np.asarray(exclude, dtype=bool)
+        cert = dataclasses.replace(cert, status=np.where(out, STATUS_EXCLUDED, cert.status).astype("<U11"),
+                                   complex_unexplained=cert.complex_unexplained & ~out)
+    return cert, notes
 
 
 @dataclass
@@ -175,8 +188,8 @@ def _regress(theta: np.ndarray, left: np.ndarray, ridge: float = 1e-3) -> np.nda
     return np.linalg.solve(G + lam * np.eye(G.shape[0]), t.T @ left) / scale[:, None]
 
 
-def learn_benign(rig: RigConfig, runs: list[MeasuredRun], false_alarm: float = 0.01, iterations: int = 3
-                 ) -> BenignLearning:
+def learn_benign(rig: RigConfig, runs: list[MeasuredRun], false_alarm: float = 0.01, iterations: int = 3,
+                 exclude: np.ndarray | None = None) -> BenignLearning:
     """From several healthy sweeps (a warm-up, several days: drifted across the ranges):
 
     1. each sweep's benign parameters ``theta_k`` fitted against the mean, and what the model leaves,
@@ -189,7 +202,9 @@ def learn_benign(rig: RigConfig, runs: list[MeasuredRun], false_alarm: float = 0
        corners (on the crack rig, with an earlier allowance, 8 training sweeps gave 1.0 and 4 of 10
        benign corners were then called damage).
 
-    One sweep: kappa = :data:`KAPPA_NOMINAL`, nothing learned; two: directions only (no leave-one-out)."""
+    One sweep: kappa = :data:`KAPPA_NOMINAL`, nothing learned; two: directions only (no leave-one-out).
+    Points of ``exclude`` (f,) bool (on a shaft harmonic) teach nothing: no weight in the fits, zero in what
+    is learned from."""
 
     if len(runs) < 2:
         return BenignLearning(KAPPA_NOMINAL)
@@ -201,12 +216,14 @@ def learn_benign(rig: RigConfig, runs: list[MeasuredRun], false_alarm: float = 0
     var_mean = np.sum([e.var for e in ests], axis=0) / len(ests) ** 2
     var_one = np.mean([e.var for e in ests], axis=0)
     var_flat = stacked(var_one)
+    used = np.ones(var_flat.size, dtype=bool) if exclude is None else ~np.tile(np.asarray(exclude, dtype=bool),
+                                                                                 var_flat.size // frfs[0].shape[0])
 
     def fits(C: np.ndarray | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        js = [joint_detection(rig, mean, var_mean, r, 0.0, None, false_alarm, speed, C) for r in runs]
+        js = [joint_detection(rig, mean, var_mean, r, 0.0, None, false_alarm, speed, C, exclude) for r in runs]
         th = np.array([j.theta for j in js], dtype=float)
-        left = np.array([j.unexplained for j in js])
-        raw = left + (th @ C if C is not None else 0.0)  # what the uncorrected model leaves
+        left = np.array([j.unexplained for j in js]) * used
+        raw = left + (th @ C if C is not None else 0.0) * used  # what the uncorrected model leaves
         return th, left, raw
 
     C: np.ndarray | None = None
@@ -245,7 +262,7 @@ def learn_benign(rig: RigConfig, runs: list[MeasuredRun], false_alarm: float = 0
             inner = np.sum(wgt * s_m.conj() * s_d)
             nd, nm = np.sum(wgt * np.abs(s_d) ** 2), np.sum(wgt * np.abs(s_m) ** 2)
             share[prm.name] = (float(abs(inner) / nd), float(abs(inner) / np.sqrt(nd * nm)))
-    spread = np.array([stacked(x - mean) for x in frfs])
+    spread = np.array([stacked(x - mean) for x in frfs]) * used
     explained = 1.0 - float(np.sum(wgt * np.abs(left) ** 2) / np.sum(wgt * np.abs(spread) ** 2))
     if len(runs) < 3:
         return BenignLearning(KAPPA_NOMINAL, C, learned, th, share, explained)
@@ -256,7 +273,7 @@ def learn_benign(rig: RigConfig, runs: list[MeasuredRun], false_alarm: float = 0
         v = np.sum([ests[j].var for j in rest], axis=0) / len(rest) ** 2
         Ci = regress(th[rest], raw[rest]) if C is not None else None
         lrn = learn_directions([left[j] for j in rest], 2.0 * var_flat)
-        return bool(joint_detection(rig, c, v, runs[i], kappa, lrn, false_alarm, speed, Ci).damage)
+        return bool(joint_detection(rig, c, v, runs[i], kappa, lrn, false_alarm, speed, Ci, exclude).damage)
 
     kappa = next((k for k in KAPPA_GRID if not any(left_out_called_damage(i, k) for i in range(len(runs)))),
                  KAPPA_GRID[-1])

@@ -25,6 +25,7 @@ from rotorcheck.robust.real_box import BoxCertificate
 from rotorcheck.robust.validation import DetectionResult, Verdict
 from rotorcheck.workflow.benign import benign_table
 from rotorcheck.workflow.detectors import Detection, DetectorSettings, make_detector
+from rotorcheck.workflow.detectors.base import HARMONICS_KEPT_OUT
 from rotorcheck.workflow.directional import DirectionalDamage, damage_per_direction
 from rotorcheck.workflow.measured import (
     MeasuredRun,
@@ -169,6 +170,12 @@ class DetectionOutcome:
         return self.found.beyond_benign
 
     @property
+    def harmonics_warning(self) -> str:
+        """Which points sit on a shaft harmonic and what they were kept out of ('' when none)."""
+        h = self.found.harmonics
+        return "" if h is None else h.warning(HARMONICS_KEPT_OUT)
+
+    @property
     def exit_code(self) -> int:
         return EXIT_CODES[self.verdict.verdict]
 
@@ -214,6 +221,9 @@ class DetectionOutcome:
         )
         rep.channel_pairs = [f"{o}<-{i}" for o, i in pair_keys(self.run)] or None
         rep.stations_m = [float(z) for z in self.rig.stations] or None
+        h = self.found.harmonics
+        if h is not None and h.n_flagged:
+            rep.shaft_harmonic_points = h.points()
         if m is not None:
             rep.confidence, rep.n_tests, rep.point_miss_probability = m.confidence, m.n_tests, m.point_miss
             rep.p_value, rep.point_p_value, rep.variance_dof = m.family_p_value, m.p_value, m.dof[:, 0]

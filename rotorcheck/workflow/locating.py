@@ -14,7 +14,7 @@ from rotorcheck.signatures import benign_box
 from rotorcheck.variability import benign_at
 from rotorcheck.workflow.benign import KAPPA_NOMINAL, benign_model
 from rotorcheck.workflow.detection import healthy_frf_of
-from rotorcheck.workflow.measured import MeasuredRun, frf_estimate, per_pair
+from rotorcheck.workflow.measured import MeasuredRun, frf_estimate, per_pair, run_harmonics
 from rotorcheck.workflow.rigs import baseline_updates, check_elements, updated_rig
 
 
@@ -39,7 +39,8 @@ def locate_run(rig: RigConfig, run: MeasuredRun, healthy_frf: np.ndarray, health
     of its mean, the rig's benign parameters real in their ranges (at the healthy ``speed_rpm``; the run's
     offset from it moves the speed range). With several channel pairs and ``both``, the rig's own actuator
     -> sensor pair alone is located too (``result.single_channel``). ``section_length`` (m): the breathing
-    crack's, for depths. ``options`` go to :func:`rotorcheck.location.locate`."""
+    crack's, for depths. ``options`` go to :func:`rotorcheck.location.locate`. Points on a shaft harmonic (at
+    the run's or the healthy speed, :func:`~rotorcheck.workflow.measured.run_harmonics`) are not used."""
 
     if rig.kind != "rotor":
         raise InputError(None, "--rig", "locating needs a rotor's shaft elements; this rig is lumped")
@@ -56,11 +57,15 @@ def locate_run(rig: RigConfig, run: MeasuredRun, healthy_frf: np.ndarray, health
     pairs = list(run.pairs)
     bm = benign_model(rig, f, speed, th, KAPPA_NOMINAL, run.speed_rpm - speed, None, pairs if n_pairs > 1 else None)
     env = np.zeros(f.size * n_pairs) if bm is None else np.asarray(bm.envelope, dtype=float)
+    harmonics = run_harmonics([run], (speed,))
+    out = harmonics.flagged
     res = locate(rig, box, pairs, f, speed, est.frf, est.var, th, vh, env, false_alarm, elements,
-                 crack_section_length=section_length, **options)
+                 crack_section_length=section_length, exclude=out, **options)
     if both and n_pairs > 1:
         res.single_channel = locate(rig, box.for_pair(pairs[0]), pairs[:1], f, speed, est.frf[:, :1],
                                     est.var[:, :1], th[:, :1], vh[:, :1], env[:f.size], false_alarm, elements,
-                                    crack_section_length=section_length, **options)
+                                    crack_section_length=section_length, exclude=out, **options)
+    if harmonics.n_flagged:
+        res.notes.append(harmonics.warning("the points the location uses"))
     return res
 

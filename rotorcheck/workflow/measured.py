@@ -19,6 +19,7 @@ from rotorcheck.robust.lft import additive_me
 from rotorcheck.robust.measured import FrfEstimate, combine_sweeps
 from rotorcheck.robust.measured import frf_estimate as _est
 from rotorcheck.robust.noise import point_miss
+from rotorcheck.signal.harmonics import ShaftHarmonics, lockin_resolution_hz, shaft_harmonic_points
 from rotorcheck.signal.lockin import SHAFT_ORDERS, fit_shaft_harmonics, remove_shaft_harmonics
 from rotorcheck.sweep.format import Sweep, ls_frf, ls_frf_var
 from rotorcheck.sweep.hdf5io import read_sweep, sweep_sha256
@@ -304,6 +305,17 @@ def resample_run(run: MeasuredRun, grid_hz: np.ndarray) -> MeasuredRun:
         run, frequency_hz=g, W=np.ones(n, complex), Zt=frf[:, 0], output_var=var[:, 0],
         n_periods=np.minimum(run.n_periods[j], run.n_periods[j + 1]), dof=dof[:, 0], frf_pairs=frf, var_pairs=var,
         dof_pairs=dof, resampled_from=int(f.size))
+
+
+def run_harmonics(runs: list[MeasuredRun], also_rpm: tuple[float, ...] = ()) -> ShaftHarmonics:
+    """The points of the runs' (shared) grid on a shaft harmonic 1X..4X (:mod:`rotorcheck.signal.harmonics`):
+    at every run's speed and at ``also_rpm`` (a baseline's), with each point's coarsest lock-in resolution
+    ``f / N`` over the runs (N: the periods the point averaged; an FRF-only run assumes the default)."""
+    f = runs[0].frequency_hz
+    res = [lockin_resolution_hz(f, r.n_periods) for r in runs]
+    speeds = tuple(dict.fromkeys([float(r.speed_rpm) for r in runs] + [float(s) for s in also_rpm]))
+    return shaft_harmonic_points(f, speeds, np.max([r for r, _ in res], axis=0),
+                                 assumed_periods=any(a for _, a in res))
 
 
 def variance_dof(run: MeasuredRun) -> np.ndarray:

@@ -15,7 +15,8 @@ from rotorcheck.report.schema import ValidationReport
 from rotorcheck.robust import validation
 from rotorcheck.robust.mu import Structure
 from rotorcheck.robust.noise import NoiseBound
-from rotorcheck.robust.validation import ValidationResult
+from rotorcheck.robust.validation import STATUS_EXCLUDED, ValidationResult
+from rotorcheck.signal.harmonics import ShaftHarmonics
 from rotorcheck.updating import Update, update_parameters
 from rotorcheck.workflow.benign import KAPPA_NOMINAL, BenignLearning, learn_benign
 from rotorcheck.workflow.measured import (
@@ -25,6 +26,7 @@ from rotorcheck.workflow.measured import (
     healthy_estimate,
     pair_experiments,
     pair_keys,
+    run_harmonics,
 )
 from rotorcheck.workflow.noise import noise_fit, noise_values
 from rotorcheck.workflow.rigs import updated_rig
@@ -41,19 +43,42 @@ class ValidationOutcome:
     rig: RigConfig
     update: Update | None = None  # validate --update
     learning: BenignLearning | None = None  # validate --learn-drift
+    harmonics: ShaftHarmonics | None = None  # points on a shaft harmonic: status 'excluded', in no claim
+
+    @property
+    def not_enclosed(self) -> np.ndarray:
+        """(f,) bool: points where gamma_h could not be verified (unexplainable, solver failure, bad data);
+        points excluded (on a shaft harmonic) are not among them."""
+        return np.asarray(~np.isin(self.result.status, ["ok", STATUS_EXCLUDED]))
 
     @property
     def n_not_enclosed(self) -> int:
-        """Points where gamma_h could not be verified (unexplainable, solver failure, bad data)."""
-        return int(np.count_nonzero(self.result.status != "ok"))
+        """The number of :attr:`not_enclosed` points."""
+        return int(np.count_nonzero(self.not_enclosed))
+
+    @property
+    def bounded(self) -> np.ndarray:
+        """(f,) bool: the points whose gamma_h is part of the model-error bound (status 'ok')."""
+        return np.asarray(self.result.status == "ok")
+
+    @property
+    def harmonics_warning(self) -> str:
+        """The shaft-harmonic warning ('' when no point is flagged)."""
+        return "" if self.harmonics is None else self.harmonics.warning(HARMONICS_KEPT_OUT)
 
     def typed_report(self, noise_bound: NoiseBound, baseline_path: str | Path) -> ValidationReport:
         """``validate --json`` as a :class:`rotorcheck.report.schema.ValidationReport`."""
 
         res = self.result
+        h = self.harmonics
         return ValidationReport(self.runs[0].frequency_hz, res.gamma, res.gamma_lower, [str(x) for x in res.status],
                                 float(noise_bound.value_m), noise_bound.method, self.baseline.enclose,
-                                self.model.structure, int(res.gamma.size), self.n_not_enclosed, str(baseline_path))
+                                self.model.structure, int(res.gamma.size), self.n_not_enclosed, str(baseline_path),
+                                h.points() if h is not None and h.n_flagged else None)
+
+
+#: what validation keeps the points on a shaft harmonic out of (the warning's words)
+HARMONICS_KEPT_OUT = "the model-error bound gamma_h and the benign update and learning"
 
 
 #: Detection modes (``--enclose``): ``measured`` (default: the healthy set centred on the measured
@@ -112,19 +137,23 @@ def validate(
         res = validation.validate(model.me, [r.W for r in runs], [r.Zt for r in runs], V,
                                   enclose="system" if enclose == "measured" else enclose,
                                   structure=parameter_structure(model, enclose), fail_at=fail_at)
+    harmonics = run_harmonics(runs)
+    res.exclude(harmonics.flagged)
+    keep = ~harmonics.flagged
     healthy = healthy_estimate(runs)
     upd = None
     if update:
 
         if not rig.variability:
             raise InputError(None, "--update", "the rig has no variability section: nothing to update")
-        upd = update_parameters(rig, first.frequency_hz, first.speed_rpm, healthy.frf[:, 0])
+        upd = update_parameters(rig, first.frequency_hz[keep], first.speed_rpm, healthy.frf[keep, 0])
     model_rig = updated_rig(rig, None if upd is None else upd.as_dict())
     if learn_drift and len(runs) < 3:
         raise InputError(None, "--learn-drift", f"needs at least 3 healthy sweeps (got {len(runs)})")
     learning = None
     if enclose == "measured":
-        learning = learn_benign(model_rig, runs) if learn_drift else BenignLearning(KAPPA_NOMINAL)
+        learning = (learn_benign(model_rig, runs, exclude=harmonics.flagged) if learn_drift
+                    else BenignLearning(KAPPA_NOMINAL))
     learned = learning.learned if learning is not None else None
     for r in runs[1:]:
         if pair_keys(r) != pair_keys(first):
@@ -143,7 +172,7 @@ def validate(
                    learning.correction if learning is not None else None, None if upd is None else upd.as_dict(),
                    {k: list(v) for k, v in learning.model_share.items()}
                    if learning is not None and learning.model_share else None))
-    return ValidationOutcome(base, res, model, runs, rig, upd, learning)
+    return ValidationOutcome(base, res, model, runs, rig, upd, learning, harmonics)
 
 
 def learning_summary(outcome: ValidationOutcome) -> str:

@@ -17,8 +17,9 @@ from rotorcheck.config import RigConfig
 from rotorcheck.robust.joint import JointResult
 from rotorcheck.robust.measured import MeasuredDetection
 from rotorcheck.robust.real_box import BoxCertificate
-from rotorcheck.robust.validation import DetectionResult, Verdict
-from rotorcheck.workflow.measured import MeasuredRun
+from rotorcheck.robust.validation import STATUS_EXCLUDED, DetectionResult, Verdict
+from rotorcheck.signal.harmonics import ShaftHarmonics
+from rotorcheck.workflow.measured import MeasuredRun, run_harmonics
 
 if TYPE_CHECKING:  # matplotlib only for .plot()
     from matplotlib.figure import Figure
@@ -61,6 +62,7 @@ class Detection:
     measured: MeasuredDetection | None = None
     joint: JointResult | None = None
     beyond_benign: BoxCertificate | None = None
+    harmonics: ShaftHarmonics | None = None  # points on a shaft harmonic: status 'excluded', in no claim
 
     @property
     def fault(self) -> np.ndarray:
@@ -86,6 +88,33 @@ class Detection:
         ctx = FigureContext(rig_id=title or self.detector)
         return decision_figure(self.frequency_hz, self.ratio, self.fault, np.asarray(self.points.status), ctx,
                                self.verdict.verdict, self.rule, self.ratio_meaning, joint, self.fault_beyond_benign)
+
+
+#: what a detection keeps the points on a shaft harmonic out of (the warning's words)
+HARMONICS_KEPT_OUT = ("the certified fault points, the joint statistic and its benign fit, and the certificate "
+                      "beyond benign change")
+
+
+def detection_harmonics(run: MeasuredRun, baseline_rpm: float) -> ShaftHarmonics:
+    """The points of ``run`` on a shaft harmonic at its own speed or the baseline's (a healthy sweep at the
+    baseline's speed holds that speed's unbalance response)."""
+    return run_harmonics([run], (baseline_rpm,))
+
+
+def exclude_points(points: DetectionResult, harmonics: ShaftHarmonics) -> DetectionResult:
+    """``points`` with the flagged points no fault and of status 'excluded' (their numbers kept)."""
+    out = harmonics.flagged
+    if not np.any(out):
+        return points
+    points.fault = np.asarray(points.fault, dtype=bool) & ~out
+    points.status = np.where(out, STATUS_EXCLUDED, np.asarray(points.status)).astype("<U13")
+    return points
+
+
+def harmonics_notes(harmonics: ShaftHarmonics) -> list[str]:
+    """The warning for the notes ([] when no point is flagged)."""
+    w = harmonics.warning(HARMONICS_KEPT_OUT)
+    return [w] if w else []
 
 
 class Detector(Protocol):

@@ -17,7 +17,7 @@ from rotorcheck.errors import InputError
 from rotorcheck.nominal import damage_direction
 from rotorcheck.robust.measured import MEASURED_RULE, FrfEstimate, measured_detect, measured_verdict
 from rotorcheck.robust.validation import DetectionResult
-from rotorcheck.workflow.detectors.base import Detection, DetectorSettings
+from rotorcheck.workflow.detectors.base import Detection, DetectorSettings, detection_harmonics, harmonics_notes
 from rotorcheck.workflow.measured import MeasuredRun, frf_estimate, per_pair
 from rotorcheck.workflow.rigs import nominal_for
 
@@ -44,6 +44,7 @@ class CertifiedDetector:
         self.settings = settings
         self.rig: RigConfig | None = None
         self.healthy: FrfEstimate | None = None
+        self.baseline_rpm = 0.0
 
     def prepare(self, rig: RigConfig, baseline: Baseline) -> None:
         """The measured healthy FRF with its variance and dof."""
@@ -52,6 +53,7 @@ class CertifiedDetector:
                              "(validate with --enclose measured)")
         self.rig = rig
         self.healthy = FrfEstimate(baseline.healthy_frf, baseline.healthy_frf_var, baseline.healthy_frf_dof)
+        self.baseline_rpm = float(baseline.speed_rpm)
 
     def detect(self, run: MeasuredRun) -> Detection:
         """Fault points of ``run`` and the verdict of :data:`MEASURED_RULE`."""
@@ -63,7 +65,8 @@ class CertifiedDetector:
         e21 = nominal_for(rig, run.frequency_hz, run.speed_rpm).E[:, 1:, 0]
         if run.n_pairs > 1 and rig.damage is not None:
             e21 = damage_direction(rig, run.frequency_hz, run.speed_rpm, run.pairs)
-        m = measured_detect(new, healthy, self.settings.confidence, e21=e21)
+        harmonics = detection_harmonics(run, self.baseline_rpm)
+        m = measured_detect(new, healthy, self.settings.confidence, e21=e21, exclude=harmonics.flagged)
         fault = m.fault.copy()
         status = m.status.astype("<U13")
         dist = m.distance[:, 0].copy()
@@ -73,4 +76,5 @@ class CertifiedDetector:
         notes = [HARMONICS_NOTE] if run.harmonics_removed == 0 and run.speed_rpm != 0.0 else []
         return Detection(self.name, run.frequency_hz, measured_verdict(fault, status, m.confidence, m.n_tests),
                          MEASURED_RULE, points, np.sqrt(np.asarray(m.statistic, dtype=float)),
-                         ratio_meaning(run.n_pairs), p_value=m.family_p_value, notes=notes, measured=m)
+                         ratio_meaning(run.n_pairs), p_value=m.family_p_value,
+                         notes=notes + harmonics_notes(harmonics), measured=m, harmonics=harmonics)

@@ -15,7 +15,13 @@ from rotorcheck.baseline import Baseline
 from rotorcheck.config import RigConfig
 from rotorcheck.robust import validation
 from rotorcheck.robust.validation import DetectionResult
-from rotorcheck.workflow.detectors.base import Detection, DetectorSettings
+from rotorcheck.workflow.detectors.base import (
+    Detection,
+    DetectorSettings,
+    detection_harmonics,
+    exclude_points,
+    harmonics_notes,
+)
 from rotorcheck.workflow.measured import MeasuredRun, pair_experiments
 from rotorcheck.workflow.noise import baseline_noise_values
 from rotorcheck.workflow.rigs import nominal_for
@@ -73,10 +79,14 @@ class SystemEnclosure:
             model = nominal_for(rig, run.frequency_hz, run.speed_rpm)
             det = validation.detect(model.me, run.W, run.Zt, baseline_noise_values(b, run), b.gamma,
                                     parameter_structure(model, b.enclose), fail_at=fail_at)
+        harmonics = detection_harmonics(run, b.speed_rpm)
+        det = exclude_points(det, harmonics)
         with np.errstate(divide="ignore", invalid="ignore"):
             ratio = np.asarray(det.gamma_required, dtype=float) / np.asarray(det.gamma_healthy, dtype=float)
+        ratio = np.where(harmonics.flagged, np.nan, ratio)
         return Detection(self.name, run.frequency_hz, validation.verdict(det.fault, det.status, b.gamma_status),
-                         VERDICT_RULE, det, ratio, "gamma_required / gamma_healthy")
+                         VERDICT_RULE, det, ratio, "gamma_required / gamma_healthy",
+                         notes=harmonics_notes(harmonics), harmonics=harmonics)
 
 
 class DataEnclosure(SystemEnclosure):

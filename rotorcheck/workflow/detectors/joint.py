@@ -77,13 +77,14 @@ class JointDetector:
         found = self.points.detect(run)
         kappa = KAPPA_NOMINAL if b.benign_kappa is None else float(b.benign_kappa)
         th, var = np.asarray(b.healthy_frf), np.asarray(b.healthy_frf_var)
+        out = None if found.harmonics is None else found.harmonics.flagged
         joint = joint_detection(rig, th, var, run, kappa, learned_directions(b), self.settings.false_alarm,
-                                b.speed_rpm, b.benign_correction)
+                                b.speed_rpm, b.benign_correction, exclude=out)
         found.detector, found.rule, found.joint = self.name, JOINT_RULE, joint
         found.verdict = joint_verdict(joint, found.verdict)
         found.statistic, found.threshold, found.p_value = joint.statistic, joint.threshold, joint.p_value
         found.notes.extend(joint.notes)
-        certified = certify_beyond_benign(rig, th, var, run, joint, b.speed_rpm)
+        certified = certify_beyond_benign(rig, th, var, run, joint, b.speed_rpm, exclude=out)
         if certified is not None:
             found.beyond_benign = certified[0]
             found.notes.extend(certified[1])
