@@ -10,9 +10,9 @@ from pathlib import Path
 import h5py
 import numpy as np
 import pytest
-from sweep_helpers import CHANNELS, make_sweep
+from sweep_helpers import make_sweep, v2_sweep
 
-from rotorcheck.sweep import Run, Sweep, read_sweep, write_sweep
+from rotorcheck.sweep import read_sweep, write_sweep
 
 xr = pytest.importorskip("xarray")
 pytest.importorskip("h5netcdf")
@@ -27,25 +27,6 @@ def _open(path: Path, group: str | None):
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # e.g. xarray's warning about phony (unlabelled) dimensions
         return xr.open_dataset(path, engine="h5netcdf", group=group)
-
-
-def _v2_sweep() -> Sweep:
-    """A run of two patterns (inputs F8x, F8y driven one at a time, 4 periods kept) and an FRF-only run."""
-    rng = np.random.default_rng(7)
-    chans = [*CHANNELS, CHANNELS[0].__class__("F8y", "input", 8, "y", "force", "N")]
-    nf, p = 12, 4
-    f = np.linspace(20.0, 130.0, nf)
-    u = np.zeros((nf, 2, 2), complex)
-    u[:, 0, 0], u[:, 1, 1] = 1.0 + 0.5j, 0.8 - 0.1j
-    per = (rng.standard_normal((nf, 2, p, 4)) + 1j * rng.standard_normal((nf, 2, p, 4))) * 1e-6
-    per[:, :, :, 0] = u[:, :, None, 0]
-    per[:, :, :, 3] = u[:, :, None, 1]
-    y = per[:, :, :, 1:3].mean(axis=2)
-    var = (np.abs(per[:, :, :, 1:3] - y[:, :, None]) ** 2).sum(axis=2) / (p * (p - 1))
-    multi = Run.from_patterns("two_shakers", 600.0, f, u, y, var, p, period_phasor=per)
-    fo = Run.frf_only("analyser", 0.0, f[:7], multi.frf[:7], multi.frf_variance()[:7], noise_source="measured")
-    return Sweep("crack_rig", "measured", "test", "2026-01-01T00:00:00Z", chans,
-                 {"two_shakers": multi, "analyser": fo})
 
 
 def _check_run_group(path: Path, run_id: str, dims: dict[str, tuple[str, ...]]) -> None:
@@ -101,7 +82,7 @@ def test_v1_and_v2_files_open_in_xarray(tmp_path: Path) -> None:
             "output_var": ("frequency", "output"), "n_periods": ("frequency",),
             "frf": ("frequency", "output", "input"), "period_phasor": ("frequency", "period_64", "channel")})
     v2 = tmp_path / "v2.h5"
-    sw = _v2_sweep()
+    sw = v2_sweep()
     write_sweep(sw, v2)
     _check_run_group(v2, "two_shakers", {
         "input_phasor": ("frequency", "pattern_2", "input"), "output_phasor": ("frequency", "pattern_2", "output"),
@@ -114,7 +95,7 @@ def test_v1_and_v2_files_open_in_xarray(tmp_path: Path) -> None:
     assert ds.sizes == {"frequency": 7, "output": 2, "input": 2} and ds.attrs["noise_source"] == "measured"
     # the labels change no byte the reader reads, and writing stays deterministic
     again = tmp_path / "again.h5"
-    write_sweep(_v2_sweep(), again)
+    write_sweep(v2_sweep(), again)
     assert again.read_bytes() == v2.read_bytes()
     with h5py.File(v2, "r") as h5:
         assert sorted(h5) == ["channel", "channels", "input", "output", "pattern_2", "period_4", "runs"]
