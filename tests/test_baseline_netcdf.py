@@ -160,3 +160,25 @@ def test_baselines_written_before_the_labels_still_load(tmp_path: Path) -> None:
     with h5py.File(LEGACY / "baseline_two_runs.h5", "r") as h5:
         assert "channel" not in h5 and "DIMENSION_LIST" not in h5["gamma"].attrs  # really without labels
 
+
+def test_the_readme_xarray_example_runs(validated_0rpm: CliRun, tmp_path: Path,
+                                        monkeypatch: pytest.MonkeyPatch) -> None:
+    """The README's xarray block, run as it stands (in a folder holding rotorcheck-out/baseline.h5): the FRF it
+    selects by channel names is the reader's column, the baseline's by pair label the reader's healthy FRF."""
+    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+    blocks = [b.split("```", 1)[0] for b in readme.split("```python\n")[1:]]
+    (code,) = [b for b in blocks if 'engine="h5netcdf"' in b]
+    validated_0rpm.copy_to(tmp_path / "rotorcheck-out")
+    monkeypatch.chdir(tmp_path)
+    space: dict[str, Any] = {}
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        exec(compile(code, "README.md", "exec"), space)  # the README's own example
+    sw = read_sweep(samples_dir() / "crack_rig_xy" / "healthy_1000rpm.h5")
+    o = [c.name for c in sw.outputs].index("disp_s6_x")
+    i = [c.name for c in sw.inputs].index("force_s8_x")
+    assert space["h"].values.tobytes() == np.ascontiguousarray(sw.runs["1000rpm"].frf[:, o, i]).tobytes()
+    assert space["h"].attrs["units"] == "m/N" and space["h"]["frequency"].attrs["units"] == "Hz"
+    (b,) = read_baselines(tmp_path / "rotorcheck-out" / "baseline.h5")
+    assert space["g"].values.tobytes() == np.ascontiguousarray(b.healthy_frf[:, 0]).tobytes()
+    assert sorted(space["tree"]["runs"].children) == ["1000rpm"]
