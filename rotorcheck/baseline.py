@@ -20,6 +20,13 @@ prediction carried in H0; absent: the default) and ``n_healthy`` (healthy sweeps
 ``benign_correction`` (p, f) complex m/N per unit parameter (the healthy sweeps' correction of the
 model's benign change, one row per benign parameter in the order of the rig's variability section at
 the baseline's speed).
+
+A file of several runs (speeds) holds the first run's set at the root and each further run's in
+``/runs/<run_id>`` (same names). netCDF-4 view (:func:`_label_for_netcdf`, added beside these datasets,
+ignored by the reader, absent from files written before it): every group opens in xarray,
+``xarray.open_dataset(path, engine="h5netcdf")`` for the first run, ``group="runs/<run_id>"`` for the others,
+with the coordinates ``frequency_hz`` (Hz), ``channel`` (the channel pairs as ``output<-input`` port labels),
+``output`` and ``input`` (the first pair's ports) and ``units`` on every numeric dataset.
 """
 
 from __future__ import annotations
@@ -35,6 +42,7 @@ import numpy as np
 
 from rotorcheck.errors import InputError
 from rotorcheck.fileio import atomic_path, check_hdf5_global_heaps, hdf5_attr_problem
+from rotorcheck.netcdf_view import Dimensions, attach
 
 SCHEMA = "rotorcheck.baseline"
 SCHEMA_VERSION = 1
@@ -232,6 +240,73 @@ def _write_into(h5: h5py.Group, baseline: Baseline) -> None:
             h5.create_dataset(name, data=value)
     if baseline.gamma_status is not None:
         h5.create_dataset("gamma_status", data=np.asarray(baseline.gamma_status, dtype="S"))
+    _label_for_netcdf(h5, baseline)
+
+
+#: the netCDF view (:mod:`rotorcheck.netcdf_view`): each dataset's axes and ``units`` (gamma's: :func:`gamma_units`)
+_VIEW: dict[str, tuple[tuple[str, ...], str | None]] = {
+    "gamma": (("frequency_hz",), None), "gamma_lower": (("frequency_hz",), None),
+    "gamma_status": (("frequency_hz",), None), "noise_bound_per_point_m": (("frequency_hz",), "m"),
+    "model_frf": (("frequency_hz", "output", "input"), "m/N"),
+    "input_phasor": (("frequency_hz", "input"), "N"), "output_phasor": (("frequency_hz", "output"), "m"),
+    "healthy_frf": (("frequency_hz", "channel"), "m/N"), "healthy_frf_var": (("frequency_hz", "channel"), "m^2/N^2"),
+    "healthy_frf_dof": (("frequency_hz", "channel"), "1"),
+    "benign_directions": (("direction", "point"), "m/N"), "benign_direction_bound": (("direction",), "1"),
+    "benign_correction": (("parameter", "point"), "m/N per unit of the parameter"),
+}
+#: ``long_name`` of the labels and of the stacked arrays
+_LONG_NAMES = {
+    "channel": "channel pair, output<-input (model ports)", "output": "output port (the first channel pair's)",
+    "input": "input port (the first channel pair's)",
+    "benign_directions": "learned benign directions, each over the points channel pair after channel pair",
+    "benign_correction": "the data's correction of the benign change per benign parameter (the rig's variability "
+                         "order), over the points channel pair after channel pair",
+}
+
+
+def gamma_units(uncertainty: str, parameter: str) -> str:
+    """The unit of gamma_h: m/N (additive), 1 (multiplicative), the parameter's (parametric: kg for a mass,
+    N/m for a stiffness), '' when unknown."""
+    if uncertainty == "additive":
+        return "m/N"
+    if uncertainty == "multiplicative":
+        return "1"
+    if uncertainty == "parametric":
+        return "kg" if parameter.endswith(".mass") else "N/m"
+    return ""
+
+
+def _label_for_netcdf(h5: h5py.Group, baseline: Baseline) -> None:
+    """Dimension scales, channel-pair coordinates and ``units`` on the datasets of one group, so that xarray
+    (``engine="h5netcdf"``) opens it: ``frequency_hz`` the coordinate (Hz), ``channel`` the pairs'
+    ``output<-input`` labels, ``output``/``input`` the first pair's ports, ``direction``, ``parameter`` and
+    ``point`` (the stacked axis of the benign arrays) dimensions without labels."""
+    dims = Dimensions(h5)
+    freq = dims.coordinate(h5["frequency_hz"], "Hz") if "frequency_hz" in h5 else None
+    pairs = baseline.healthy.channel_pairs or []
+    labels = {"channel": [f"{o}<-{i}" for o, i in pairs], "output": [o for o, _ in pairs[:1]],
+              "input": [i for _, i in pairs[:1]]}
+    gamma = gamma_units(baseline.uncertainty, baseline.parameter)
+    for name, (axes, units) in _VIEW.items():
+        if name not in h5:
+            continue
+        ds = h5[name]
+        if ds.ndim != len(axes):  # not the layout this view knows: numbered axes
+            axes = tuple(f"{name}_axis{k}" for k in range(ds.ndim))
+        scales = []
+        for axis, dname in enumerate(axes):
+            size = int(ds.shape[axis])
+            if dname == "frequency_hz" and freq is not None and freq.shape == (size,):
+                scales.append(freq)
+            elif len(labels.get(dname, ())) == size:
+                scales.append(dims.labels(dname, labels[dname], {"long_name": _LONG_NAMES[dname]}))
+            else:
+                scales.append(dims.plain("frequency" if dname == "frequency_hz" else dname, size))
+        attach(ds, scales, gamma if name in ("gamma", "gamma_lower") else units)
+        if name in _LONG_NAMES:
+            ds.attrs["long_name"] = _LONG_NAMES[name]
+        if ds.dtype.kind == "S":  # fixed-length bytes: xarray decodes them as text
+            ds.attrs["_Encoding"] = "utf-8"
 
 
 #: attribute holding each item's digest (JSON ``{name: sha256}``) over everything detection reads

@@ -17,7 +17,7 @@ ROOT = Path(__file__).resolve().parents[1] / "rotorcheck"
 #: lowest first; a module's layer is that of its longest matching prefix
 LAYERS: tuple[tuple[str, ...], ...] = (
     ("rotorcheck", "rotorcheck.errors", "rotorcheck.units", "rotorcheck.progress"),
-    ("rotorcheck.fileio", "rotorcheck.resources"),
+    ("rotorcheck.fileio", "rotorcheck.resources", "rotorcheck.netcdf_view"),
     ("rotorcheck.safeload",),  # bounded YAML/TOML parsing over fileio's bounded reading; below config
     ("rotorcheck.config",),
     ("rotorcheck.variability",),  # benign parameter ranges over the config: above it, below fe/robust

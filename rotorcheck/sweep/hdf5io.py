@@ -8,16 +8,17 @@ The writer writes version 1 exactly as before unless a run needs version 2
 ``frf_var`` or ``noise_source``); it is atomic (:func:`rotorcheck.fileio.atomic_path`) and refuses
 to overwrite unless ``force=True``.
 
-netCDF-4 view (xarray ``engine="h5netcdf"``): the writer labels every axis with an HDF5 dimension
-scale, so ``xarray.open_dataset(path, engine="h5netcdf", group="runs/<run_id>")`` shows
-``frequency`` as the coordinate (``units`` "Hz") and each data variable with its ``units``
-(:data:`DATASET_UNITS`; ``period_phasor`` mixes N and m, its unit is per channel in
-``/channels/unit``). The axes shared by all runs are root-level netCDF dimensions without a
-variable (empty float32 datasets, netCDF-4's convention): ``channel`` (the channel table, also the
-dimension of ``/channels/*``), ``input``, ``output``; the axes whose length is per run are
-``pattern_<n_exc>`` (version 2) and ``period_<p>``. Nothing is added inside ``/runs`` or a run
-group (the contract's names only); complex128 stays the h5py compound (r, i), which h5netcdf and
-xarray read as complex. The reader ignores the labels.
+netCDF-4 view (xarray ``engine="h5netcdf"``, :mod:`rotorcheck.netcdf_view`): the writer names every axis
+with an HDF5 dimension scale, so ``xarray.open_dataset(path, engine="h5netcdf", group="runs/<run_id>")``
+shows the coordinates ``frequency`` (``units`` "Hz"), ``input`` and ``output`` (the names of the input and
+output channels, the columns' order) and, with ``period_phasor``, ``channel`` (every channel's name, the
+order of ``/channels``), and each data variable with its ``units`` (:data:`DATASET_UNITS`). The root holds
+the coordinate ``channel`` (the channel names, the dimension of ``/channels/*``) and, as dimensions without
+a variable, the axes whose length is per run: ``pattern_<n_exc>`` (version 2) and ``period_<p>``;
+``xarray.open_datatree(path, engine="h5netcdf")`` opens the whole file. Inside a run group the writer adds
+the coordinate variables ``input``, ``output`` and ``channel`` beside the contract's datasets (no
+contract name is used, moved or changed); complex128 stays the h5py compound (r, i), which h5netcdf and
+xarray read as complex. The reader ignores the labels (files written before them read the same).
 """
 
 from __future__ import annotations
@@ -30,6 +31,7 @@ import h5py
 import numpy as np
 
 from rotorcheck.fileio import atomic_path, check_hdf5_global_heaps, hdf5_attr_problem, hdf5_vlen_problem
+from rotorcheck.netcdf_view import Dimensions, attach
 from rotorcheck.sweep.format import (
     CHANNEL_FIELDS,
     EXCITATION,
@@ -400,7 +402,7 @@ def _put(grp: h5py.Group, name: str, data: np.ndarray) -> None:
     grp.create_dataset(name, data=data, track_times=False)
 
 
-#: ``units`` attribute of each run dataset (the netCDF view); ``period_phasor`` has none (N or m by channel)
+#: ``units`` attribute of each run dataset (the netCDF view)
 DATASET_UNITS = {
     "frequency": "Hz",
     "input_phasor": "N",
@@ -410,6 +412,7 @@ DATASET_UNITS = {
     "n_periods": "1",
     "frf": "m/N",
     "frf_var": "m^2/N^2",
+    "period_phasor": "N (input channels), m (output channels)",
 }
 #: the axes after ``frequency`` of each run dataset (``pattern``/``period`` get their length appended);
 #: in version 2 the phasor datasets (:data:`PATTERN_ATTRS`) have ``pattern`` first
@@ -423,41 +426,35 @@ _AXES = {
     "frf_var": ("output", "input"),
     "period_phasor": ("period", "channel"),
 }
-#: netCDF-4's NAME of a dimension scale that is not a variable (followed by the length, 10 wide)
-_NOT_A_VARIABLE = "This is a netCDF dimension but not a netCDF variable."
+#: ``long_name`` of the channel-name coordinates
+_LABEL_NAMES = {"channel": "channel name (/channels/name)", "input": "input channel name (force, N)",
+                "output": "output channel name (displacement, m)"}
 
 
-def _label_for_netcdf(h5: h5py.File, version: int) -> None:
-    """Attach dimension scales and ``units`` (module docstring: the netCDF-4 view)."""
-    dims: dict[str, h5py.Dataset] = {}
-
-    def dim(name: str, size: int) -> h5py.Dataset:
-        if name not in dims:
-            # attribute creation order tracked: a newer object header, so REFERENCE_LIST (one entry per
-            # attached dataset) may outgrow the 64 KiB of a compact attribute in a file of many runs
-            ds = h5.create_dataset(name, shape=(size,), dtype=">f4", track_times=False, track_order=True)
-            ds.make_scale(f"{_NOT_A_VARIABLE}{size:10d}")
-            dims[name] = ds
-        return dims[name]
-
+def _label_for_netcdf(h5: h5py.File, version: int, channels: list[Channel]) -> None:
+    """Attach dimension scales, channel-name coordinates and ``units`` (module docstring: the netCDF-4 view)."""
+    root = Dimensions(h5)
+    names = {"channel": [c.name for c in channels], "input": [c.name for c in channels if c.role == "input"],
+             "output": [c.name for c in channels if c.role == "output"]}
+    channel = root.labels("channel", names["channel"], {"long_name": _LABEL_NAMES["channel"]})
     ch = h5["channels"]
     for fld in CHANNEL_FIELDS:
-        ch[fld].dims[0].attach_scale(dim("channel", ch[fld].shape[0]))
+        attach(ch[fld], [channel], "1" if fld == "node" else None)
     for g in h5["runs"].values():
-        freq = g["frequency"]
-        freq.make_scale("frequency")
-        freq.attrs["units"] = DATASET_UNITS["frequency"]
+        local = Dimensions(g)
+        freq = local.coordinate(g["frequency"], DATASET_UNITS["frequency"])
         for name, axes in _AXES.items():
             if name not in g:
                 continue
             ds = g[name]
-            names = ("pattern", *axes) if version != SCHEMA_VERSION_V1 and name in PATTERN_ATTRS else axes
-            ds.dims[0].attach_scale(freq)
-            for axis, dname in enumerate(names, start=1):
-                size = int(ds.shape[axis])
-                ds.dims[axis].attach_scale(dim(f"{dname}_{size}" if dname in ("pattern", "period") else dname, size))
-            if name in DATASET_UNITS:
-                ds.attrs["units"] = DATASET_UNITS[name]
+            dims = ("pattern", *axes) if version != SCHEMA_VERSION_V1 and name in PATTERN_ATTRS else axes
+            scales = [freq]
+            for axis, dname in enumerate(dims, start=1):
+                if dname in names:
+                    scales.append(local.labels(dname, names[dname], {"long_name": _LABEL_NAMES[dname]}))
+                else:  # the pattern and period axes: lengths per run, shared by the file's runs at the root
+                    scales.append(root.plain(dname, int(ds.shape[axis]), suffix=True))
+            attach(ds, scales, DATASET_UNITS[name])
 
 
 def write_sweep(sweep: Sweep, path: str | os.PathLike[str], force: bool = False,
@@ -513,7 +510,7 @@ def write_sweep(sweep: Sweep, path: str | os.PathLike[str], force: bool = False,
                         _put(g, "period_phasor", np.asarray(run.period_phasor, dtype=np.complex128))
                 else:
                     _write_run_v2(g, run)
-            _label_for_netcdf(h5, version)
+            _label_for_netcdf(h5, version, sweep.channels)
 
 
 def _write_run_v2(g: h5py.Group, run: Run) -> None:

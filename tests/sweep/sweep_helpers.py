@@ -39,6 +39,25 @@ def make_sweep(n_f: int = 262, seed: int = 1, periods: bool = False) -> Sweep:
     return Sweep("crack_rig", "simulated", "tests/sweep", "2024-05-01T12:00:00Z", list(CHANNELS), runs)
 
 
+def v2_sweep() -> Sweep:
+    """A run of two patterns (inputs F8x, F8y driven one at a time, 4 periods kept) and an FRF-only run."""
+    rng = np.random.default_rng(7)
+    chans = [*CHANNELS, CHANNELS[0].__class__("F8y", "input", 8, "y", "force", "N")]
+    nf, p = 12, 4
+    f = np.linspace(20.0, 130.0, nf)
+    u = np.zeros((nf, 2, 2), complex)
+    u[:, 0, 0], u[:, 1, 1] = 1.0 + 0.5j, 0.8 - 0.1j
+    per = (rng.standard_normal((nf, 2, p, 4)) + 1j * rng.standard_normal((nf, 2, p, 4))) * 1e-6
+    per[:, :, :, 0] = u[:, :, None, 0]
+    per[:, :, :, 3] = u[:, :, None, 1]
+    y = per[:, :, :, 1:3].mean(axis=2)
+    var = (np.abs(per[:, :, :, 1:3] - y[:, :, None]) ** 2).sum(axis=2) / (p * (p - 1))
+    multi = Run.from_patterns("two_shakers", 600.0, f, u, y, var, p, period_phasor=per)
+    fo = Run.frf_only("analyser", 0.0, f[:7], multi.frf[:7], multi.frf_variance()[:7], noise_source="measured")
+    return Sweep("crack_rig", "measured", "test", "2026-01-01T00:00:00Z", chans,
+                 {"two_shakers": multi, "analyser": fo})
+
+
 def three_mass() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """ECP 210a three-mass chain (rigs.md section 2): m1-m2-m3-ground, M, C, K in SI."""
     m1, m2, m3 = 2.8113, 2.6396, 2.6074

@@ -180,7 +180,8 @@ def test_foreign_pyuff_file_imports_as_frf_only_v2(
     np.testing.assert_allclose(run.frf_var, (0.02 * np.abs(run.frf)) ** 2, rtol=1e-15, atol=0)
     with h5py.File(out, "r") as h5:  # raw: a version-2 FRF-only run
         assert int(h5.attrs["schema_version"]) == 2
-        assert sorted(h5["runs/1000rpm"]) == ["frequency", "frf", "frf_var"]
+        # the contract's FRF-only datasets (no phasors) and the channel-name coordinates of the netCDF view
+        assert sorted(h5["runs/1000rpm"]) == ["frequency", "frf", "frf_var", "input", "output"]
         assert h5["runs/1000rpm"].attrs["noise_source"] == "assumed: 2 % of |H|"
     # deterministic: the same conversion again gives the same bytes (created_utc is the UFF's mtime)
     again = tmp_path / "again.h5"

@@ -15,7 +15,8 @@ SWEEP_DIR = Path(pkg.__file__).parent
 ALLOWED = {
     "format": {"rotorcheck.errors"},  # SweepFormatError is a UserInputError (exit 2 by class, not by name)
     "validation": {"rotorcheck.errors", "rotorcheck.sweep.format"},  # check_rig_id: a rig id is a name
-    "hdf5io": {"rotorcheck.fileio", "rotorcheck.sweep.format", "rotorcheck.sweep.validation"},
+    "hdf5io": {"rotorcheck.fileio", "rotorcheck.netcdf_view", "rotorcheck.sweep.format",
+               "rotorcheck.sweep.validation"},
     "compare": {"rotorcheck.sweep.format", "rotorcheck.sweep.hdf5io"},
     "uff": {"rotorcheck.fileio", "rotorcheck.sweep.format", "rotorcheck.sweep.validation"},
     "tidy_csv": {"rotorcheck.fileio", "rotorcheck.sweep.format", "rotorcheck.sweep.validation"},

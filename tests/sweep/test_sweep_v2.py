@@ -278,8 +278,9 @@ def test_v2_roundtrip_bit_exact(tmp_path: Path) -> None:
     with h5py.File(a, "r") as h5:  # raw h5py: the datasets are exactly the arrays, v2 names and shapes
         assert int(h5.attrs["schema_version"]) == 2
         g = h5["runs/two_shakers_1000rpm"]
+        # v2's names, and the channel-name coordinates of the netCDF view (hdf5io's docstring)
         assert sorted(g) == sorted(["frequency", "input_phasor", "output_phasor", "output_var", "input_var",
-                                    "n_periods", "frf", "frf_var", "period_phasor"])
+                                    "n_periods", "frf", "frf_var", "period_phasor", "input", "output", "channel"])
         for name, arr in (("input_phasor", multi.input_phasor_exc), ("output_phasor", multi.output_phasor_exc),
                           ("output_var", multi.output_var_exc), ("input_var", multi.input_var_exc),
                           ("n_periods", multi.n_periods_exc), ("frf", multi.frf), ("frf_var", multi.frf_var),
@@ -288,7 +289,7 @@ def test_v2_roundtrip_bit_exact(tmp_path: Path) -> None:
         assert g["input_phasor"].shape == (40, 2, 2) and g["period_phasor"].shape == (40, 2, 16, 6)
         assert g["n_periods"].dtype == np.int32
         f = h5["runs/analyser_0rpm"]
-        assert sorted(f) == ["frequency", "frf", "frf_var"]
+        assert sorted(f) == ["frequency", "frf", "frf_var", "input", "output"]
         assert f.attrs["noise_source"] == "assumed: 1 % of |H| floor"
         assert f["frf"][()].tobytes() == fo.frf.tobytes()
     # a one-ulp change is found
