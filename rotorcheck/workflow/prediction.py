@@ -7,9 +7,11 @@ from typing import Any
 
 import numpy as np
 
+from rotorcheck.baseline import Baseline
 from rotorcheck.config import RigConfig
 from rotorcheck.detectability import (
     DETECTABILITY_RULE_SETS,
+    Detectability,
     detectability,
     rank_sensor_sets,
     score_sensor_set,
@@ -71,7 +73,7 @@ def _stated_prediction(config: RigConfig, speed_rpm: float | None, noise_std_m: 
 def detectability_for_rig(
     config: RigConfig,
     speed_rpm: float | None = None,
-    baseline: Any = None,
+    baseline: Baseline | None = None,
     noise_std_m: float | None = None,
     periods: int | None = None,
     sensors: Sequence[str] | None = None,
@@ -81,7 +83,7 @@ def detectability_for_rig(
     workers: int | None = None,
     source: str = "",
     progress: Progress | None = None,
-) -> Any:
+) -> Detectability:
     """:func:`rotorcheck.detectability.detectability` with its inputs resolved the way the CLI does. Grid and speed: the
     baseline's (``baseline``, a :class:`rotorcheck.baseline.Baseline`), else the rig's ``analysis``
     (band, ``n_points`` or 262 points; its first speed). Noise: the baseline's healthy variance (the
