@@ -156,7 +156,8 @@ def _same_sweep_twice(tasks: list[SweepTask]) -> None:
 # executors
 
 
-#: called after each finished task: ``(task, finished so far, tasks in all)``
+#: called after each finished task: ``(task, finished so far, tasks in all)``; with 0 finished when a stage
+#: (detect, locate) begins
 Tick = Callable[[SweepTask, int, int], None]
 
 
@@ -164,7 +165,7 @@ def _no_tick(task: SweepTask, done: int, total: int) -> None:
     return None
 
 
-def _serial(tasks: list[SweepTask], log: Callable[[str], None], tick: Tick) -> list[dict[str, Any]]:
+def _serial(tasks: list[SweepTask], log: Callable[[str], None], tick: Tick = _no_tick) -> list[dict[str, Any]]:
     out = []
     for k, t in enumerate(tasks, 1):
         out.append(run_task(t))
@@ -172,7 +173,7 @@ def _serial(tasks: list[SweepTask], log: Callable[[str], None], tick: Tick) -> l
     return out
 
 
-def _processes(tasks: list[SweepTask], workers: int, log: Callable[[str], None], tick: Tick
+def _processes(tasks: list[SweepTask], workers: int, log: Callable[[str], None], tick: Tick = _no_tick
                ) -> list[dict[str, Any]]:
     """A process pool; a pool broken by a dead worker is replaced and the unfinished tasks run again
     (at most 3 pools)."""
@@ -203,7 +204,7 @@ SCHEDULER_TIMEOUT_S = 10.0
 
 
 def _dask(tasks: list[SweepTask], workers: int, scheduler: str | None, log: Callable[[str], None],
-          tick: Tick) -> list[dict[str, Any]]:
+          tick: Tick = _no_tick) -> list[dict[str, Any]]:
     """Dask distributed: a client of ``scheduler``, else of a LocalCluster (``workers`` processes, one thread
     each). A task whose worker died is rescheduled by Dask; a task that raised is retried twice."""
     import logging
@@ -243,6 +244,7 @@ def execute(tasks: list[SweepTask], opts: FleetOptions, log: Callable[[str], Non
     finished task (progress), ``log`` for what else happens (a worker that died)."""
     if not tasks:
         return []
+    tick(tasks[0], 0, len(tasks))  # the stage begins
     workers = opts.workers or os.cpu_count() or 1
     if opts.executor == "dask" or opts.scheduler:
         return _dask(tasks, workers, opts.scheduler, log, tick)
