@@ -61,16 +61,20 @@ wheel-check: $(STAMP)
 	if [ $$rc -ne 1 ]; then echo "wheel-check: detect exited $$rc, expected 1 (damage)"; exit 1; fi; \
 	echo "wheel-check: ok"
 
-# issue 15: a simulated fleet (20 machines x 10 sweeps: two growing cracks, one benign bearing drift) in a
-# temporary folder, then `rotorcheck fleet` on it (local processes), printing the alert list
+# issue 15: a simulated fleet (20 machines x 10 sweeps: two growing cracks, one benign bearing drift) in
+# $(FLEET_DEMO)/fleet (kept: the previous demo there is replaced), then `rotorcheck fleet` on it (local processes),
+# printing the alert list, the trends against the simulator's truth (tools/fleet_trends.py) and where index.html is
+FLEET_DEMO ?= rotorcheck-out/fleet-demo
 fleet-demo: $(STAMP)
-	@set -e; tmp=$$(mktemp -d); trap 'rm -rf "$$tmp"' EXIT; \
+	@set -e; test -n "$(FLEET_DEMO)"; dir="$(FLEET_DEMO)/fleet"; rm -rf "$$dir"; mkdir -p "$$dir"; \
 	export MPLBACKEND=Agg OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1; \
-	$(BIN)/python -m tools.fleet_sim "$$tmp/fleet" --machines 20 --sweeps 10 --seed 0; \
-	rc=0; $(BIN)/python -m rotorcheck fleet "$$tmp/fleet" --limit 3000 || rc=$$?; \
+	$(BIN)/python -m tools.fleet_sim "$$dir" --machines 20 --sweeps 10 --seed 0; \
+	rc=0; $(BIN)/python -m rotorcheck fleet "$$dir" --limit 3000 || rc=$$?; \
 	if [ $$rc -gt 1 ]; then echo "fleet-demo: rotorcheck fleet exited $$rc"; exit $$rc; fi; \
-	echo "--- alert list ($$tmp/fleet/results/alerts.txt; exit $$rc: 1 = a machine in alarm)"; \
-	cat "$$tmp/fleet/results/alerts.txt"
+	echo "--- alert list ($$dir/results/alerts.txt; exit $$rc: 1 = a machine in alarm)"; \
+	cat "$$dir/results/alerts.txt"; echo "---"; \
+	$(BIN)/python -m tools.fleet_trends "$$dir"; \
+	echo "--- the fleet's report: $$(cd "$$dir/results" && pwd)/index.html (open it in a browser)"
 
 clean:
 	rm -rf $(VENV) rotorcheck-out .pytest_cache

@@ -29,6 +29,7 @@ from tests.shared_runs import CliRun, cli_run, crack_rig_sample, shared_root, va
 #: rounded): scheduled first under xdist. test_locate.py makes the shared open-crack location
 #: (conftest.located_open_crack) that report/test_html_report.py reads later on.
 SLOW_FIRST: tuple[str, ...] = (
+    "tests/fleet/test_fleet_demo_trends.py",  # ~60 (measured alone): the demo's 3 changing machines x 10 sweeps
     "tests/test_multichannel.py",  # 47: x/y end to end, the x/y standstill detection
     "tests/faults/test_faults_time_sim.py",  # 36: harmonic balance against time integration
     "tests/test_locate.py",  # 29: the shared locate; detect and locate one element

@@ -95,8 +95,10 @@ def machine_kinds(n: int) -> dict[int, str]:
 
 
 def make_fleet(out: Path, machines: int = 20, sweeps: int = 10, seed: int = 0, points: int = 262,
-               step_days: float = 7.0) -> dict[str, Any]:
-    """Write the fleet into ``out`` (module docstring); returns the truth document (also truth.json)."""
+               step_days: float = 7.0, only: set[str] | None = None) -> dict[str, Any]:
+    """Write the fleet into ``out`` (module docstring); returns the truth document (also truth.json).
+    ``only``: write just these machines (names ``machine-NN``), each exactly as in the whole fleet (the
+    seeds and the random benign scatter of the others are drawn and dropped)."""
     if sweeps < 3:
         raise ValueError("at least 3 sweeps per machine")
     truth, nominal = _configs()
@@ -121,6 +123,10 @@ def make_fleet(out: Path, machines: int = 20, sweeps: int = 10, seed: int = 0, p
     rng = np.random.default_rng([seed, 15])
     for i, kind in sorted(machine_kinds(machines).items()):
         name = f"machine-{i:02d}"
+        if only is not None and name not in only:
+            if kind != "benign-drift":  # draw its scatter all the same: the machines after it stay as they are
+                rng.uniform(-1.0, 1.0, (sweeps, 3))
+            continue
         mdir = out / name
         (mdir / "sweeps").mkdir(parents=True, exist_ok=True)
         (mdir / "healthy").mkdir(exist_ok=True)
@@ -182,9 +188,12 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--points", type=int, default=262)
     ap.add_argument("--step-days", type=float, default=7.0)
+    ap.add_argument("--only", default=None, help="comma-separated machine names: write just these (as in the "
+                                                 "whole fleet)")
     a = ap.parse_args(argv)
     a.out.mkdir(parents=True, exist_ok=True)
-    make_fleet(a.out, a.machines, a.sweeps, a.seed, a.points, a.step_days)
+    make_fleet(a.out, a.machines, a.sweeps, a.seed, a.points, a.step_days,
+               None if a.only is None else {x.strip() for x in a.only.split(",") if x.strip()})
     print(f"wrote a fleet of {a.machines} machines x {a.sweeps} sweeps into {a.out} (truth.json)", file=sys.stderr)
     return 0
 

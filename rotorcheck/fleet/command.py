@@ -1,12 +1,16 @@
 """``rotorcheck fleet DIR|MANIFEST``: :func:`register` adds the command to the rotorcheck Typer app
 (``rotorcheck.fleet.command.register(app)`` in ``rotorcheck/cli.py``, whose ``main`` maps errors to the exit
 codes). Exit codes: 0 no alarm, 1 a machine is in alarm, 2 bad input.
-Human output on stderr, ``--json`` one document on stdout."""
+Human output on stderr, ``--json`` one document on stdout. Progress on stderr, per sweep with the time elapsed
+and the time left (a rich progress bar on a terminal, one line per sweep otherwise); none with ``-q`` or
+``--json``."""
 
 from __future__ import annotations
 
-import os
 import sys
+import time
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -19,6 +23,58 @@ def _err() -> Any:
     from rich.console import Console
 
     return Console(stderr=True, highlight=False, soft_wrap=True)
+
+
+def _clock(seconds: float) -> str:
+    s = round(seconds)
+    return f"{s // 3600}:{s // 60 % 60:02d}:{s % 60:02d}"
+
+
+@contextmanager
+def progress_reporter(err: Any, quiet: bool) -> Iterator[Callable[[Any, int, int], None]]:
+    """A ``tick(task, done, total)`` for :func:`rotorcheck.fleet.runner.run_fleet` (``done`` 0: the stage
+    begins): a rich progress bar per stage (detect, locate) on a terminal, else one line per finished task,
+    both with the time elapsed and the time left (the mean time per task so far times the tasks left);
+    nothing when ``quiet``."""
+    if quiet:
+        yield lambda task, done, total: None
+        return
+    if err.is_terminal:
+        from rich.progress import (
+            BarColumn,
+            MofNCompleteColumn,
+            Progress,
+            TextColumn,
+            TimeElapsedColumn,
+            TimeRemainingColumn,
+        )
+
+        bar = Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
+                       TextColumn("left"), TimeRemainingColumn(), console=err, transient=False)
+        ids: dict[str, Any] = {}
+
+        def tick_bar(task: Any, done: int, total: int) -> None:
+            if task.stage not in ids:
+                ids[task.stage] = bar.add_task(f"{task.stage} sweeps", total=total)
+            what = f"{task.machine} {task.time}" if done else "sweeps"
+            bar.update(ids[task.stage], completed=done, description=f"{task.stage} {what}")
+
+        with bar:
+            yield tick_bar
+        return
+    start = time.perf_counter()
+    stage_start: dict[str, float] = {}
+
+    def tick_line(task: Any, done: int, total: int) -> None:
+        now = time.perf_counter()
+        t0 = stage_start.setdefault(task.stage, now)
+        if done == 0:
+            return
+        left = (now - t0) / max(done, 1) * (total - done)
+        err.print(f"[{done}/{total}] {task.stage} {task.machine} {task.time}: elapsed {_clock(now - start)}, "
+                  f"about {_clock(left)} left")
+
+    yield tick_line
 
 
 def fleet(
@@ -48,7 +104,9 @@ def fleet(
     trend_confidence: Annotated[float, typer.Option("--trend-confidence", help="Confidence of the trend's "
                                                                                 "intervals.")] = 0.95,
     force: Annotated[bool, typer.Option("--force", help="Recompute every sweep's result.")] = False,
-    as_json: Annotated[bool, typer.Option("--json", help="Print one JSON document on stdout.")] = False,
+    as_json: Annotated[bool, typer.Option("--json", help="Print one JSON document on stdout (no progress).")
+                       ] = False,
+    quiet: Annotated[bool, typer.Option("--quiet", "-q", help="No progress on stderr.")] = False,
 ) -> int:
     """A fleet over time: every new sweep against its machine's baseline (skipping those done, by sha256),
     damages located, one summary table (CSV, HDF5), an alert list, per-machine trends with the time to a
@@ -66,11 +124,14 @@ def fleet(
                         settings=Settings(confidence, false_alarm, low_band), locate=locate, confirm=confirm,
                         limit=limit, trend_confidence=trend_confidence, force=force)
 
+    silent = quiet or as_json
+
     def log(text: str) -> None:
-        if err.is_terminal or os.environ.get("ROTORCHECK_FLEET_PROGRESS"):
+        if not silent:
             err.print(text)
 
-    res = run_fleet(source, opts, log)
+    with progress_reporter(err, silent) as tick:
+        res = run_fleet(source, opts, log, tick)
     what = ("nothing new: every sweep's result exists, outputs up to date" if res.up_to_date else
             f"detected {res.n_detected} sweeps, located {res.n_located}")
     err.print(f"{res.n_machines} machines, {res.n_sweeps} sweeps: {what} ({res.seconds:.2f} s); results in {res.out}")

@@ -40,25 +40,40 @@ def trend_figure(machine: str, rows: list[dict[str, Any]], trend: Trend) -> Figu
             ax1.errorbar(_dates(t[sel]), y[sel], yerr=1.96 * se[sel], fmt="o", color=colour, capsize=3,
                          label=f"{verdict} sweep")
     f = trend.fit
+    t0, t1 = float(np.min(t)), float(np.max(t))
+    pad = max(0.03 * (t1 - t0), 1.0)
+    x_hi = t1 + pad  # the axis fits the data; a crossing beyond half the data's span is written, not drawn
+    shown = (trend.crossing_days is not None and trend.crossing_days <= t1 + 0.5 * (t1 - t0 + 1.0))
     if f is not None:
-        t_end = float(t[-1])
-        if trend.crossing_days is not None and trend.crossing_interval_days[1] is not None:
-            t_end = max(t_end, min(float(trend.crossing_interval_days[1]), float(t[-1]) + 5.0 * (t[-1] - t[0] + 1)))
-        tt = np.linspace(float(t[trend.used[0]]), t_end, 100)
+        t_start = f.kink_days if f.kink_days is not None else float(t[trend.used[0]])
+        t_end = t1
+        if shown:
+            c_hi = trend.crossing_interval_days[1]
+            t_end = float(max(t1, min(c_hi if c_hi is not None else t1, t1 + 0.5 * (t1 - t0 + 1.0))))
+            x_hi = t_end + pad
+        tt = np.linspace(t_start, t_end, 100)
         line = np.array([f.value(x) for x in tt])
         band = np.array([f.quantile * f.value_se(x) for x in tt])
         lo, hi = f.slope_interval
         ax1.plot(_dates(tt), line, color="k", lw=1.2,
-                 label=f"fit: {f.b:.3g} N/m/day [{lo:.3g}, {hi:.3g}] ({f.confidence:.0%})")
+                 label=f"trend: {f.b:.3g} N/m/day [{lo:.3g}, {hi:.3g}] ({f.confidence * 100:g} %)")
         ax1.fill_between(_dates(tt), line - band, line + band, color="k", alpha=0.12, label="line's confidence band")
+        if trend.change_points:
+            ax1.axvline(_dates([trend.change_points[-1].time])[0], color="tab:blue", ls=":", lw=1.0,
+                        label="last change point")
     if trend.limit_n_per_m is not None:
         ax1.axhline(trend.limit_n_per_m, color="tab:purple", ls="--", lw=1.0,
                     label=f"limit {trend.limit_n_per_m:.4g} N/m")
-        if trend.crossing_days is not None:
+        if trend.crossing_days is not None and shown:
             ax1.axvline(_dates([trend.crossing_days])[0], color="tab:purple", lw=0.8)
             c_lo, c_hi = trend.crossing_interval_days
             if c_lo is not None and c_hi is not None:
-                ax1.axvspan(*_dates([c_lo, c_hi]), color="tab:purple", alpha=0.10, label="crossing interval")
+                ax1.axvspan(*_dates([c_lo, min(c_hi, x_hi)]), color="tab:purple", alpha=0.10,
+                            label="crossing interval")
+        elif trend.crossing_days is not None:
+            ax1.text(0.99, 0.03, trend.forecast_words + " (beyond this plot)", transform=ax1.transAxes,
+                     ha="right", va="bottom", fontsize=7, color="tab:purple")
+    ax1.set_xlim(*_dates([t0 - pad, x_hi]))
     ax1.set_ylabel("Re D_u, low band (N/m)\n(+: stiffness loss)")
     ax1.set_title(f"{machine}: low-frequency stiffness change at the damage port")
     ax1.legend(fontsize=7, loc="upper left")
@@ -92,7 +107,11 @@ def trend_figure(machine: str, rows: list[dict[str, Any]], trend: Trend) -> Figu
     ax3.set_xlabel("sweep time (UTC)")
     ax3.set_title(f"{machine}: joint test (damage above 1)", fontsize=9)
     ax3.grid(alpha=0.3)
-    fig.autofmt_xdate()
+    import matplotlib.dates as mdates
+
+    locator = mdates.AutoDateLocator(minticks=4, maxticks=9)
+    ax3.xaxis.set_major_locator(locator)
+    ax3.xaxis.set_major_formatter(mdates.ConciseDateFormatter(locator))
     return fig
 
 
@@ -141,16 +160,15 @@ def render_index(out: Path, rows_by_machine: dict[str, list[dict[str, Any]]], tr
                  + ".</p>")
     parts += ["<h2>Trends</h2>", f"<p>Limit: {_e(meta.get('limit_text'))}. Assumptions: "
               + "; ".join(_e(a) for a in ASSUMPTIONS) + ".</p>",
-              "<table><tr><th>machine</th><th>sweeps fitted</th><th>slope (N/m/day)</th><th>interval</th>"
-              "<th>crossing</th><th>crossing interval</th><th>status</th></tr>"]
+              "<table><tr><th>machine</th><th>latest verdict</th><th>sweeps since the last change point</th>"
+              "<th>slope (N/m/day)</th><th>interval</th><th>trend</th><th>prognosis</th></tr>"]
     for m in sorted(trends):
         d = trends[m].to_dict()
         lo, hi = d["slope_interval_n_per_m_per_day"]
-        c_lo, c_hi = d["crossing_interval"]
-        parts.append(f"<tr><td class='l'><a href='#m-{_e(m)}'>{_e(m)}</a></td><td>{d['n_fitted']}</td>"
-                     f"<td>{_num(d['slope_n_per_m_per_day'])}</td><td>[{_num(lo)}, {_num(hi)}]</td>"
-                     f"<td>{_e(d['crossing_time'] or '')}</td><td>[{_e(c_lo or '')}, {_e(c_hi or '')}]</td>"
-                     f"<td class='l'>{_e(d['status'])}</td></tr>")
+        parts.append(f"<tr><td class='l'><a href='#m-{_e(m)}'>{_e(m)}</a></td><td class='l'>{_e(d['latest_verdict'])}"
+                     f"</td><td>{d['n_since_change']}</td><td>{_num(d['slope_n_per_m_per_day'], '.3g')}</td>"
+                     f"<td>[{_num(lo, '.3g')}, {_num(hi, '.3g')}]</td><td class='l'>{_e(d['trend'])}</td>"
+                     f"<td class='l'>{_e(d['prognosis'])}</td></tr>")
     parts.append("</table><h2>Machines</h2>")
     for m in sorted(rows_by_machine):
         rows = rows_by_machine[m]

@@ -156,15 +156,25 @@ def _same_sweep_twice(tasks: list[SweepTask]) -> None:
 # executors
 
 
-def _serial(tasks: list[SweepTask], log: Callable[[str], None]) -> list[dict[str, Any]]:
+#: called after each finished task: ``(task, finished so far, tasks in all)``; with 0 finished when a stage
+#: (detect, locate) begins
+Tick = Callable[[SweepTask, int, int], None]
+
+
+def _no_tick(task: SweepTask, done: int, total: int) -> None:
+    return None
+
+
+def _serial(tasks: list[SweepTask], log: Callable[[str], None], tick: Tick = _no_tick) -> list[dict[str, Any]]:
     out = []
     for k, t in enumerate(tasks, 1):
         out.append(run_task(t))
-        log(f"[{k}/{len(tasks)}] {t.stage} {t.machine} {t.time}")
+        tick(t, k, len(tasks))
     return out
 
 
-def _processes(tasks: list[SweepTask], workers: int, log: Callable[[str], None]) -> list[dict[str, Any]]:
+def _processes(tasks: list[SweepTask], workers: int, log: Callable[[str], None], tick: Tick = _no_tick
+               ) -> list[dict[str, Any]]:
     """A process pool; a pool broken by a dead worker is replaced and the unfinished tasks run again
     (at most 3 pools)."""
     from concurrent.futures import ProcessPoolExecutor, as_completed
@@ -179,7 +189,7 @@ def _processes(tasks: list[SweepTask], workers: int, log: Callable[[str], None])
                 for fut in as_completed(futs):
                     t = futs[fut]
                     results[t.task_key] = fut.result()
-                    log(f"[{len(results)}/{len(tasks)}] {t.stage} {t.machine} {t.time}")
+                    tick(t, len(results), len(tasks))
             break
         except BrokenProcessPool:
             todo = [t for t in todo if t.task_key not in results]
@@ -193,8 +203,8 @@ def _processes(tasks: list[SweepTask], workers: int, log: Callable[[str], None])
 SCHEDULER_TIMEOUT_S = 10.0
 
 
-def _dask(tasks: list[SweepTask], workers: int, scheduler: str | None, log: Callable[[str], None]
-          ) -> list[dict[str, Any]]:
+def _dask(tasks: list[SweepTask], workers: int, scheduler: str | None, log: Callable[[str], None],
+          tick: Tick = _no_tick) -> list[dict[str, Any]]:
     """Dask distributed: a client of ``scheduler``, else of a LocalCluster (``workers`` processes, one thread
     each). A task whose worker died is rescheduled by Dask; a task that raised is retried twice."""
     import logging
@@ -220,7 +230,7 @@ def _dask(tasks: list[SweepTask], workers: int, scheduler: str | None, log: Call
         for fut in as_completed(futs):
             t = by_key[fut.key]
             results[t.task_key] = fut.result()
-            log(f"[{len(results)}/{len(tasks)}] {t.stage} {t.machine} {t.time}")
+            tick(t, len(results), len(tasks))
         return [results[t.task_key] for t in tasks]
     finally:
         client.close()
@@ -228,17 +238,19 @@ def _dask(tasks: list[SweepTask], workers: int, scheduler: str | None, log: Call
             cluster.close()
 
 
-def execute(tasks: list[SweepTask], opts: FleetOptions, log: Callable[[str], None] = lambda s: None
-            ) -> list[dict[str, Any]]:
-    """Run ``tasks`` on the chosen executor; their results in the order of ``tasks``."""
+def execute(tasks: list[SweepTask], opts: FleetOptions, log: Callable[[str], None] = lambda s: None,
+            tick: Tick = _no_tick) -> list[dict[str, Any]]:
+    """Run ``tasks`` on the chosen executor; their results in the order of ``tasks``; ``tick`` after each
+    finished task (progress), ``log`` for what else happens (a worker that died)."""
     if not tasks:
         return []
+    tick(tasks[0], 0, len(tasks))  # the stage begins
     workers = opts.workers or os.cpu_count() or 1
     if opts.executor == "dask" or opts.scheduler:
-        return _dask(tasks, workers, opts.scheduler, log)
+        return _dask(tasks, workers, opts.scheduler, log, tick)
     if opts.executor == "serial":
-        return _serial(tasks, log)
-    return _processes(tasks, workers, log)
+        return _serial(tasks, log, tick)
+    return _processes(tasks, workers, log, tick)
 
 
 # --------------------------------------------------------------------------------------------
@@ -273,7 +285,7 @@ def _limits(fleet: Fleet, rows: dict[str, list[dict[str, Any]]], limit: tuple[fl
             ) -> tuple[dict[str, float | None], str]:
     """The limit per machine in N/m (a % of the damage port's static stiffness per machine's rig) and words."""
     if limit is None:
-        return dict.fromkeys(rows), "none set (--limit)"
+        return dict.fromkeys(rows), "none set: --limit"
     value, unit = limit
     if unit == "N/m":
         return dict.fromkeys(rows, value), f"{value:.4g} N/m of the low-frequency Re D_u"
@@ -287,10 +299,12 @@ def _limits(fleet: Fleet, rows: dict[str, list[dict[str, Any]]], limit: tuple[fl
                  + ", ".join(f"{k} {v:.4g} N/m" for k, v in sorted(out.items()) if v is not None))
 
 
-def run_fleet(source: str | Path, opts: FleetOptions | None = None, log: Callable[[str], None] = lambda s: None
-              ) -> FleetResult:
+def run_fleet(source: str | Path, opts: FleetOptions | None = None, log: Callable[[str], None] = lambda s: None,
+              tick: Tick = _no_tick) -> FleetResult:
     """Detect every new sweep of the fleet at ``source`` (a folder or a manifest), locate damages, and write
-    the summary, alerts, trends and index.html into the results folder (:mod:`rotorcheck.fleet`)."""
+    the summary, alerts, trends and index.html into the results folder (:mod:`rotorcheck.fleet`); ``tick``
+    after each finished task (its stage, machine and time; the count done and in all), ``log`` for the
+    stages in words."""
     t_start = time.perf_counter()
     opts = opts or FleetOptions()
     check_options(opts)
@@ -304,7 +318,7 @@ def run_fleet(source: str | Path, opts: FleetOptions | None = None, log: Callabl
     _same_sweep_twice(tasks)
     pending = [t for t in tasks if opts.force or not is_done(t)]
     log(f"{len(fleet.machines)} machines, {len(tasks)} sweeps: {len(pending)} to detect")
-    executed = execute(pending, opts, log)
+    executed = execute(pending, opts, log, tick)
     n_detected = sum(1 for r in executed if r.get("executed"))
     rows: dict[str, list[tuple[SweepTask, dict[str, Any]]]] = {m.name: [] for m in fleet.machines}
     for t in tasks:
@@ -315,7 +329,7 @@ def run_fleet(source: str | Path, opts: FleetOptions | None = None, log: Callabl
     loc_tasks = _locate_tasks(rows, opts.locate)
     if loc_tasks:
         log(f"locating {len(loc_tasks)} damaged sweeps")
-    n_located = sum(1 for r in execute(loc_tasks, opts, log) if r.get("executed"))
+    n_located = sum(1 for r in execute(loc_tasks, opts, log, tick) if r.get("executed"))
     merged: dict[str, list[dict[str, Any]]] = {}
     for name, items in rows.items():
         merged[name] = []
@@ -336,6 +350,7 @@ def run_fleet(source: str | Path, opts: FleetOptions | None = None, log: Callabl
         alerts = json.loads((out / "alerts.json").read_text(encoding="utf-8"))["alerts"]
         return FleetResult(out, len(fleet.machines), n_sweeps, 0, 0, merged, alerts, {}, [], True,
                            time.perf_counter() - t_start)
+    log(f"writing the summary, the trends and index.html ({len(merged)} trend plots)")
     files, alerts, trends = write_outputs(fleet, merged, opts, out)
     atomic_write_text(state_path, json.dumps({"fingerprint": fp}) + "\n")
     return FleetResult(out, len(fleet.machines), n_sweeps, n_detected, n_located, merged, alerts, trends, files,
@@ -354,10 +369,9 @@ def write_outputs(fleet: Fleet, rows: dict[str, list[dict[str, Any]]], opts: Fle
     flat = [r for m in sorted(rows) for r in rows[m]]
     files = summary.write_summary(flat, out)
     files.append(summary.write_trends(trends, out))
-    files += summary.write_alerts(entries, out)
-    meta = {"source": str(fleet.source), "n_machines": len(fleet.machines), "n_sweeps": len(flat),
-            "rules": {k: v.format(confirm=opts.confirm, false_alarm=opts.settings.false_alarm, limit=0.0,
-                                  confidence=opts.trend_confidence) for k, v in summary.ALERT_RULES.items()},
+    rules = summary.rule_texts(opts.confirm, opts.settings.false_alarm, limit_text, opts.trend_confidence)
+    files += summary.write_alerts(entries, out, rules)
+    meta = {"source": str(fleet.source), "n_machines": len(fleet.machines), "n_sweeps": len(flat), "rules": rules,
             "limit_text": limit_text}
     files += html.write_index(out, rows, trends, entries, meta)
     return files, entries, trends

@@ -36,12 +36,19 @@ COLUMNS: tuple[tuple[str, str], ...] = (
 ALERT_RULES = {
     "damage-confirmed": "alarm: the last {confirm} sweeps all have the verdict damage (joint test, false-alarm rate "
                         "{false_alarm:g} per sweep)",
-    "limit-exceeded": "alarm: the latest low-frequency stiffness change exceeds the limit {limit:.4g} N/m by more than "
+    "limit-exceeded": "alarm: the latest low-frequency stiffness change exceeds the limit ({limit}) by more than "
                       "its {confidence:.0%} half-width",
     "damage-unconfirmed": "watch: the latest sweep has the verdict damage, not yet {confirm} in a row",
     "sweep-error": "watch: the latest sweep could not be checked (bad input); it neither confirms nor clears an "
                    "alarm",
 }
+
+
+def rule_texts(confirm: int, false_alarm: float, limit_text: str, confidence: float) -> dict[str, str]:
+    """Every alert rule in words, with the numbers in use (``limit_text``: the limit as set, e.g.
+    ``3000 N/m of the low-frequency Re D_u``, or ``none set: --limit``)."""
+    return {k: v.format(confirm=confirm, false_alarm=false_alarm, limit=limit_text, confidence=confidence)
+            for k, v in ALERT_RULES.items()}
 
 
 def _unit_tag(unit: str) -> str:
@@ -179,7 +186,8 @@ def alerts(rows_by_machine: dict[str, list[dict[str, Any]]], trends: dict[str, A
         if unchecked:
             rules.append(("watch", "sweep-error", unchecked[0]["time"]))
         for level, rule, since in rules:
-            text = ALERT_RULES[rule].format(confirm=confirm, false_alarm=false_alarm, limit=limit or 0.0,
+            text = ALERT_RULES[rule].format(confirm=confirm, false_alarm=false_alarm,
+                                            limit="none set" if limit is None else f"{limit:.4g} N/m",
                                             confidence=getattr(fit, "confidence", 0.95))
             out.append({"level": level, "rule": rule, "rule_text": text, "since": since,
                         "first_damage_time": judged[len(judged) - streak]["time"] if streak else None, **entry})
@@ -205,11 +213,12 @@ def _fmt(x: Any) -> str:
     return "-" if x is None else f"{x:.4g}"
 
 
-def write_alerts(entries: list[dict[str, Any]], out: Path) -> list[Path]:
-    """alerts.json (the entries) and alerts.txt (:func:`render_alerts_text`), atomically."""
+def write_alerts(entries: list[dict[str, Any]], out: Path, rules: dict[str, str] | None = None) -> list[Path]:
+    """alerts.json (the entries and the rules in words, :func:`rule_texts`) and alerts.txt
+    (:func:`render_alerts_text`), atomically."""
     from rotorcheck.report.reports import render_json
 
-    atomic_write_text(out / "alerts.json", render_json({"alerts": entries, "rules": ALERT_RULES}))
+    atomic_write_text(out / "alerts.json", render_json({"alerts": entries, "rules": rules or ALERT_RULES}))
     atomic_write_text(out / "alerts.txt", render_alerts_text(entries))
     return [out / "alerts.json", out / "alerts.txt"]
 

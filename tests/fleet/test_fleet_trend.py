@@ -1,11 +1,12 @@
-"""The trend fit against closed forms and brute force, and its intervals' coverage by Monte Carlo."""
+"""The line fit against closed forms and brute force, and its intervals' coverage by Monte Carlo (the change
+point and the kink fit: test_fleet_changepoint.py)."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from rotorcheck.fleet.trend import fit_line, fit_window, machine_trend
+from rotorcheck.fleet.trend import fit_line, machine_trend
 
 
 def _data(rng: np.random.Generator, n: int = 8, a: float = 120.0, b: float = 35.0) -> tuple[np.ndarray, ...]:
@@ -77,13 +78,6 @@ def test_flat_trend_has_no_bounded_crossing() -> None:
     lo, hi = f.slope_interval
     assert lo < 0 < hi
     assert f.crossing(3000.0)[1] == (None, None)
-
-
-def test_fit_window() -> None:
-    assert fit_window(["healthy"] * 5) == [0, 1, 2, 3, 4]
-    assert fit_window(["healthy"] * 5 + ["damage"] * 4) == [5, 6, 7, 8]
-    assert fit_window(["healthy"] * 5 + ["damage"] * 2) == [4, 5, 6]  # extended back to 3 points
-    assert fit_window(["damage", "healthy", "healthy"]) == [0, 1, 2]
 
 
 def test_machine_trend_crossing_in_calendar_time() -> None:
