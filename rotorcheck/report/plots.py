@@ -79,14 +79,29 @@ class FigureContext:
         return "at standstill (0 rpm)" if self.speed_rpm == 0 else f"at {self.speed_rpm:g} rpm"
 
     def title(self, what: str, width: int = 90) -> str:
-        """``what`` with the rig, speed and channels; the sweep and baseline on a second line."""
-        head = " ".join(x for x in (f"{what}: {self.rig_id}", self.speed_text()) if x)
+        """``what`` with the rig, speed and channels; the sweep and baseline on a second line. Lines of at
+        most ``width`` characters, broken between these parts (a channel pair "s6.x <- s8.x" stays whole)
+        unless one part alone is longer."""
+        head = [x for x in (f"{what}: {self.rig_id}", self.speed_text()) if x]
         if self.channels:
-            head += f", {self.channels}"
-        tail = "; ".join(x for x in (f"sweep {self.sweep}" if self.sweep else "",
-                                      f"baseline {self.baseline}" if self.baseline else "") if x)
-        lines = textwrap.wrap(head, width) + (textwrap.wrap(tail, width) if tail else [])
-        return "\n".join(lines)
+            head[-1] += ","
+            head.append(self.channels)
+        tail = [x for x in (f"sweep {self.sweep}" if self.sweep else "",
+                            f"baseline {self.baseline}" if self.baseline else "") if x]
+        tail = [x + ";" for x in tail[:-1]] + tail[-1:]
+        return "\n".join(line for parts in (head, tail) for line in _pack(parts, width))
+
+
+def _pack(parts: list[str], width: int) -> list[str]:
+    """``parts`` joined by spaces into lines of at most ``width`` characters, broken between parts (a part
+    longer than ``width`` wrapped on its own)."""
+    lines: list[str] = []
+    for part in parts:
+        if lines and len(lines[-1]) + 1 + len(part) <= width:
+            lines[-1] += " " + part
+        else:
+            lines += textwrap.wrap(part, width) or [part]
+    return lines
 
 
 def _wrap_near(phase_deg: np.ndarray, ref_deg: np.ndarray) -> np.ndarray:
