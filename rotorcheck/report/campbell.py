@@ -15,6 +15,7 @@ from rotorcheck.config import RigConfig
 from rotorcheck.fe.elements import TimoshenkoBeam, beam_shape_functions
 from rotorcheck.fe.modal import CampbellResult, campbell, modes
 from rotorcheck.fe.system import MechanicalSystem
+from rotorcheck.report.figures import wrap_to_width
 from rotorcheck.report.rotor_drawing import boxes_overlap, text_extent
 from rotorcheck.units import UNITS
 
@@ -234,7 +235,8 @@ def campbell_figure(
         a.grid(True, lw=0.3)
     span = f"{speed_text(rpm[0], speed_unit)} to {speed_text(rpm[-1], speed_unit)}"
     op = "" if operating_speed_rpm is None else f"; operating speed {speed_text(operating_speed_rpm, speed_unit)}"
-    fig.suptitle(title or f"Campbell diagram: {rig_id or 'rotor'}, {span}{op}", fontsize=11)
+    fig.suptitle(wrap_to_width(title or f"Campbell diagram: {rig_id or 'rotor'}, {span}{op}",
+                               0.95 * fig.get_figwidth(), 11), fontsize=11)
     fig.legend(handles=handles, loc="outside lower center", ncol=3, fontsize=8, frameon=False)
     # labels: branch numbers right of both panels, then order, operating-speed and critical labels inside
     _end_labels(ax, x, [f[:, b] for b in range(n_branch)], names, colours)
@@ -374,7 +376,8 @@ def mode_shape_figure(
             ax.set_title(f"mode {i + 1}: {md.frequency_hz[i]:.2f} Hz", fontsize=8, loc="left")
             ax.set_ylabel("normalised\ndisplacement", fontsize=8)
             ax.axhline(0.0, color="black", lw=0.5)
-        fig.suptitle(head.replace(" at standstill (0 rpm)", ""), fontsize=10)
+        fig.suptitle(wrap_to_width(head.replace(" at standstill (0 rpm)", ""), 0.95 * fig.get_figwidth(), 10),
+                     fontsize=10)
         return fig
     ncol = 2 if len(md) > 1 else 1
     nrow = int(np.ceil(len(md) / ncol))
@@ -413,12 +416,15 @@ def mode_shape_figure(
 
         rax = fig.add_subplot(gs[0, :], sharex=axes[0])
         draw_rig(rax, config, fontsize=6.5)
-        rax.set_xlabel("")
     handles, labels = axes[0].get_legend_handles_labels()
     handles += [h for _, h in marks["legend"]]
     labels += [k for k, _ in marks["legend"]]
     fig.legend(handles, labels, loc="outside lower center", ncol=4, fontsize=8, frameon=False)
-    fig.suptitle(head, fontsize=10)
+    fig.suptitle(wrap_to_width(head, 0.95 * fig.get_figwidth(), 10), fontsize=10)
+    if config is not None:
+        from rotorcheck.report.rotor_drawing import fit_rotor_labels, settle_labels
+
+        settle_labels(fig, lambda: fit_rotor_labels(rax))  # the layout is final: the drawing's labels placed for it
     return fig
 
 

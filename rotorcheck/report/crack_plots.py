@@ -22,7 +22,7 @@ from rotorcheck.config import Crack, UnbalanceMass
 from rotorcheck.faults.analysis import orbit_from_harmonics, unbalance_harmonics
 from rotorcheck.faults.crack import rotating_reduction
 from rotorcheck.fe.system import MechanicalSystem
-from rotorcheck.report.figures import legend_outside
+from rotorcheck.report.figures import legend_outside, wrap_to_width
 
 __all__ = ["crack_figures", "orbit_figure", "spectrum_figure", "stiffness_change_figure"]
 
@@ -50,8 +50,8 @@ def stiffness_change_figure(crack: Crack, poisson: float = 0.3, radius: float = 
     ax.set_xticks(np.arange(0, 361, 45))
     ax.set_xlabel("crack opening angle theta (deg; 0 = closed, facing up)")
     ax.set_ylabel("normalized stiffness")
-    ax.set_title(title or f"Breathing crack stiffness over one revolution: element {crack.element} ({crack.model})",
-                 fontsize=10)
+    ax.set_title(wrap_to_width(title or f"Breathing crack stiffness over one revolution: element {crack.element} "
+                               f"({crack.model})", 0.95 * fig.get_figwidth(), 10), fontsize=10)
     ax.grid(True, alpha=0.3)
     ax.legend()
     return fig
@@ -95,7 +95,8 @@ def orbit_figure(orbits: Mapping[str, Any], title: str = "Orbit") -> Figure:
     handles += [Line2D([], [], marker="o", ls="", color="0.3", ms=6, label="start of the period (t = 0, crack closed)"),
                 Line2D([], [], marker=">", ls="-", color="0.3", label="direction of travel")]
     fig.legend(handles=handles, loc="outside lower center", ncol=2, fontsize=8, frameon=False)
-    fig.suptitle(title + "\nshaft spin counter-clockwise (+x towards +y)", fontsize=10)
+    fig.suptitle(wrap_to_width(title + "\nshaft spin counter-clockwise (+x towards +y)", 0.95 * fig.get_figwidth(), 10),
+                 fontsize=10)
     return fig
 
 
@@ -138,11 +139,11 @@ def spectrum_figure(panels: Sequence[Mapping[str, Any]], title: str = "") -> Fig
         if log:
             ax.set_yscale("log")
             ax.set_ylim(floor, float(a.max()) * 3.0)
-            ax.set_ylabel("amplitude (um)\nlog scale", fontsize=9)
+            ax.set_ylabel("amplitude (um, 0-peak)\nlog scale", fontsize=9)
         else:
             ax.set_ylim(0.0, None)
-            ax.set_ylabel("amplitude (um)\nlinear scale", fontsize=9)
-        ax.set_title(str(p.get("title", "")), fontsize=9, loc="left")
+            ax.set_ylabel("amplitude (um, 0-peak)\nlinear scale", fontsize=9)
+        ax.set_title(wrap_to_width(str(p.get("title", "")), 0.8 * fig.get_figwidth(), 9), fontsize=9, loc="left")
         ax.grid(True, which="major", alpha=0.3)
         legend_outside(ax, fontsize=7, frameon=False)
     axes[-1].set_xlabel("order of the running speed (nX)")
@@ -150,7 +151,7 @@ def spectrum_figure(panels: Sequence[Mapping[str, Any]], title: str = "") -> Fig
         title = (title + "\n" if title else "") + (f"log scale: amplitudes below 1e-{LOG_DECADES:g} of a panel's "
                                                    "largest sit on its bottom edge")
     if title:
-        fig.suptitle(title, fontsize=10)
+        fig.suptitle(wrap_to_width(title, 0.95 * fig.get_figwidth(), 10), fontsize=10)
     return fig
 
 

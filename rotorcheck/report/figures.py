@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import textwrap
 from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
@@ -36,11 +37,28 @@ def save_figures(figures: dict[str, Figure], out_dir: str | Path, formats: tuple
 
 
 def legend_outside(ax: Any, handles: Iterable[Any] | None = None, labels: Iterable[str] | None = None,
-                   fontsize: float = 8, **kw: Any) -> Any:
+                   fontsize: float = 8, wrap: int = 50, **kw: Any) -> Any:
     """A legend right of ``ax``, outside its data (``handles``/``labels``: default the axes' labelled
-    artists); None when there is nothing to show."""
+    artists), each label wrapped at ``wrap`` characters (a wide legend would squeeze the axes); None when
+    there is nothing to show."""
     h, lab = (list(handles), list(labels or [])) if handles is not None else ax.get_legend_handles_labels()
     if not h:
         return None
+    lab = [textwrap.fill(str(x), wrap, subsequent_indent="  ") for x in lab]
     return ax.legend(h, lab, loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0, fontsize=fontsize,
                      **kw)
+
+
+#: average glyph width of the default sans-serif font, in em (a little above DejaVu Sans' mean: wrapping errs short)
+GLYPH_EM = 0.62
+
+
+def wrap_to_width(text: str, width_in: float, fontsize: float) -> str:
+    """``text`` wrapped, line by line, to fit ``width_in`` inches at ``fontsize`` points (titles a constrained
+    layout would otherwise leave cut at the figure's edge)."""
+    chars = max(20, int(width_in * 72.0 / (GLYPH_EM * fontsize)))
+    return "\n".join(textwrap.fill(line, chars) if line else line for line in text.split("\n"))
+
+
+#: how the data are stated (sweep-format.md, method.md): x(t) = Re{X exp(j 2 pi f t)} with X the peak phasor
+PHASOR_NOTE = "phasors x(t) = Re{X exp(j 2 pi f t)}, X the 0-peak amplitude; phase + = leads"

@@ -18,9 +18,10 @@ from typing import Any
 
 import numpy as np
 from matplotlib.figure import Figure
+from matplotlib.ticker import MultipleLocator
 
-from rotorcheck.report.figures import legend_outside
-from rotorcheck.report.rotor_drawing import draw_rotor
+from rotorcheck.report.figures import PHASOR_NOTE, legend_outside
+from rotorcheck.report.rotor_drawing import draw_rotor, fit_rotor_labels, fit_texts, settle_labels
 from rotorcheck.units import PLOT_FRF_UNITS, UNITS
 
 #: receptance units a plot may use: factor from m/N (rotorcheck.units' receptance table, inverted)
@@ -77,15 +78,30 @@ class FigureContext:
             return ""
         return "at standstill (0 rpm)" if self.speed_rpm == 0 else f"at {self.speed_rpm:g} rpm"
 
-    def title(self, what: str, width: int = 100) -> str:
-        """``what`` with the rig, speed and channels; the sweep and baseline on a second line."""
-        head = " ".join(x for x in (f"{what}: {self.rig_id}", self.speed_text()) if x)
+    def title(self, what: str, width: int = 90) -> str:
+        """``what`` with the rig, speed and channels; the sweep and baseline on a second line. Lines of at
+        most ``width`` characters, broken between these parts (a channel pair "s6.x <- s8.x" stays whole)
+        unless one part alone is longer."""
+        head = [x for x in (f"{what}: {self.rig_id}", self.speed_text()) if x]
         if self.channels:
-            head += f", {self.channels}"
-        tail = "; ".join(x for x in (f"sweep {self.sweep}" if self.sweep else "",
-                                      f"baseline {self.baseline}" if self.baseline else "") if x)
-        lines = textwrap.wrap(head, width) + (textwrap.wrap(tail, width) if tail else [])
-        return "\n".join(lines)
+            head[-1] += ","
+            head.append(self.channels)
+        tail = [x for x in (f"sweep {self.sweep}" if self.sweep else "",
+                            f"baseline {self.baseline}" if self.baseline else "") if x]
+        tail = [x + ";" for x in tail[:-1]] + tail[-1:]
+        return "\n".join(line for parts in (head, tail) for line in _pack(parts, width))
+
+
+def _pack(parts: list[str], width: int) -> list[str]:
+    """``parts`` joined by spaces into lines of at most ``width`` characters, broken between parts (a part
+    longer than ``width`` wrapped on its own)."""
+    lines: list[str] = []
+    for part in parts:
+        if lines and len(lines[-1]) + 1 + len(part) <= width:
+            lines[-1] += " " + part
+        else:
+            lines += textwrap.wrap(part, width) or [part]
+    return lines
 
 
 def _wrap_near(phase_deg: np.ndarray, ref_deg: np.ndarray) -> np.ndarray:
@@ -108,6 +124,23 @@ def _runs(f: np.ndarray, mask: np.ndarray) -> list[tuple[float, float]]:
         prev = i
     out.append((f[start] - 0.5 * step, f[prev] + 0.5 * step))
     return out
+
+
+def phase_limits(ax: Any, *arrays: Any, margin_deg: float = 10.0) -> tuple[float, float]:
+    """Fit a phase axis (deg) to the finite values of ``arrays``: a margin of ``margin_deg`` (or 8 % of
+    the span) each side, ticks every 45 or 90 deg for spans over 90 deg; returns the limits."""
+    vals = np.concatenate([np.ravel(np.asarray(a, dtype=float)) for a in arrays if a is not None] or [np.zeros(0)])
+    vals = vals[np.isfinite(vals)]
+    if vals.size == 0:
+        lo, hi = -180.0, 180.0
+    else:
+        lo, hi = float(vals.min()), float(vals.max())
+        pad = max(margin_deg, 0.08 * (hi - lo))
+        lo, hi = lo - pad, hi + pad
+    ax.set_ylim(lo, hi)
+    if hi - lo > 90.0:
+        ax.yaxis.set_major_locator(MultipleLocator(45.0 if hi - lo <= 400.0 else 90.0))
+    return lo, hi
 
 
 def _log_limits(*arrays: Any) -> tuple[float, float]:
@@ -179,16 +212,19 @@ def bode_band_figure(
                       color=COLOURS["fault"], label=f"fault points ({n_fault}{which})", zorder=4, gid="fault_points")
         ax_p.plot(f[fault], _wrap_near(np.degrees(np.angle(damaged_frf[fault])), centre_deg[fault]), "o",
                   mfc="none", mew=1.3, ms=8, color=COLOURS["fault"], zorder=4, gid="fault_points")
-    ax_m.set_ylabel(f"|receptance| ({ctx.frf_unit})")
-    ax_p.set_ylabel("phase (deg)")
+    ax_m.set_ylabel(f"|receptance| ({ctx.frf_unit})\n0-peak displacement / 0-peak force", fontsize=9)
+    ax_p.set_ylabel("phase of displacement re force\n(deg; + = displacement leads)", fontsize=9)
     ax_p.set_xlabel("frequency (Hz)")
-    ax_p.set_ylim(float(np.min(centre_deg)) - 200.0, float(np.max(centre_deg)) + 200.0)
+    drawn = [np.concatenate([l_.get_ydata() for l_ in ax_p.get_lines()]) if ax_p.get_lines() else None,
+             np.where(full, np.nan, centre_deg - half), np.where(full, np.nan, centre_deg + half)]
+    phase_limits(ax_p, *drawn)  # the data and the finite band; an any-phase (hatched) band fills what is shown
     legend_outside(ax_m)
     ax_m.grid(True, which="both", alpha=0.3)
     ax_p.grid(True, alpha=0.3)
     note = ("Band: the range of magnitude and of phase over the uncertainty disk at each frequency. A point inside "
             "both ranges can still lie outside the disk" + (": the decision figure shows the ratio that decided."
-                                                           if damaged_frf is not None else "."))
+                                                           if damaged_frf is not None else ".")
+            + f" {PHASOR_NOTE[0].upper()}{PHASOR_NOTE[1:]}.")
     ax_p.text(0.0, -0.16, "\n".join(textwrap.wrap(note, 120)), transform=ax_p.transAxes, fontsize=7, va="top")
     ax_m.set_title(title or ctx.title("Bode"), fontsize=9)
     return fig
@@ -244,21 +280,47 @@ def decision_figure(
     ax.grid(True, which="both", alpha=0.3)
     legend_outside(ax)
     head = context.title(f"Detection ({verdict.upper()})")
-    ax.set_title(head + "\n" + "\n".join(textwrap.wrap("Rule: " + rule, 120)), fontsize=8)
+    ax.set_title(head + "\n" + "\n".join(textwrap.wrap("Rule: " + rule, 100)), fontsize=8)
     if bx is not None and joint is not None:
-        t, thr = float(joint["statistic"]), float(joint["threshold"])
-        bx.barh([0], [t / thr], color=COLOURS["fault"] if t > thr else COLOURS["ok"], height=0.5,
-                label=f"joint statistic T = {t:.4g} (p = {float(joint['p_value']):.3g})")
-        bx.axvline(1.0, color="k", ls="--", lw=1.0,
-                   label=f"threshold {thr:.4g} (false alarm {float(joint['false_alarm']):g} per sweep)")
-        bx.set_xscale("log")
-        bx.set_xlim(min(0.5, 0.5 * t / thr), max(2.0, 2.0 * t / thr))
-        bx.set_yticks([])
-        bx.set_ylabel("this sweep")
-        bx.set_xlabel("joint statistic / its threshold (the verdict: damage above 1)")
-        bx.grid(True, which="both", axis="x", alpha=0.3)
-        legend_outside(bx)
+        joint_panel(bx, float(joint["statistic"]), float(joint["threshold"]), float(joint["p_value"]),
+                    float(joint["false_alarm"]))
     return fig
+
+
+def engineering_unit(largest_m_per_n: float) -> tuple[str, float]:
+    """The receptance unit (rotorcheck.units' table: m/N, mm/N, um/N, nm/N) in which ``largest_m_per_n``
+    reads 1 or more (nm/N below that) and its factor from m/N."""
+    units = sorted(((u, f) for u, f in UNITS["receptance"].items() if u.isascii()), key=lambda uf: -uf[1])
+    for unit, factor in units:
+        if abs(largest_m_per_n) >= factor:
+            return unit, 1.0 / factor
+    return units[-1][0], 1.0 / units[-1][1]
+
+
+def joint_panel(bx: Any, t: float, thr: float, p_value: float, false_alarm: float) -> None:
+    """The sweep's joint statistic ``t`` as a dot against its threshold ``thr`` (dashed line; the damage side
+    shaded) on a linear axis from 0, or a symlog one (linear up to the threshold) when ``t`` exceeds 20
+    thresholds: a statistic of 0 sits on the axis, never off a log scale."""
+    damage = t > thr
+    top = max(t, thr, 1e-300)
+    if top > 20.0 * thr > 0.0:
+        bx.set_xscale("symlog", linthresh=thr)
+        right = 2.0 * top
+    else:
+        right = 1.15 * top
+    left = min(0.0, 1.15 * t)
+    bx.axvspan(thr, right, color=COLOURS["fault"], alpha=0.08, lw=0, label="damage side (T above the threshold)")
+    bx.axvline(thr, color="k", ls="--", lw=1.0, gid="joint_threshold",
+               label=f"threshold {thr:.4g} (false alarm {false_alarm:g} per sweep)")
+    bx.plot([t], [0.0], "o", ms=9, color=COLOURS["fault"] if damage else COLOURS["ok"], mec="k", zorder=3,
+            gid="joint_statistic", label=f"joint statistic T = {t:.4g} (p = {p_value:.3g})", clip_on=False)
+    bx.set_xlim(left, right)
+    bx.set_ylim(-1.0, 1.0)
+    bx.set_yticks([])
+    bx.set_ylabel("this sweep", fontsize=9)
+    bx.set_xlabel("joint statistic T (the verdict: damage when T is above the threshold)")
+    bx.grid(True, which="both", axis="x", alpha=0.3)
+    legend_outside(bx)
 
 
 def complex_plane_figure(
@@ -274,16 +336,14 @@ def complex_plane_figure(
     set_label: str = "uncertainty set",
 ) -> Figure:
     """The uncertainty disk at one frequency in the complex plane (dissertation Fig. 48), with the noise
-    disks of the data (their own noise bound, m/N) and the distance of the new data from the set."""
+    disks of the data (their own noise bound, m/N) and the distance of the new data from the set.
+
+    A square frame on the set and the data, equal scales; the unit an engineering one chosen from the frame
+    (:func:`engineering_unit`, named in the axis labels: no offset or power in a corner)."""
     ctx = context or FigureContext(rig_id="")
-    s = ctx.frf_scale
-    fig = Figure(figsize=(10.0, 5.6), layout="constrained")
+    fig = Figure(figsize=(9.0, 5.6), layout="constrained")
     ax = fig.subplots()
     t = np.linspace(0, 2 * np.pi, 361)
-    c = complex(centre) * s
-    if np.isfinite(radius):
-        ax.fill(c.real + s * radius * np.cos(t), c.imag + s * radius * np.sin(t), color=COLOURS["band"], alpha=0.2,
-                label=f"{set_label} (radius {s * radius:.3g} {ctx.frf_unit})")
     # frame the set and the data (the decision is read there); the model and the origin only when near
     c0 = complex(centre)
     near = [complex(z) for z in (healthy, damaged) if z is not None]
@@ -292,6 +352,12 @@ def complex_plane_figure(
     model_far = abs(complex(model) - c0) > 2.5 * half
     if not model_far:
         half = max(half, 1.3 * abs(complex(model) - c0))
+    unit, s = engineering_unit(max(abs(c0.real) + half, abs(c0.imag) + half))
+    c = c0 * s
+    if np.isfinite(radius):
+        ax.fill(c.real + s * radius * np.cos(t), c.imag + s * radius * np.sin(t), color=COLOURS["band"], alpha=0.2,
+                label=f"{set_label} (radius {s * radius:.3g} {unit})")
+    if not model_far:
         ax.plot(s * model.real, s * model.imag, "s", color=COLOURS["model"], label="nominal model")
     for z, noise, key, label in ((healthy, healthy_noise, "healthy", "healthy data"),
                                  (damaged, damaged_noise, "new", "new data")):
@@ -300,12 +366,13 @@ def complex_plane_figure(
         ax.plot(s * z.real, s * z.imag, "o", color=COLOURS[key], label=label, zorder=3)
         if noise is not None and np.isfinite(noise):
             ax.plot(s * z.real + s * noise * np.cos(t), s * z.imag + s * noise * np.sin(t), ":", color=COLOURS[key],
-                    lw=1.0, label=f"{label}: its noise bound ({s * noise:.3g} {ctx.frf_unit})")
+                    lw=1.0, label=f"{label}: its noise bound ({s * noise:.3g} {unit})")
     if abs(c0) <= half:
         ax.plot(0, 0, "+", color="grey", ms=10, label="origin")
     ax.set_xlim(s * (c0.real - half), s * (c0.real + half))
     ax.set_ylim(s * (c0.imag - half), s * (c0.imag + half))
-    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_aspect("equal", adjustable="box")  # a square frame: the limits stay as set
+    ax.ticklabel_format(axis="both", style="plain", useOffset=False)
     if model_far:
         d = complex(model) - c0
         u = d / abs(d)
@@ -313,8 +380,8 @@ def complex_plane_figure(
                     xy=(0.5 + 0.49 * u.real, 0.5 + 0.49 * u.imag), xytext=(0.5 + 0.36 * u.real, 0.5 + 0.36 * u.imag),
                     textcoords="axes fraction", fontsize=7, color=COLOURS["model"],
                     ha="center", arrowprops={"arrowstyle": "->", "color": COLOURS["model"]}, gid="model_off_frame")
-    ax.set_xlabel(f"Re ({ctx.frf_unit})")
-    ax.set_ylabel(f"Im ({ctx.frf_unit})")
+    ax.set_xlabel(f"Re receptance ({unit})")
+    ax.set_ylabel(f"Im receptance ({unit})")
     extra = ""
     if damaged is not None and np.isfinite(radius) and radius > 0:
         d = abs(complex(damaged) - complex(centre)) / radius
@@ -322,8 +389,21 @@ def complex_plane_figure(
     ax.set_title(ctx.title(f"Complex plane at {freq_hz:.2f} Hz") + "\n" + "\n".join(textwrap.wrap(extra[2:], 90))
                  if extra else ctx.title(f"Complex plane at {freq_hz:.2f} Hz"), fontsize=8)
     legend_outside(ax)
+    ax.text(1.02, 0.0, "\n".join(textwrap.wrap(f"receptance = displacement / force; {PHASOR_NOTE}", 45)),
+            transform=ax.transAxes, fontsize=7, va="bottom", ha="left", color="0.3")
     ax.grid(True, alpha=0.3)
     return fig
+
+
+def _significant_phase(f: np.ndarray, damage: np.ndarray, significant: np.ndarray) -> np.ndarray:
+    """Phase (deg) of ``damage`` where ``significant``, NaN elsewhere: unwrapped along each contiguous run,
+    the run shifted by whole turns to centre within +-180 deg."""
+    out = np.full(f.size, np.nan)
+    idx = np.flatnonzero(significant)
+    for run in np.split(idx, np.flatnonzero(np.diff(idx) > 1) + 1) if idx.size else []:
+        ph = np.degrees(np.unwrap(np.angle(damage[run])))
+        out[run] = ph - 360.0 * np.round(np.mean(ph) / 360.0)
+    return out
 
 
 def damage_dynamics_figure(
@@ -335,37 +415,41 @@ def damage_dynamics_figure(
     phase_hi_deg: np.ndarray | None = None,
     fault: np.ndarray | None = None,
     title: str = "",
-    anchored: np.ndarray | None = None,
+    nominal: np.ndarray | None = None,
     label: str = "identified D_u (eq. 3.11)",
     bound_label: str = "exact bound",
-    anchored_label: str = "D_u anchored at the healthy data",
+    nominal_label: str = "D_u with the nominal E22 (eq. 3.11; carries the model error)",
     context: FigureContext | None = None,
     reference_n_per_m: float | None = None,
     reference_label: dict[float, str] | None = None,
 ) -> Figure:
     """Identified damage dynamics D_u (N/m) with its bound: magnitude and phase.
 
-    ``damage`` is drawn solid where it is significant (its bound excludes 0) and faint where not; where the
-    bound is unbounded the frequencies are hatched over the whole axis (D_u not identifiable there). A
-    reference level (``reference_n_per_m``, e.g. 1 % of the damage port's static stiffness) gives the scale.
-    ``anchored``: an optional second estimate (dashed).
+    ``damage`` is drawn (solid) only where it is significant (its bound excludes 0): elsewhere its value
+    means nothing and the bound alone is shown (down to the axis: 0 included); where the bound is unbounded
+    the frequencies are hatched over the whole axis (D_u not identifiable there). The phase is drawn where
+    significant, unwrapped along each run, the axis fitted to it. Fault points are ticks along the bottom.
+    A reference level (``reference_n_per_m``, e.g. 1 % of the damage port's static stiffness) gives the scale.
+    ``nominal``: an estimate not to be read (the nominal model's, with its error), drawn thin and grey.
     """
     ctx = context or FigureContext(rig_id="")
     reference_label = reference_label or {1.0: "reference", 0.1: "reference x 0.1"}
     f = np.asarray(freq_hz, dtype=float)
+    damage = np.asarray(damage, dtype=complex)
     fig = Figure(figsize=(10, 7), layout="constrained")
     ax_m, ax_p = fig.subplots(2, 1, sharex=True)
     lo_b = np.asarray(bound_min_abs, dtype=float)
     hi_b = np.asarray(bound_max_abs, dtype=float)
     unbounded = ~np.isfinite(hi_b)
-    significant = np.isfinite(lo_b) & (lo_b > 0)
+    significant = np.isfinite(lo_b) & (lo_b > 0) & np.isfinite(damage)
     ref = [reference_n_per_m, 0.1 * reference_n_per_m] if reference_n_per_m else []
-    lo_lim, hi_lim = _log_limits(damage, None if anchored is None else anchored, lo_b[significant],
+    lo_lim, hi_lim = _log_limits(damage[significant], None if nominal is None else nominal, lo_b[significant],
                                  hi_b[~unbounded], np.asarray(ref, dtype=float))
     ax_m.set_ylim(lo_lim, hi_lim)
     band_lo = np.clip(np.where(significant, lo_b, lo_lim), lo_lim, hi_lim)  # 0 in the bound: down to the axis
     band_hi = np.clip(np.where(unbounded, hi_lim, hi_b), lo_lim, hi_lim)
-    ax_m.fill_between(f, band_lo, band_hi, where=~unbounded, color="tab:orange", alpha=0.3, lw=0, label=bound_label)
+    ax_m.fill_between(f, band_lo, band_hi, where=~unbounded, color="tab:orange", alpha=0.3, lw=0,
+                      label=bound_label + "; down to the axis: 0 in the bound")
     if np.any(unbounded):
         for a in (ax_m, ax_p):
             for k, (x0, x1) in enumerate(_runs(f, unbounded)):
@@ -373,38 +457,46 @@ def damage_dynamics_figure(
                           label=f"bound unbounded: D_u not identifiable ({int(np.sum(unbounded))} points)"
                           if a is ax_m and k == 0 else None)
     mag = np.abs(damage)
-    ax_m.semilogy(f, np.where(significant, mag, np.nan), color="tab:red", lw=1.4,
-                  label=label + " (bound excludes 0)" if np.any(significant) else None)
-    ax_m.semilogy(f, np.where(significant, np.nan, mag), color="tab:red", lw=0.8, alpha=0.35,
-                  label=label + ": not significant (0 in the bound)")
-    if anchored is not None:
-        ax_m.semilogy(f, np.abs(anchored), "--", color="tab:purple", lw=1.0, label=anchored_label)
+    ax_m.semilogy(f, np.where(significant, mag, np.nan), color="tab:red", lw=1.6,
+                  label=label + " where its bound excludes 0" if np.any(significant) else None)
+    if nominal is not None:
+        ax_m.semilogy(f, np.abs(nominal), "--", color="0.55", lw=0.7, alpha=0.8, label=nominal_label + ": not to read")
     if fault is not None and np.any(fault):
         fault = np.asarray(fault, dtype=bool)
-        ax_m.semilogy(f[fault], mag[fault], "o", mfc="none", ms=6, color="k",
-                      label=f"fault points ({int(np.sum(fault))})", gid="fault_points")
+        ax_m.plot(f[fault], np.full(int(np.sum(fault)), 0.02), "|", ms=8, mew=0.8, color="k",
+                  transform=ax_m.get_xaxis_transform(),
+                  label=f"fault points ({int(np.sum(fault))}: ticks along the bottom)", gid="fault_points")
     if reference_n_per_m:
         for frac, ls in ((1.0, "-."), (0.1, ":")):
             ax_m.axhline(frac * reference_n_per_m, color=COLOURS["reference"], ls=ls, lw=1.0,
                          label=f"{reference_label[frac]}: {frac * reference_n_per_m:.3g} N/m")
     if not np.any(significant):
-        ax_m.text(0.5, 0.93, "NOT SIGNIFICANT: the bound holds D_u = 0 at every frequency", transform=ax_m.transAxes,
+        ax_m.text(0.5, 0.93, "NOT SIGNIFICANT:\nthe bound holds D_u = 0 at every frequency", transform=ax_m.transAxes,
                   ha="center", va="top", fontsize=9, color="0.2", gid="not_significant",
                   bbox={"facecolor": "white", "edgecolor": "0.5", "alpha": 0.9})
-    ph = np.degrees(np.angle(damage))
-    ax_p.plot(f, np.where(significant, ph, np.nan), color="tab:red", lw=1.2)
-    ax_p.plot(f, np.where(significant, np.nan, ph), color="tab:red", lw=0.8, alpha=0.35)
-    if anchored is not None:
-        ax_p.plot(f, np.degrees(np.angle(anchored)), "--", color="tab:purple", lw=1.0)
+    ph = _significant_phase(f, damage, significant)
+    ax_p.plot(f, ph, color="tab:red", lw=1.4)
+    shown = [ph]
     if phase_lo_deg is not None and phase_hi_deg is not None:
         plo, phi = np.asarray(phase_lo_deg, dtype=float), np.asarray(phase_hi_deg, dtype=float)
-        ok = np.isfinite(plo) & np.isfinite(phi) & ((phi - plo) < 360.0)
-        ax_p.fill_between(f, plo, phi, where=ok, color="tab:orange", alpha=0.3, lw=0)
-    ax_m.set_ylabel("|D_u| (N/m)")
-    ax_p.set_ylabel("phase of D_u (deg)")
+        ok = significant & np.isfinite(plo) & np.isfinite(phi) & ((phi - plo) < 360.0)
+        mid = 0.5 * (plo + phi)
+        shift = np.where(ok, _wrap_near(mid, np.where(ok, ph, 0.0)) - mid, 0.0)  # the band's turn: the estimate's
+        ax_p.fill_between(f, plo + shift, phi + shift, where=ok, color="tab:orange", alpha=0.3, lw=0)
+        shown += [np.where(ok, plo + shift, np.nan), np.where(ok, phi + shift, np.nan)]
+    if nominal is not None and np.any(significant):
+        ax_p.plot(f, np.where(significant, _wrap_near(np.degrees(np.angle(nominal)), np.where(significant, ph, 0.0)),
+                              np.nan), "--", color="0.55", lw=0.7, alpha=0.8)
+    if np.any(significant):
+        phase_limits(ax_p, *shown)
+    else:
+        ax_p.set_ylim(-180.0, 180.0)
+        ax_p.yaxis.set_major_locator(MultipleLocator(90.0))
+        ax_p.text(0.5, 0.5, "phase not shown:\nD_u is not significant at any frequency (0 in its bound)",
+                  transform=ax_p.transAxes, ha="center", va="center", fontsize=9, color="0.3")
+    ax_m.set_ylabel("|D_u| (N/m): 0-peak force / 0-peak displacement", fontsize=9)
+    ax_p.set_ylabel("phase of D_u: force re displacement\n(deg; + = force leads; where significant)", fontsize=9)
     ax_p.set_xlabel("frequency (Hz)")
-    ax_p.set_ylim(-200, 200)
-    ax_p.set_yticks([-180, -90, 0, 90, 180])
     legend_outside(ax_m)
     ax_m.grid(True, which="both", alpha=0.3)
     ax_p.grid(True, alpha=0.3)
@@ -420,8 +512,8 @@ def detectability_figure(config: Any, det: Any) -> Figure:
 
     from rotorcheck.nominal import parse_port
 
-    fig = Figure(figsize=(8.0, 5.0), layout="constrained")
-    ax, bx = fig.subplots(2, 1, sharex=True, height_ratios=(1.0, 1.4))
+    fig = Figure(figsize=(8.0, 6.0), layout="constrained")
+    ax, bx = fig.subplots(2, 1, sharex=True, height_ratios=(1.0, 1.2))
     depth = {e.element: e.breathing_depth_min for e in det.elements}
     cmap = colormaps["RdYlGn_r"]
 
@@ -441,10 +533,12 @@ def detectability_figure(config: Any, det: Any) -> Figure:
         vals = np.array([np.nan if getattr(e, key) is None else 100 * getattr(e, key) for e in det.elements])
         bx.plot(mids, vals, style, label=label)
     bx.set_yscale("log")
-    bx.set_ylabel("breathing crack depth (% of diameter)")
-    bx.set_xlabel("axial position (m)\ngrey elements: not seen by these channels, or no detectable depth up to 50 %")
+    bx.set_ylabel("smallest detectable breathing\ncrack depth (% of diameter)", fontsize=8)
+    bx.set_xlabel("axial position (m); grey elements: not seen by these channels, or no detectable depth up to 50 %",
+                  fontsize=8)
+    bx.tick_params(labelsize=7)
     bx.grid(True, which="both", alpha=0.3)
-    legend_outside(bx)
+    legend_outside(bx, fontsize=7)
     from matplotlib.cm import ScalarMappable
     from matplotlib.colors import Normalize
 
@@ -454,6 +548,7 @@ def detectability_figure(config: Any, det: Any) -> Figure:
     bar.ax.tick_params(labelsize=7)
     z = np.asarray(config.stations, dtype=float)
     bx.set_xlim(z[0] - 0.01, z[-1] + 0.01)
+    settle_labels(fig, lambda: fit_rotor_labels(ax))  # the layout is final: the drawing's labels placed for it
     return fig
 
 
@@ -483,6 +578,7 @@ def location_figure(config: Any, location: Any, title: str = "") -> Figure:
                candidates=([c.element for c in location.candidates]  # outlined only when not every element
                            if len(location.candidates) < len(config.shaft) else None))
     ax.set_title("\n".join(textwrap.wrap(title or location.summary(), 100)), fontsize=8, loc="left")
+    ranks = []
     for c in location.candidates:
         if c.status != "consistent":
             continue
@@ -494,10 +590,19 @@ def location_figure(config: Any, location: Any, title: str = "") -> Figure:
             bx.plot(mid, 100 * c.loss_estimate, "k_", ms=12)
         depth = depth_text(*c.depth_interval)
         if c.rank is not None and c.rank <= 3 and depth:
-            bx.annotate(f"#{c.rank}\ndepth {depth}", (mid, hi), textcoords="offset points", xytext=(0, 4),
-                        ha="center", fontsize=7)
-    bx.set_ylabel("element stiffness loss (%)\ncertified interval, fit (-)")
-    bx.set_xlabel("axial position (m); grey: excluded, blue: consistent, red: most likely")
+            ranks.append(bx.annotate(f"#{c.rank}\ndepth {depth}", (mid, hi), textcoords="offset points",
+                                     xytext=(0, 4), ha="center", va="bottom", fontsize=7, gid=f"rank {c.rank}"))
+    bx.set_ylabel("element stiffness loss (%)\ncertified interval, fit (-)", fontsize=8)
+    bx.set_xlabel("axial position (m); grey: excluded, blue: consistent, red: most likely", fontsize=8)
+    bx.tick_params(labelsize=7)
     bx.grid(True, alpha=0.3)
     bx.set_xlim(z[0] - 0.01, z[-1] + 0.01)
+
+    def reset() -> None:
+        for t in ranks:
+            t.xyann = (0.0, 4.0)
+
+    # the layout is final: the drawing's labels and the ranks (the best ranked nearest its bar) placed for it
+    settle_labels(fig, lambda: fit_rotor_labels(ax),
+                  lambda: fit_texts(bx, sorted(ranks, key=lambda t: t.get_gid()), reset))
     return fig

@@ -13,7 +13,9 @@ of the axes, outside the drawing. :func:`rotor_figure` is the drawing alone (``r
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from typing import Any
+from weakref import WeakKeyDictionary
 
 import numpy as np
 from matplotlib.figure import Figure
@@ -24,9 +26,10 @@ from matplotlib.text import Text
 
 from rotorcheck.config import DamagePort, Port, RigConfig
 from rotorcheck.faults.kinds import fault_elements
-from rotorcheck.report.figures import legend_outside
+from rotorcheck.report.figures import legend_outside, wrap_to_width
 
-__all__ = ["COLOURS", "draw_rig", "draw_rotor", "rig_cracks", "rig_elements", "rotor_figure"]
+__all__ = ["COLOURS", "draw_rig", "draw_rotor", "fit_rotor_labels", "fit_texts", "rig_cracks", "rig_elements",
+           "rotor_figure", "settle_labels"]
 
 #: colours of the drawing's parts (kept apart for the common colour-vision deficiencies)
 COLOURS = {
@@ -43,6 +46,21 @@ COLOURS = {
 }
 #: half height of a disc given without its diameter, as a multiple of the local shaft radius
 DISC_MARKER = 2.5
+#: gap (points) between the drawing's top and its lowest port label
+LABEL_GAP_PT = 10.0
+
+
+@dataclass
+class _Labels:
+    """A drawing's labels: port labels (with the port's radius, m) above its top ``top`` (m), names below."""
+
+    top: float
+    ports: list[tuple[Any, float]]
+    names: list[tuple[Any, tuple[float, float]]]
+
+
+#: the labels of each axes :func:`draw_rotor` drew on (for :func:`fit_rotor_labels`)
+_LABELS: WeakKeyDictionary[Any, _Labels] = WeakKeyDictionary()
 
 
 def rig_elements(config: RigConfig) -> list[tuple[int, float, float]]:
@@ -154,7 +172,8 @@ def draw_rotor(
                                edgecolor=COLOURS["disc"], hatch=None if to_scale else "////", lw=1.0, zorder=5,
                                gid=f"disc {d.name}"))
         names.append(ax.annotate(d.name, (zs, -h), xytext=(0, -1), textcoords="offset points", ha="center",
-                                 va="top", fontsize=fontsize - 1, color=COLOURS["disc"], zorder=6))
+                                 va="top", fontsize=fontsize - 1, color=COLOURS["disc"], zorder=6,
+                                 gid=f"disc label {d.name}"))
         key = "disc (to scale)" if to_scale else "disc (mass only: marker, not to scale)"
         handles.setdefault(key, Patch(facecolor=COLOURS["disc"], alpha=0.55 if to_scale else 0.35,
                                       hatch=None if to_scale else "////", edgecolor=COLOURS["disc"]))
@@ -175,34 +194,31 @@ def draw_rotor(
     if damage_port is not None:
         dp = damage_port.port if isinstance(damage_port, DamagePort) else damage_port
         ports.append(("damage", dp, _port_label("d", dp)))
-    stacked: dict[int, int] = {}
+    ports_drawn: list[tuple[Any, float]] = []  # (label, port radius m): placed above the drawing by fit_rotor_labels
     for kind, port, label in ports:
         if port.station is None or not 1 <= port.station <= n:
             continue
         zs, r = z[port.station - 1], _shaft_radius(config, port.station)
-        level = stacked.get(port.station, 0)
-        stacked[port.station] = level + 1
-        y_text = U * (1.35 + 0.45 * level)
         colour = COLOURS[kind]
-        names.append(ax.annotate(
-            label, xy=(zs, r), xytext=(zs, y_text), ha="center", va="bottom", fontsize=fontsize, color=colour,
-            fontweight="bold", zorder=7, gid=f"{kind} {label}",
+        ports_drawn.append((ax.annotate(
+            label, xy=(zs, r), xytext=(0.0, 0.0), textcoords="offset points", ha="center", va="bottom",
+            fontsize=fontsize, color=colour, fontweight="bold", zorder=7, gid=f"{kind} {label}",
             arrowprops={"arrowstyle": "-|>" if kind != "sensor" else "-", "color": colour, "lw": 1.2,
-                        "shrinkA": 0.0, "shrinkB": 0.0}))
+                        "shrinkA": 0.0, "shrinkB": 0.0}), float(r)))
         marker = {"sensor": "s", "actuator": "v", "damage": "X"}[kind]
         if kind != "actuator":  # a probe's tip, the damage port; the force is the arrow
             ax.plot(zs, r, marker, color=colour, ms=5, zorder=7, gid=f"{kind} marker {label}")
         name = {"sensor": "sensor (s<station><dir>)", "actuator": "actuator force (f<station><dir>)",
                 "damage": "damage port (d<station><dir>)"}[kind]
         handles.setdefault(name, Line2D([], [], marker=marker, ls="", color=colour))
-    top = U * (1.35 + 0.45 * max(stacked.values(), default=0) + 0.35)
     ax.set_xlim(z[0] - 0.04 * length, z[-1] + 0.04 * length)
-    ax.set_ylim(-1.9 * U, max(top, 1.5 * U))
+    ax.set_ylim(-1.9 * U, 2.0 * U if ports_drawn else 1.5 * U)
     ax.set_xticks(z, minor=True)
     ax.tick_params(axis="x", which="minor", length=3)
     ax.set_ylabel("radius (m)", fontsize=fontsize + 1)
     ax.tick_params(labelsize=fontsize)
     ax.set_xlabel("axial position (m); minor ticks: stations", fontsize=fontsize + 1)
+    ax.tick_params(axis="x", labelbottom=True)  # also when the axes shares x with a panel below
     if label_elements:
         top_ax = ax.secondary_xaxis("top")
         els = rig_elements(config)
@@ -211,9 +227,10 @@ def draw_rotor(
         top_ax.set_xticks([0.5 * (a + b) for _, a, b in shown], [str(k) for k, _, _ in shown])
         top_ax.tick_params(labelsize=fontsize - 1, length=2, pad=1)
         top_ax.set_xlabel("shaft element", fontsize=fontsize)
-    declutter(ax.figure, names + bearing_names)
     if legend:
         legend_outside(ax, handles.values(), handles.keys(), fontsize=fontsize, frameon=False)
+    _LABELS[ax] = _Labels(U, ports_drawn, [(t, tuple(t.xyann)) for t in names + bearing_names])
+    fit_rotor_labels(ax)
 
 
 def _draw_bearings(ax: Any, config: RigConfig, z: np.ndarray, U: float, fontsize: float,
@@ -254,7 +271,7 @@ def _draw_bearings(ax: Any, config: RigConfig, z: np.ndarray, U: float, fontsize
             xk = zs - 1.5 * w + 0.75 * w * k
             ax.plot([xk, xk - 0.5 * w], [y0 - h, y0 - 1.3 * h], color="black", lw=0.6, zorder=6)
         texts.append(ax.annotate(b.name, (zs, y0 - 1.3 * h), xytext=(0, -1), textcoords="offset points",
-                                 ha="center", va="top", fontsize=fontsize - 1, zorder=6))
+                                 ha="center", va="top", fontsize=fontsize - 1, zorder=6, gid=f"bearing label {b.name}"))
         handles.setdefault("bearing / seal to ground", Line2D([], [], marker="^", ls="", color="0.3", mec="black",
                                                               ms=8))
     return texts
@@ -296,6 +313,74 @@ def declutter(fig: Any, texts: Sequence[Any], avoid: Sequence[Any] = (), max_mov
         placed.append(box)
 
 
+def _inside_x(ax: Any, texts: Sequence[Any]) -> None:
+    """Shift texts placed in offset points sideways until they lie within the axes' width."""
+    box = ax.get_window_extent()
+    for t in texts:
+        b = text_extent(t)
+        dx = max(box.x0 - b.x0, 0.0) - max(b.x1 - box.x1, 0.0)
+        if dx and t.anncoords == "offset points":
+            x, y = t.xyann
+            t.xyann = (x + dx * 72.0 / t.figure.dpi, y)
+
+
+def fit_texts(ax: Any, texts: Sequence[Any], reset: Callable[[], None], margin_px: float = 3.0,
+              tries: int = 6) -> None:
+    """Keep ``texts`` (annotations in offset points) apart and inside ``ax``: ``reset`` puts them at their
+    wanted places for the current scale, they are shifted into the axes' width and moved apart
+    (:func:`declutter`), then the (linear) y limits grow until every text lies inside the axes."""
+    if not texts:
+        return
+    fig = ax.figure
+    for _ in range(tries):
+        fig.draw_without_rendering()
+        reset()
+        _inside_x(ax, texts)
+        declutter(fig, texts)
+        box = ax.get_window_extent()
+        boxes = [text_extent(t) for t in texts]
+        over_top = max(b.y1 for b in boxes) - (box.y1 - margin_px)
+        over_bottom = (box.y0 + margin_px) - min(b.y0 for b in boxes)
+        if over_top <= 0.0 and over_bottom <= 0.0:
+            return
+        y0, y1 = ax.get_ylim()
+        per_px = (y1 - y0) / max(box.height, 1.0)
+        ax.set_ylim(y0 - 1.15 * max(over_bottom, 0.0) * per_px, y1 + 1.15 * max(over_top, 0.0) * per_px)
+
+
+def fit_rotor_labels(ax: Any) -> None:
+    """Place a drawing's labels for the axes' current size (:func:`draw_rotor` calls it; call it again when
+    the figure's layout changes afterwards, e.g. a colour bar or another panel added): port labels above the
+    drawing, stacked where they would overlap, disc and bearing names below it, all inside the axes (the
+    y limits grow to hold them)."""
+    lab = _LABELS.get(ax)
+    if lab is None:
+        return
+    fig = ax.figure
+
+    def reset() -> None:
+        y0, y1 = ax.get_ylim()
+        pt_per_m = ax.get_window_extent().height / (y1 - y0) * 72.0 / fig.dpi
+        for t, r in lab.ports:
+            t.xyann = (0.0, (lab.top - r) * pt_per_m + LABEL_GAP_PT)
+        for t, xy in lab.names:
+            t.xyann = xy
+
+    fit_texts(ax, [t for t, _ in lab.ports] + [t for t, _ in lab.names], reset)
+
+
+def settle_labels(fig: Any, *fits: Callable[[], None]) -> None:
+    """A figure's last step: ``fits`` (label placements such as :func:`fit_rotor_labels`) for its layout,
+    the layout frozen, then ``fits`` again, so that the labels stay where they were placed when the figure
+    is drawn or saved (a layout engine would move the axes after the y limits grew)."""
+    for fit in fits:
+        fit()
+    fig.draw_without_rendering()
+    fig.set_layout_engine("none")
+    for fit in fits:
+        fit()
+
+
 def rig_cracks(config: RigConfig) -> list[int]:
     """Elements of the rig's faults (1-based): :func:`rotorcheck.faults.kinds.fault_elements`."""
     return fault_elements(config)
@@ -314,6 +399,8 @@ def rotor_figure(config: RigConfig, title: str | None = None) -> Figure:
     fig = Figure(figsize=(9.0, 3.6), layout="constrained")
     ax = fig.add_subplot()
     draw_rig(ax, config)
-    ax.set_title(title or f"Rotor of {config.rig_id}: {len(config.stations)} stations, "
-                 f"{len(rig_elements(config))} shaft elements", fontsize=10)
+    ax.set_title(wrap_to_width(title or f"Rotor of {config.rig_id}: {len(config.stations)} stations, "
+                               f"{len(rig_elements(config))} shaft elements", 0.7 * fig.get_figwidth(), 10),
+                 fontsize=10)
+    settle_labels(fig, lambda: fit_rotor_labels(ax))  # the layout is final: the drawing's labels placed for it
     return fig

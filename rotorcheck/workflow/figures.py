@@ -117,19 +117,23 @@ def validation_figures(outcome: ValidationOutcome, at_hz: float | None = None,
 
 def detection_plots(outcome: DetectionOutcome, out_dir: str | Path, at_hz: float | None = None,
                     formats: tuple[str, ...] = ("png",), baseline_path: str | Path | None = None,
-                    frf_unit: str = "m/N") -> list[str]:
+                    frf_unit: str = "m/N", show_nominal_damage: bool = False) -> list[str]:
     """:func:`detection_figures` written to ``out_dir`` (``formats``); returns the written paths."""
     from rotorcheck.report.figures import save_figures  # lazy import: matplotlib only when plotting
 
-    return save_figures(detection_figures(outcome, at_hz, baseline_path, frf_unit), out_dir, formats)
+    return save_figures(detection_figures(outcome, at_hz, baseline_path, frf_unit, show_nominal_damage), out_dir,
+                        formats)
 
 
 def detection_figures(outcome: DetectionOutcome, at_hz: float | None = None,
-                      baseline_path: str | Path | None = None, frf_unit: str = "m/N") -> dict[str, Any]:
+                      baseline_path: str | Path | None = None, frf_unit: str = "m/N",
+                      show_nominal_damage: bool = False) -> dict[str, Any]:
     """The detection figures by file stem (:data:`PLOT_STEMS_DETECT`): the decision (ratio per frequency
     against its threshold, the joint test), Bode with band, healthy and new data and fault points, complex
     plane at one frequency (``at_hz``, default the fault point nearest ratio 2), damage dynamics with its
-    bound and the port's stiffness as reference."""
+    bound and the port's stiffness as reference. ``show_nominal_damage``: the damage figure also draws D_u
+    with the nominal model's E22 (thin, grey; it carries the model error, not to be read) where the anchored
+    estimate leads; hidden by default."""
     from rotorcheck.report.plots import (  # lazy import: matplotlib only when plotting
         bode_band_figure,
         complex_plane_figure,
@@ -184,9 +188,9 @@ def detection_figures(outcome: DetectionOutcome, at_hz: float | None = None,
         conf = f", {outcome.measured.confidence:.0%}" if outcome.measured is not None else ""
         fig = damage_dynamics_figure(run.frequency_hz, outcome.anchored, a.min_abs, a.max_abs,
                                      np.degrees(a.phase_min), np.degrees(a.phase_max), fault=fault, title=title,
-                                     anchored=outcome.damage, label="D_u anchored at the healthy data",
+                                     nominal=outcome.damage if show_nominal_damage else None,
+                                     label="D_u anchored at the healthy data",
                                      bound_label=f"its bound (noise of both sweeps + channel error{conf})",
-                                     anchored_label="D_u with the nominal E22 (eq. 3.11; carries the model error)",
                                      context=ctx, **ref)  # type: ignore[arg-type]
     else:
         fig = damage_dynamics_figure(run.frequency_hz, outcome.damage, ds.min_abs, ds.max_abs,

@@ -11,9 +11,11 @@ test_multichannel.py, beside the x/y standstill detection it shares.)
 from __future__ import annotations
 
 from collections.abc import Callable
+from pathlib import Path
 
 import numpy as np
 import pytest
+from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.collections import PolyCollection
 from matplotlib.figure import Figure
 
@@ -120,11 +122,12 @@ def test_decision_ratio_is_the_distance_from_the_set(breathing: tuple) -> None:
         idx = np.searchsorted(f, x)
         np.testing.assert_allclose(y, ratio[idx], rtol=1e-6)
         assert np.all(y > 1.0) if key == "fault_points" else np.all(y <= 1.0)
-    # the joint panel: the bar is T / threshold of the report, the threshold line at 1
+    # the joint panel: the dot is T of the report, the dashed line its threshold
     rep = out.report()  # type: ignore[attr-defined]
-    bar = fig.axes[1].patches[0]
-    assert bar.get_width() == pytest.approx(rep["joint_statistic"] / rep["joint_threshold"], rel=1e-12)
-    assert any(np.allclose(ln.get_xdata(), 1.0) for ln in fig.axes[1].get_lines())
+    panel = {ln.get_gid(): ln for ln in fig.axes[1].get_lines()}
+    assert float(np.asarray(panel["joint_statistic"].get_xdata())[0]) == pytest.approx(rep["joint_statistic"],
+                                                                                      rel=1e-12)
+    assert np.allclose(panel["joint_threshold"].get_xdata(), rep["joint_threshold"])
     assert "Rule" in ax.get_title() and "joint GLR" in ax.get_title()
 
 
@@ -214,7 +217,8 @@ def test_complex_plane_draws_the_set_and_the_data_noise(breathing: tuple) -> Non
     labels = [str(ln.get_label()) for ln in ax.get_lines()]
     assert any("its noise bound" in lab for lab in labels)
     i = int(np.argmin(np.abs(out.run.frequency_hz - 54.0)))  # type: ignore[attr-defined]
-    disk = ax.patches[0].get_path().vertices
+    m_per = _unit_of(ax)  # m/N per drawn unit, from the axis label and the units table
+    disk = m_per * ax.patches[0].get_path().vertices
     c = complex(out.baseline.healthy_frf[i, 0])  # type: ignore[attr-defined]
     r = np.abs(disk[:, 0] + 1j * disk[:, 1] - c)
     np.testing.assert_allclose(r, out.measured.radius[i, 0], rtol=1e-9)  # type: ignore[attr-defined]
@@ -226,13 +230,51 @@ def test_complex_plane_draws_the_set_and_the_data_noise(breathing: tuple) -> Non
     f_at = float(ax.get_title().split("Complex plane at ", 1)[1].split(" Hz", 1)[0])
     i = int(np.argmin(np.abs(out.run.frequency_hz - f_at)))  # type: ignore[attr-defined]
     assert out.detection.fault[i]  # type: ignore[attr-defined]
-    disk = ax.patches[0].get_path().vertices
+    disk = ax.patches[0].get_path().vertices  # drawn units, as the limits and the data points
     (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
     assert x0 <= disk[:, 0].min() and disk[:, 0].max() <= x1 and y0 <= disk[:, 1].min() and disk[:, 1].max() <= y1
     for lab in ("healthy data", "new data"):
         pt = next(ln for ln in ax.get_lines() if ln.get_label() == lab)
         assert x0 <= float(np.asarray(pt.get_xdata())[0]) <= x1 and y0 <= float(np.asarray(pt.get_ydata())[0]) <= y1
-    assert 2 * out.measured.radius[i, 0] > 0.1 * (x1 - x0)  # type: ignore[attr-defined]
+    assert 2 * out.measured.radius[i, 0] > 0.1 * (x1 - x0) * _unit_of(ax)  # type: ignore[attr-defined]
+
+
+def _unit_of(ax: object) -> float:
+    """m/N per unit of a complex-plane axis, read from its x label ("Re receptance (nm/N)")."""
+    from rotorcheck.units import UNITS
+
+    label = ax.get_xlabel()  # type: ignore[attr-defined]
+    assert label == ax.get_ylabel().replace("Im", "Re")  # type: ignore[attr-defined]
+    return UNITS["receptance"][label.rsplit("(", 1)[1].rstrip(")")]
+
+
+def test_complex_plane_in_engineering_units_without_offset() -> None:
+    """A set far from the origin and small beside it (centre -8.527e-7 m/N, radius 1e-10: ticks read -8.526,
+    -8.528 with "1e-7" in a corner before): drawn in nm/N, plain tick labels, no offset text, equal scales,
+    the limits as set (no "Ignoring fixed limits" warning), the frame holding the set and the data."""
+    import warnings
+
+    from rotorcheck.report.plots import complex_plane_figure
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        fig = complex_plane_figure(50.0, complex(-8.5e-7, -1e-8), complex(-8.527e-7, 0.0), 1e-10,
+                                   healthy=complex(-8.5272e-7, 0.3e-10), damaged=complex(-8.5255e-7, 1e-10),
+                                   context=FigureContext("r", 0.0), damaged_noise=2e-11)
+        FigureCanvasAgg(fig)
+        fig.canvas.draw()
+    ax = fig.axes[0]
+    assert _unit_of(ax) == 1e-9 and ax.get_xlabel() == "Re receptance (nm/N)"
+    for axis in (ax.xaxis, ax.yaxis):
+        assert axis.get_offset_text().get_text() == ""
+        labels = [t.get_text() for t in axis.get_ticklabels() if t.get_text()]
+        assert labels and not any("e" in lab.lower() for lab in labels)
+    (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
+    assert x1 - x0 == pytest.approx(y1 - y0)
+    assert x0 < -852.72 < -852.55 < x1 and x1 - x0 < 1.0  # both data points (nm/N), framed on the set
+    assert any(t.get_gid() == "model_off_frame" for t in ax.texts)  # the model, 10 nm/N away, pointed at
+    box = ax.get_window_extent()
+    assert box.width == pytest.approx(box.height, rel=1e-3)  # equal scales: a square frame in a square box
 
 
 def test_frf_unit_scales_the_plots(breathing: tuple) -> None:
@@ -304,3 +346,141 @@ def test_validation_figures_name_and_place(breathing: tuple) -> None:
     healthy = next(ln for ln in ax.get_lines() if ln.get_label() == "healthy data")
     hx, hy = float(np.asarray(healthy.get_xdata())[0]), float(np.asarray(healthy.get_ydata())[0])
     assert np.hypot(hx - centre[0], hy - centre[1]) <= radius * (1 + 1e-6)
+
+
+@pytest.fixture(scope="module")
+def repeat_healthy(sample_pipeline: Callable[..., tuple[object, object]]) -> tuple[object, object]:
+    """The repeat healthy sweep at 1000 rpm against the measured baseline of ``breathing`` (a healthy shaft)."""
+    return sample_pipeline(configs_dir() / "crack_rig.yaml", CR / "healthy_1000rpm.h5",
+                           CR / "healthy_1000rpm_repeat.h5", "measured")
+
+
+def _estimate_lines(ax: object) -> list:
+    return [ln for ln in ax.get_lines() if ln.get_color() == "tab:red"]  # type: ignore[attr-defined]
+
+
+def test_report_figures_raise_no_warning(breathing: tuple, repeat_healthy: tuple, three_mass: tuple,
+                                         tmp_path: Path) -> None:
+    """Every validation and detection figure built and saved with warnings as errors (matplotlib's "Ignoring
+    fixed x limits to fulfill fixed data aspect" came on every validate and detect; a joint statistic of 0
+    on a log axis warned too)."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        for k, (val, out) in enumerate((breathing, repeat_healthy, three_mass)):
+            written = workflow.validation_plots(val, tmp_path / str(k))  # type: ignore[arg-type]
+            written += workflow.detection_plots(out, tmp_path / str(k), show_nominal_damage=True)  # type: ignore[arg-type]
+            assert len(written) == 6
+        fig = decision_figure_with_joint(0.0, 8.0)  # a statistic of 0
+        FigureCanvasAgg(fig)
+        fig.canvas.draw()
+
+
+def decision_figure_with_joint(t: float, threshold: float) -> Figure:
+    from rotorcheck.report.plots import decision_figure
+
+    f = np.linspace(10.0, 100.0, 20)
+    ratio = np.linspace(0.2, 0.9, 20)
+    return decision_figure(f, ratio, np.zeros(20, dtype=bool), np.full(20, "ok"), FigureContext("r", 0.0),
+                           "healthy" if t <= threshold else "damage", "joint test",
+                           joint={"statistic": t, "threshold": threshold, "p_value": 0.5, "false_alarm": 0.01})
+
+
+@pytest.mark.parametrize(("t", "threshold", "scale"), [(0.0, 8.0, "linear"), (17.1, 8.4, "linear"),
+                                                      (5.2e4, 8.4, "symlog")])
+def test_joint_panel_is_a_dot_against_its_threshold(t: float, threshold: float, scale: str) -> None:
+    """The sweep's statistic as a dot at T (0 included, on the axis), the threshold a dashed line at its value,
+    both inside the x limits; linear unless T is over 20 thresholds (then symlog, linear up to the threshold)."""
+    fig = decision_figure_with_joint(t, threshold)
+    FigureCanvasAgg(fig)
+    fig.canvas.draw()
+    bx = fig.axes[1]
+    lines = {ln.get_gid(): ln for ln in bx.get_lines()}
+    x_t = float(np.asarray(lines["joint_statistic"].get_xdata())[0])
+    assert x_t == t and np.allclose(lines["joint_threshold"].get_xdata(), threshold)
+    x0, x1 = bx.get_xlim()
+    assert x0 <= min(t, 0.0) and max(t, threshold) < x1
+    assert bx.get_xscale() == scale
+    assert not bx.patches or all(p.get_width() > 0 for p in bx.patches if hasattr(p, "get_width"))
+
+
+def test_damage_figure_hides_the_nominal_estimate_by_default(breathing: tuple) -> None:
+    """The anchored D_u leads; the nominal-E22 D_u (model error, not to be read) is absent by default and, when
+    asked for, the thinnest line, grey and dashed, never red."""
+    _, out = breathing
+    hidden = workflow.detection_figures(out)["damage_dynamics"].axes[0]  # type: ignore[arg-type]
+    assert not any("nominal E22" in str(ln.get_label()) for ln in hidden.get_lines())
+    shown = workflow.detection_figures(out, show_nominal_damage=True)["damage_dynamics"].axes[0]  # type: ignore[arg-type]
+    nominal = next(ln for ln in shown.get_lines() if "nominal E22" in str(ln.get_label()))
+    np.testing.assert_allclose(np.asarray(nominal.get_ydata()), np.abs(out.damage))  # type: ignore[attr-defined]
+    widths = [ln.get_linewidth() for ln in shown.get_lines() if ln is not nominal and ln.get_linestyle() != "None"]
+    assert nominal.get_linewidth() < min(widths) and nominal.get_linestyle() == "--"
+    assert nominal.get_color() == "0.55"
+
+
+def test_damage_figure_of_a_healthy_shaft_draws_no_estimate(repeat_healthy: tuple) -> None:
+    """The repeat healthy sweep: D_u's bound holds 0 at every frequency, so no estimate is drawn (magnitude or
+    phase), the figure says NOT SIGNIFICANT and the phase panel says why it is empty."""
+    _, out = repeat_healthy
+    a = out.anchored_set  # type: ignore[attr-defined]
+    assert not np.any(np.asarray(a.min_abs) > 0)  # the premise: nothing significant (the report's bound)
+    fig = workflow.detection_figures(out)["damage_dynamics"]  # type: ignore[arg-type]
+    ax_m, ax_p = fig.axes[:2]
+    for ax in (ax_m, ax_p):
+        for ln in _estimate_lines(ax):
+            assert not np.any(np.isfinite(np.asarray(ln.get_ydata(), dtype=float)))
+    assert any(t.get_gid() == "not_significant" for t in ax_m.texts)
+    assert any("phase not shown" in t.get_text() for t in ax_p.texts)
+
+
+def test_damage_phase_unwrapped_where_significant_and_axis_fitted() -> None:
+    """D_u with a phase ramp over three turns (-540..+540 deg), significant except between 40 and 50 Hz: the
+    drawn phase is the ramp itself (closed form) up to a whole turn per run, with no jump over 180 deg between
+    neighbours; NaN where not significant; the axis spans the drawn phase and its band, not +-200 deg."""
+    f = np.linspace(10.0, 100.0, 181)
+    ramp = np.linspace(-540.0, 540.0, f.size)
+    d = 4e3 * np.exp(1j * np.radians(ramp))
+    sig = ~((f > 40.0) & (f < 50.0))
+    lo = np.where(sig, 3e3, 0.0)
+    fig = damage_dynamics_figure(f, d, lo, np.full(f.size, 5e3), np.degrees(np.angle(d)) - 5.0,
+                                 np.degrees(np.angle(d)) + 5.0, context=FigureContext("r", 0.0))
+    ax_p = fig.axes[1]
+    ph = np.asarray(_estimate_lines(ax_p)[0].get_ydata(), dtype=float)
+    assert np.array_equal(np.isfinite(ph), sig)
+    for run in (f <= 40.0, f >= 50.0):
+        turns = (ph[run] - ramp[run]) / 360.0
+        np.testing.assert_allclose(turns, np.round(turns[0]), atol=1e-9)  # the ramp, one whole-turn shift per run
+        assert np.max(np.abs(np.diff(ph[run]))) < 10.0
+    lo_y, hi_y = ax_p.get_ylim()
+    band = [c for c in ax_p.collections if c.get_facecolor().size]
+    verts = np.concatenate([p.vertices for c in band for p in c.get_paths()])
+    assert lo_y <= min(np.nanmin(ph), verts[:, 1].min()) and max(np.nanmax(ph), verts[:, 1].max()) <= hi_y
+    assert hi_y - lo_y < 1.3 * (max(np.nanmax(ph), verts[:, 1].max()) - min(np.nanmin(ph), verts[:, 1].min())) + 25
+    # the band follows its estimate's turn: every band vertex within 5 deg (+ rounding) of the drawn phase
+    x_ph = f[sig]
+    near = np.interp(verts[:, 0], x_ph, ph[sig])
+    assert np.max(np.abs(verts[:, 1] - near)) < 5.0 + 1e-6
+
+
+def test_bode_phase_axis_fitted_to_the_data(breathing: tuple) -> None:
+    """Detection Bode of the breathing crack: data in about -185..0 deg; the phase axis holds every drawn
+    point and spans at most the drawn range plus 10 % and 2 x 10 deg (it spanned -350..+200 before)."""
+    _, out = breathing
+    ax_p = workflow.detection_figures(out)["detection_bode"].axes[1]  # type: ignore[arg-type]
+    y = np.concatenate([np.asarray(ln.get_ydata(), dtype=float) for ln in ax_p.get_lines()])
+    lo, hi = ax_p.get_ylim()
+    assert lo <= np.nanmin(y) and np.nanmax(y) <= hi
+    span = np.nanmax(y) - np.nanmin(y)
+    assert 150.0 < span < 260.0 and hi - lo <= 1.2 * span + 20.0 + 1e-9
+
+
+def test_amplitude_and_phase_labels_state_their_convention(breathing: tuple) -> None:
+    """Wherever an amplitude or a phase is drawn its axis says 0-peak (the sweep's phasors are peak values,
+    sweep-format.md) and the phase's sense."""
+    _, out = breathing
+    figs = workflow.detection_figures(out)  # type: ignore[arg-type]
+    for stem in ("detection_bode", "damage_dynamics"):
+        ax_m, ax_p = figs[stem].axes[:2]
+        assert "0-peak" in ax_m.get_ylabel(), stem
+        assert "+ =" in ax_p.get_ylabel() and "leads" in ax_p.get_ylabel(), stem
