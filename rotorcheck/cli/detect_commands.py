@@ -56,6 +56,9 @@ def detect(
         "--locate", help="When the verdict is damage, locate it too (the 'location' section; see `locate`).")] = False,
     plot_format: PlotFormatOpt = "png",
     frf_unit: FrfUnitOpt = "m/N",
+    show_nominal: Annotated[bool, typer.Option(
+        "--show-nominal", help="Also draw the nominal-E22 damage dynamics (carries the model's own error: not to "
+                               "read) in damage_dynamics.png.")] = False,
     fail_at: FailAtOpt = "",
     as_json: JsonOpt = False,
     force: ForceOpt = False,
@@ -87,7 +90,8 @@ def detect(
         with progress("writing reports and plots"):
             report = outcome.typed_report()
             report.baseline = str(base_path)
-            plot_files = workflow.detection_plots(outcome, d, at, formats, base_path, frf_unit) if plots else []
+            plot_files = (workflow.detection_plots(outcome, d, at, formats, base_path, frf_unit, show_nominal)
+                          if plots else [])
             files = write_reports(report, d, plot_files, base_path)
         print_outcome(outcome, report, prefix=f"run {mrun.run_id} ({mrun.speed_rpm:g} rpm): " if several else "")
         written += [*files, *map(Path, plot_files)]
