@@ -381,6 +381,10 @@ def score_sensor_set(config: RigConfig, freq_hz: np.ndarray, speed_rpm: float, v
     prs = [ChannelPair(o, i, "") for o in sensors for i in actuators]
     multi = prs if len(prs) > 1 else None
     th = io_frf(config, freq_hz, speed_rpm, multi)
+    if not crack_signatures(config, freq_hz, speed_rpm, th, pairs=multi, model_frf=th)[0]:
+        # the set sees no element at all (e.g. y probes of an x force at standstill: the planes decouple)
+        return SensorSetScore(tuple(dict.fromkeys(p.key()[0] for p in prs)), int(elements[0]) if elements else 0,
+                              None, None)
     bm = benign_for(prs, th)
     det = detectability(config, freq_hz, speed_rpm, np.full(th.shape, variance), np.full(th.shape, variance), prs,
                         th, false_alarm, None if bm is None else linearized(bm), elements, workers=1, model_frf=th)
@@ -414,6 +418,10 @@ def rank_sensor_sets(
         raise ValueError("need candidate sensors and max_sensors >= 1")
 
     seen = visible_elements(config, f, speed_rpm, cand, actuators)
+    if not seen:
+        raise ValueError("no candidate sensor sees any shaft element with these actuators (at standstill the x and "
+                         "y planes decouple: a y probe sees nothing of an x force); add candidates in the "
+                         "actuator's plane or an actuator in theirs")
 
     def evaluate(ports: tuple[Any, ...]) -> SensorSetScore:
         return score_sensor_set(config, f, speed_rpm, variance, ports, actuators, benign_for, false_alarm, seen)

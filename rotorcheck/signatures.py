@@ -128,7 +128,9 @@ def crack_signatures(config: RigConfig, freq_hz: np.ndarray, speed_rpm: float, h
     healthy_frf = stacked(th)
     # an element the channel cannot see (an overhang with a free end carries no bending moment): its
     # "signature" is round-off, not a shape; it is no candidate
-    norms = np.linalg.norm(S / np.abs(healthy_frf), axis=1) if S.size else np.zeros(0)
+    scale = np.abs(healthy_frf)  # a silent pair (0: y probe of an x force at standstill) weighs nothing, not NaN
+    norms = (np.linalg.norm(np.divide(S, scale, out=np.zeros_like(S), where=scale > 0), axis=1) if S.size
+             else np.zeros(0))
     seen = norms > VISIBLE * (norms.max() if norms.size else 0.0)
     return tuple(e for e, k in zip(els, seen) if k), S[seen]
 

@@ -164,3 +164,15 @@ def test_a_stacked_healthy_frf_is_read_pair_after_pair(rig: RigConfig) -> None:
         "youngs_modulus": 1.01 * m.youngs_modulus, "shear_modulus": 1.01 * (m.shear_modulus or 0) or None})
         for k, m in rig.materials.items()}}), F, 1000.0, pairs)
     np.testing.assert_allclose(a, stacked(g - th), rtol=1e-6, atol=1e-6 * np.abs(th).max())
+
+
+def test_sensor_ranking_with_only_blind_candidates_is_an_input_error_not_a_crash() -> None:
+    """y probes of an x force at standstill see no element (the planes decouple): said as the option's error,
+    never a ValueError from an empty max (a set of them among others scores as undetectable)."""
+    from rotorcheck.config import load_config
+    from rotorcheck.errors import InputError
+    from rotorcheck.workflow import sensor_ranking_for_rig
+
+    cfg = load_config(configs_dir() / "crack_rig.yaml")
+    with pytest.raises(InputError, match="--candidate-sensors: no candidate sensor sees any shaft element"):
+        sensor_ranking_for_rig(cfg, ["2y", "6y"], 1, speed_rpm=0.0, noise_std_m=2e-7)

@@ -154,7 +154,10 @@ def sensor_ranking_for_rig(
     def benign_for(pairs: list[ChannelPair], th: np.ndarray) -> Any:
         return benign_model(config, f, speed, th, KAPPA_NOMINAL, 0.0, None, pairs if len(pairs) > 1 else None)
 
-    ranked, method, seen = rank_sensor_sets(config, f, speed, v, cand, acts, max_sensors, benign_for, false_alarm)
+    try:
+        ranked, method, seen = rank_sensor_sets(config, f, speed, v, cand, acts, max_sensors, benign_for, false_alarm)
+    except ValueError as exc:  # no candidate sees any element: the user's choice of ports, said as such
+        raise InputError(source or None, "--candidate-sensors", str(exc)) from None
     now = score_sensor_set(config, f, speed, v, current, acts, benign_for, false_alarm, seen) if current else None
     best = ranked[0]
 
