@@ -6,17 +6,18 @@ import io
 from pathlib import Path
 
 import pytest
-from rich.console import Console
 
-from rotorcheck import cli
-from rotorcheck.cli import EXIT_OK, main
+from rotorcheck.cli import EXIT_OK, common, main
 
 
 @pytest.mark.parametrize("terminal", [True, False])
 def test_simulate_shows_progress_only_on_a_terminal(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
                                                     terminal: bool) -> None:
     buf = io.StringIO()
-    monkeypatch.setattr(cli, "err", Console(file=buf, force_terminal=terminal, highlight=False, soft_wrap=True))
+    # the one stderr console every command module prints to (rotorcheck.cli.common.err), redirected
+    monkeypatch.setattr(common.err, "file", buf)
+    monkeypatch.setattr(common.err, "_force_terminal", terminal)
+    monkeypatch.setattr(common.err, "is_interactive", terminal)
     assert main(["simulate", str(tmp_path / "s.h5"), "--points", "20", "--periods", "4"]) == EXIT_OK
     text = buf.getvalue()
     assert "wrote" in text
