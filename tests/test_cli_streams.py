@@ -94,7 +94,7 @@ def _no_foreign_warnings(caught: list[warnings.WarningMessage]) -> list[str]:
 
 def test_normal_runs_print_data_only_and_no_third_party_warning(
         tmp_path: Path, capsys: pytest.CaptureFixture[str], validated_0rpm: object) -> None:
-    """model, info, schema, simulate, convert, detect (plots on) and locate: stdout is empty, or one JSON
+    """model, info, schema, simulate, convert, detect and locate: stdout is empty, or one JSON
     document with --json, or the schema; no warning from a third-party library on the way."""
     out = validated_0rpm.copy_to(tmp_path / "run")  # type: ignore[attr-defined]
     with warnings.catch_warnings(record=True) as caught:
@@ -106,7 +106,7 @@ def test_normal_runs_print_data_only_and_no_third_party_warning(
             (["schema"], EXIT_OK, "json"),
             (["simulate", str(tmp_path / "s.h5"), "--speed", "0", "--points", "4", "--periods", "2"], EXIT_OK, "empty"),
             (["convert", str(tmp_path / "s.h5"), str(tmp_path / "s.csv")], EXIT_OK, "empty"),
-            (["detect", str(CR / "open_crack_0rpm.h5"), "--out", str(out)], EXIT_DAMAGE, "empty"),
+            (["detect", str(CR / "open_crack_0rpm.h5"), "--out", str(out), "--no-plots"], EXIT_DAMAGE, "empty"),
             (["detect", str(CR / "open_crack_0rpm.h5"), "--out", str(out), "--no-plots", "--json", "--force"],
              EXIT_DAMAGE, "json"),
             (["locate", str(CR / "open_crack_0rpm.h5"), "--out", str(out), "--elements", "4", "--no-plots"], None,
