@@ -15,7 +15,7 @@ def test_simulate_shows_progress_only_on_a_terminal(tmp_path: Path, monkeypatch:
                                                     terminal: bool) -> None:
     buf = io.StringIO()
     # the one stderr console every command module prints to (rotorcheck.cli.common.err), redirected
-    monkeypatch.setattr(common.err, "file", buf)
+    monkeypatch.setattr(common.err, "_file", buf)  # restored to None: sys.stderr as each later test has it
     monkeypatch.setattr(common.err, "_force_terminal", terminal)
     monkeypatch.setattr(common.err, "is_interactive", terminal)
     assert main(["simulate", str(tmp_path / "s.h5"), "--points", "20", "--periods", "4"]) == EXIT_OK

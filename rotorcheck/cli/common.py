@@ -101,12 +101,31 @@ PLAIN_EVERY_S = 2.0
 
 
 def progress(text: str) -> Any:
-    """A spinner with ``text`` on stderr while a step runs (rich); nothing when stderr is not a terminal
-    or ``-q`` was given."""
+    """One long step without items to count: on a terminal a spinner with ``text`` and the elapsed time
+    (rich); otherwise, when it took :data:`PLAIN_EVERY_S` or more, one line after it saying how long;
+    nothing with ``-q``."""
     import contextlib
+    import time
 
-    return (err.status(text, spinner="dots") if err.is_terminal and not QUIET["on"]
-            else contextlib.nullcontext())
+    if QUIET["on"]:
+        return contextlib.nullcontext()
+    if err.is_terminal:
+        from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
+
+        bar = Progress(SpinnerColumn("dots"), TextColumn("{task.description}"), TimeElapsedColumn(), console=err,
+                       transient=True)
+        bar.add_task(text, total=None)
+        return bar
+
+    @contextlib.contextmanager
+    def timed() -> Any:
+        start = time.monotonic()
+        yield
+        took = time.monotonic() - start
+        if took >= PLAIN_EVERY_S:
+            err.print(f"{text}: {took:.0f} s")
+
+    return timed()
 
 
 class Steps:
