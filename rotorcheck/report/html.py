@@ -158,7 +158,7 @@ def _key_numbers(report: DetectionReport) -> list[tuple[str, str]]:
                                           f"false alarm {report.false_alarm:g} per sweep)"))
     best = best_candidate(report)
     if best is not None:
-        rows.append(("best candidate element", best))
+        rows.append(("where", best))
     if report.channel_pairs:
         rows.append(("channel pairs (output<-input)", ", ".join(report.channel_pairs)))
     return rows
