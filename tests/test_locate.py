@@ -74,7 +74,8 @@ def test_detect_report_carries_the_location(base0: Path) -> None:
     # a damage verdict says where: the ranking (issue 30), the sample's crack element first, no certificate yet
     rep = outcome.report()
     assert outcome.verdict.verdict == "damage" and rep["location"]["certified"] is False
-    assert rep["best_element"] == 4 and rep["location"]["best_element"] == 4 and "element 4" in rep["location"]["summary"]
+    assert rep["best_element"] == 4 and rep["location"]["best_element"] == 4
+    assert "element 4" in rep["location"]["summary"]
     assert rep["location"]["ranking"]["elements"][0]["element"] == 4
     outcome.location = workflow.locate_damage(cfg, base, runs[0], elements=(4,))
     loc = outcome.report()["location"]
