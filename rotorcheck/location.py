@@ -398,13 +398,15 @@ def locate(config: RigConfig, box: Any, pairs: Sequence[ChannelPair], change: Sw
         t0 = time.process_time()
         # the healthy hypothesis: no loss (the same model whatever the element), benign parameters in their box
         healthy = severity_interval(models[els[0]], pts, lo, np.r_[hi_b, 0.0], p, step, 1, 4 * refine_boxes)
+        # a witness of the healthy hypothesis (no loss) is one of every element's at loss 0: no lower-end search
+        at_zero = healthy.status == "consistent" and bool(np.isfinite(healthy.witness_interval[0]))
         for k, e in enumerate(els):
-            results[e] = severity_interval(models[e], pts, lo, hi, p, step, slices, max_boxes)
+            results[e] = severity_interval(models[e], pts, lo, hi, p, step, slices, max_boxes, at_zero)
             if progress is not None:
                 progress("certifying", k + 1, len(els), time.process_time() - t0)
         order = [fit.element for fit in ranking.fits if results[fit.element].status == "consistent"]
         for e in order[:refine]:
-            results[e] = severity_interval(models[e], pts, lo, hi, p, step, slices, refine_boxes)
+            results[e] = severity_interval(models[e], pts, lo, hi, p, step, slices, refine_boxes, at_zero)
     healthy_excluded = None if healthy is None else healthy.status == "excluded"
     damage_found = bool(healthy_excluded) if damage is None else damage
     order = [fit.element for fit in ranking.fits if not results or results[fit.element].status == "consistent"]

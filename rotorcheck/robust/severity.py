@@ -193,8 +193,12 @@ def examine_points(model: AffineModel, fac: _Factors, pts: Points, centre: np.nd
             hope = big[margin_of(low_n, big) >= best] if np.isfinite(best) else big
             hope = hope[~ok[hope]]
             if hope.size:
-                Nb = Ns[hope]
-                top = np.linalg.eigvalsh(np.conj(np.swapaxes(Nb, 1, 2)) @ Nb)[:, -1]  # ||N||^2, Hermitian
+                # ||N_s|| with N_s = P Q, P = diag(sc) V^T (r, n), Q = Z^-1 U diag(scale / sc) (n, r): with P = Q_p R,
+                # ||N_s|| = ||R Q||, an n x n Hermitian eigenvalue problem instead of r x r (r > n with E and speed)
+                P = sc[hope][:, :, None] * fac.V.T[None]
+                R = np.linalg.qr(P, mode="r")
+                C = R @ (Xu[hope] / sc[hope][:, None, :])
+                top = np.linalg.eigvalsh(C @ np.conj(np.swapaxes(C, 1, 2)))[:, -1]  # ||N||^2, Hermitian
                 nrm = np.minimum(frob[hope], np.sqrt(np.maximum(top, 0.0)) * (1.0 + 1e-12))
                 margin[hope] = margin_of(nrm, hope)
     return ok, margin, share
@@ -343,17 +347,22 @@ def _end(model: AffineModel, fac: _Factors, pts: Points, lo: np.ndarray, hi: np.
 
 
 def severity_interval(model: AffineModel, pts: Points, lo: np.ndarray, hi: np.ndarray, index: int,
-                      tol: float = 0.01, slices: int = 16, max_boxes: int = 16) -> SeverityInterval:
+                      tol: float = 0.01, slices: int = 16, max_boxes: int = 16, witnessed_at_lo: bool = False
+                      ) -> SeverityInterval:
     """Certify the interval of parameter ``index`` over which the box ``[lo, hi]`` (p,) explains every
     point jointly (module docstring; each point's ``b``, ``c`` in ``pts``); ``tol`` the width to which
     the end slices are halved; ``slices`` the first division of the range; ``max_boxes`` the budget of
-    sub-boxes per slice."""
+    sub-boxes per slice. ``witnessed_at_lo``: the caller holds a witness with the parameter at ``lo[index]``
+    (e.g. the healthy hypothesis's): the lower end is ``lo[index]``, attained, without a search."""
     lo, hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
     used: Counter[int] = Counter()
     cache: dict[tuple[float, float], str] = {}
     fac = _Factors.of(model)
     n_sl = slices if hi[index] > lo[index] else 1
-    lower, w_lo, n1, done1 = _end(model, fac, pts, lo, hi, index, False, tol, n_sl, max_boxes, used, cache)
+    if witnessed_at_lo:
+        lower, w_lo, n1, done1 = float(lo[index]), float(lo[index]), 0, True
+    else:
+        lower, w_lo, n1, done1 = _end(model, fac, pts, lo, hi, index, False, tol, n_sl, max_boxes, used, cache)
     if not np.isfinite(lower):
         return SeverityInterval("excluded", float("nan"), float("nan"), (float("nan"), float("nan")),
                                 tuple(k for k, _ in used.most_common()), n1, False)
