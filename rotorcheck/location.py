@@ -40,12 +40,12 @@ import numpy as np
 
 from rotorcheck.config import Crack, RigConfig
 from rotorcheck.nominal import ChannelPair, port_label
+from rotorcheck.progress import Progress, report
 from rotorcheck.ranking import (
     BENIGN_MODEL_ERROR,
     CRACK_MODEL_ERROR,
     MAX_LOSS,
     MAX_MODEL_ERROR,
-    Progress,
     Ranking,
     SweepChange,
     breathing_crack,
@@ -178,7 +178,9 @@ class LocationResult:
     @property
     def locatable(self) -> bool:
         """Some element explains the change better than benign change alone (by :data:`MIN_EVIDENCE`)."""
-        return self.ranking is not None and bool(self.ranked) and self.ranking.evidence_over_benign >= MIN_EVIDENCE
+        if self.ranking is None:  # a result without a ranking (made by hand): its ranks are its word
+            return bool(self.ranked)
+        return bool(self.ranked) and self.ranking.evidence_over_benign >= MIN_EVIDENCE
 
     @property
     def kind(self) -> str:
@@ -189,7 +191,7 @@ class LocationResult:
         if not self.locatable:
             return "not locatable"
         b = self.ranked[0]
-        return "located" if (b.likelihood or 0.0) >= LOCATED_LIKELIHOOD else "ranked"
+        return "located" if b.likelihood is None or b.likelihood >= LOCATED_LIKELIHOOD else "ranked"
 
     def summary(self) -> str:
         """One line: where and how deep, how sure, and what is excluded."""
@@ -214,7 +216,8 @@ class LocationResult:
                     ", ".join(f"{c.element}" for c in ranked[1:4]) + " about as likely)" + advice + ex)
         b = ranked[0]
         lead = "crack most likely in element" if kind == "located" else "crack location uncertain: ranked, element"
-        head = (f"{lead} {b.element} ({b.z_start_m:.3f}-{b.z_end_m:.3f} m, relative likelihood {b.likelihood:.2f}"
+        sure = "" if b.likelihood is None else f"; relative likelihood {b.likelihood:.2f}"
+        head = (f"{lead} {b.element} ({b.z_start_m:.3f}-{b.z_end_m:.3f} m{sure}"
                 + (f"; next: {others}" if others else "") + ")")
         if self.certified and b.status == "consistent":
             mf = b.modulus_factor_interval
@@ -359,8 +362,6 @@ def locate(config: RigConfig, box: Any, pairs: Sequence[ChannelPair], change: Sw
     (:func:`rotorcheck.ranking.section_length`). ``false_alarm``: the chance that the true element is
     excluded when its hypothesis holds and the model errs within its stated bounds (Sidak over the points
     used). ``progress`` hears each element ranked and certified."""
-    import time
-
     from rotorcheck.robust.severity import Points, severity_interval
     from rotorcheck.signatures import candidate_elements
 
@@ -395,15 +396,13 @@ def locate(config: RigConfig, box: Any, pairs: Sequence[ChannelPair], change: Sw
                      f"the prediction's error bound there: {BENIGN_MODEL_ERROR:.0%} of the largest benign change the "
                      f"ranges allow, plus {CRACK_MODEL_ERROR:.0%} and the model's error on the healthy FRF times "
                      "the predicted change")
-        t0 = time.process_time()
         # the healthy hypothesis: no loss (the same model whatever the element), benign parameters in their box
         healthy = severity_interval(models[els[0]], pts, lo, np.r_[hi_b, 0.0], p, step, 1, 4 * refine_boxes)
         # a witness of the healthy hypothesis (no loss) is one of every element's at loss 0: no lower-end search
         at_zero = healthy.status == "consistent" and bool(np.isfinite(healthy.witness_interval[0]))
         for k, e in enumerate(els):
             results[e] = severity_interval(models[e], pts, lo, hi, p, step, slices, max_boxes, at_zero)
-            if progress is not None:
-                progress("certifying", k + 1, len(els), time.process_time() - t0)
+            report(progress, k + 1, len(els), f"certifying: element {e}")
         order = [fit.element for fit in ranking.fits if results[fit.element].status == "consistent"]
         for e in order[:refine]:
             results[e] = severity_interval(models[e], pts, lo, hi, p, step, slices, refine_boxes, at_zero)

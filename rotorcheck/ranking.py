@@ -22,8 +22,7 @@ has more than one valley).
 
 from __future__ import annotations
 
-import time
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -31,6 +30,7 @@ import numpy as np
 
 from rotorcheck.config import Crack, RigConfig
 from rotorcheck.nominal import ChannelPair
+from rotorcheck.progress import Progress, report
 from rotorcheck.robust.real_box import AffineModel, AffineParameter
 
 #: assumed bound on the model's error in the predicted change at a point, relative to that change: the
@@ -58,8 +58,6 @@ LOSS_SCAN = (0.0, 0.03, 0.07, 0.12, 0.2, 0.3, 0.42, 0.55, 0.68, 0.8)
 #: least-squares evaluations per start
 MAX_NFEV = 25
 
-#: progress callback: (stage, k, n, elapsed seconds), called as element k of n is done
-Progress = Callable[[str, int, int, float], None]
 
 
 @dataclass(frozen=True)
@@ -389,7 +387,8 @@ def _starts(fit: _Fit, centre: np.ndarray, g: float) -> list[np.ndarray]:
 def rank_elements(config: RigConfig, box: Any, change: SweepChange, elements: Sequence[int],
                   models: dict[int, AffineModel] | None = None, progress: Progress | None = None) -> Ranking:
     """Every element of ``elements`` fitted and ranked (module docstring); ``models`` the loss models
-    already built (:func:`loss_model`), filled in here; ``progress`` hears each element done."""
+    already built (:func:`loss_model`), filled in here; ``progress`` (:data:`rotorcheck.progress.Progress`)
+    hears each element done."""
     models = {} if models is None else models
     idx = fit_frequencies(change)
     lo_b = np.array([q.lo for q in box.model.parameters], dtype=float)
@@ -397,7 +396,6 @@ def rank_elements(config: RigConfig, box: Any, change: SweepChange, elements: Se
     centre = np.clip(0.0, lo_b, hi_b)
     g_lo, g_hi = change.gain
     g = float(np.clip(1.0, g_lo, g_hi))
-    t0 = time.process_time()
     raw: list[tuple[int, float, float, np.ndarray]] = []
     chi2_benign = float("nan")
     n_res = 0
@@ -411,8 +409,7 @@ def rank_elements(config: RigConfig, box: Any, change: SweepChange, elements: Se
         x, chi2 = _solve(fit, lo, hi, _starts(fit, centre, g))
         n_res = 2 * int(fit.used.sum())
         raw.append((e, float(x[-2]), chi2, x))
-        if progress is not None:
-            progress("ranking", k + 1, len(elements), time.process_time() - t0)
+        report(progress, k + 1, len(elements), f"ranking: element {e}")
     chis = np.array([c for _, _, c, _ in raw])
     lik = np.exp(-0.5 * (chis - chis.min())) if chis.size else chis
     lik = lik / lik.sum() if lik.size else lik

@@ -11,7 +11,7 @@ from pathlib import Path
 from rotorcheck.baseline import Baseline, read_baselines
 from rotorcheck.config import RigConfig
 from rotorcheck.errors import InputError
-from rotorcheck.ranking import Progress
+from rotorcheck.progress import Progress
 from rotorcheck.workflow.detection import EXIT_CODES, DetectionOutcome, baseline_for_speed, check_baseline, detect
 from rotorcheck.workflow.detectors import DetectorSettings
 from rotorcheck.workflow.locating import locate_damage
@@ -74,7 +74,7 @@ def detect_pairs(cfg: RigConfig, rig_file: Path, sweep: str | Path, baseline_pat
     """Each (baseline run, run) of :func:`paired_runs` detected with the detector ``rule`` (None: the default)
     and ``settings``, a damage verdict with where (the ranked candidate elements); with ``locate`` the
     certificates too (``outcome.location``). ``say`` hears progress in words, ``progress`` each element
-    ranked or certified (stage, k, n, CPU seconds)."""
+    ranked or certified (:data:`rotorcheck.progress.Progress`)."""
     s = settings if settings is not None else DetectorSettings()
     if not pairs:
         raise InputError(sweep, "/runs", "no run to check")

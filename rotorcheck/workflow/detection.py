@@ -15,7 +15,7 @@ from rotorcheck.detectability import Detectability, detectability, linearized
 from rotorcheck.errors import InputError
 from rotorcheck.location import LocationResult
 from rotorcheck.nominal import NominalModel, primary_pair
-from rotorcheck.ranking import Progress
+from rotorcheck.progress import Progress
 from rotorcheck.report.content import conclusion
 from rotorcheck.report.schema import DetectionReport
 from rotorcheck.robust import identify

@@ -15,7 +15,8 @@ from rotorcheck.config import RigConfig
 from rotorcheck.errors import InputError
 from rotorcheck.location import LocationResult, locate
 from rotorcheck.nominal import ChannelPair
-from rotorcheck.ranking import Progress, Ranking, SweepChange, sweep_change
+from rotorcheck.progress import Progress
+from rotorcheck.ranking import Ranking, SweepChange, sweep_change
 from rotorcheck.signatures import BenignBox, benign_box
 from rotorcheck.variability import benign_at
 from rotorcheck.workflow.benign import KAPPA_NOMINAL, benign_model
