@@ -19,8 +19,15 @@ depth-to-compliance relations of :mod:`rotorcheck.faults.compliance` (strip meth
 best ranked breathing candidates the relation is the model's own harmonic-balance response (sidebands
 included) seen through the time-invariant hypothesis.
 
-Before locating, the healthy hypothesis (``s = 0``: benign change only, the same at every point) is
-tested the same way; while it is not excluded there is "no damage to locate" and no candidate ranks.
+The candidates are ranked by :func:`rotorcheck.ranking.rank_elements` (their relative likelihoods, the
+ranking ``detect`` reports too); the certificates add what is excluded (a certified exclusion drops a
+candidate from the ranks, the others keep their order) and the certified intervals. The healthy
+hypothesis (``s = 0``: benign change only, the same at every point) is certified the same way. Where
+there is damage (the detector's verdict, else the healthy hypothesis excluded) the result always says
+where as far as the data allow (:meth:`LocationResult.summary`): the most likely element when its
+relative likelihood is at least :data:`LOCATED_LIKELIHOOD`, else the ranked candidates with theirs, or
+"not locatable" when no element explains the change better than benign change alone by
+:data:`MIN_EVIDENCE` chi-square units.
 """
 
 from __future__ import annotations
@@ -33,28 +40,28 @@ import numpy as np
 
 from rotorcheck.config import Crack, RigConfig
 from rotorcheck.nominal import ChannelPair, port_label
-from rotorcheck.robust.real_box import AffineModel, AffineParameter
+from rotorcheck.progress import Progress, report
+from rotorcheck.ranking import (
+    BENIGN_MODEL_ERROR,
+    CRACK_MODEL_ERROR,
+    MAX_LOSS,
+    MAX_MODEL_ERROR,
+    Ranking,
+    SweepChange,
+    breathing_crack,
+    loss_model,
+    rank_elements,
+    section_length,
+)
+from rotorcheck.robust.real_box import AffineModel
 from rotorcheck.robust.severity import SEVERITY_RULE
 
-#: assumed bound on the model's error in the predicted change at a point, relative to that change: the
-#: nominal model's crack shapes agree with the truth rig's to a cosine of 0.987-0.990 (limits.md 1), an
-#: error of 14-16 % of the change
-CRACK_MODEL_ERROR = 0.2
-#: and relative to the largest benign change the ranges allow there (the envelope): the nominal model
-#: predicts a benign change to 40-60 % (limits.md 4)
-BENIGN_MODEL_ERROR = 0.6
-#: points are used only where the model's receptance errs on the healthy data by at most this much
-#: (relative, the largest over +-HALFWIDTH points): near a resonance the model misplaces, its predicted
-#: change is wrong by more than the change (on the crack rig: 30-97 % at 500-517 Hz)
-MAX_MODEL_ERROR, HALFWIDTH = 0.3, 5
-#: breathing hypothesis: a point is not used when a sideband f +- Omega or f +- 2 Omega lies within this
-#: relative distance of a natural frequency: the revolution average leaves out the crack's parametric
-#: coupling through the sidebands, which is large there (on the crack rig a 50 % deep crack's first mode
-#: at 50 Hz moves the response at 33 and 67 Hz by more than the mean stiffness predicts)
-SIDEBAND_GUARD = 0.08
-#: the largest severity searched (stiffness loss of the element, fraction)
-MAX_LOSS = 0.8
-#: points used: the largest whitened changes and as many spread over the band (all channel pairs)
+#: a located element: relative likelihood at least this (else the ranked candidates are the answer)
+LOCATED_LIKELIHOOD = 0.5
+#: chi-square units the best element's loss must remove over benign change alone to rank anything
+MIN_EVIDENCE = 4.0
+
+#: certificate points: the largest whitened changes and as many spread over the band (all channel pairs)
 N_TOP, N_SPREAD = 24, 24
 #: depth range of the strip relation (fraction of the diameter)
 MAX_DEPTH = 0.5
@@ -109,8 +116,9 @@ class CandidateResult:
     excluding_frequencies_hz: tuple[float, ...]
     witness_interval: tuple[float, float] = (float("nan"), float("nan"))  # losses that explain every point
     witnessed: bool = False  # witnesses at both ends: the interval is attained (within the step)
-    loss_estimate: float | None = None  # the best fit's loss (consistent candidates)
-    chi2: float | None = None  # the best fit's whitened residual sum over every point and pair
+    loss_estimate: float | None = None  # the best fit's loss (:mod:`rotorcheck.ranking`)
+    chi2: float | None = None  # the best fit's whitened residual sum at the fit points
+    likelihood: float | None = None  # relative likelihood among the ranked candidates (None: excluded)
 
     @property
     def modulus_factor_interval(self) -> tuple[float, float]:
@@ -127,15 +135,18 @@ class CandidateResult:
                 "depth_interval": [num(x) for x in self.depth_interval],
                 "excluding_frequencies_hz": [float(x) for x in self.excluding_frequencies_hz],
                 "loss_witness_interval": [num(x) for x in self.witness_interval], "witnessed": self.witnessed,
-                "loss_estimate": num(self.loss_estimate), "chi2": num(self.chi2)}
+                "loss_estimate": num(self.loss_estimate), "chi2": num(self.chi2),
+                "relative_likelihood": num(self.likelihood)}
 
 
 @dataclass
 class LocationResult:
-    """Candidates per element (:func:`locate`) and what they say together."""
+    """Candidates per element (:func:`locate`) and what they say together: the ranking (relative
+    likelihoods), what the certificates exclude and their intervals (``certified``; without them, the
+    ranking's best fits only: ``detect``'s diagnosis), and the detector's verdict where known."""
 
     hypothesis: str  # "open" (standstill) | "breathing" (rotating)
-    healthy_excluded: bool  # the benign-only hypothesis is excluded at every point jointly
+    healthy_excluded: bool | None  # the benign-only hypothesis is excluded at every point jointly (None: not tested)
     candidates: list[CandidateResult]
     channels: list[str]
     points_used: int
@@ -144,36 +155,94 @@ class LocationResult:
     notes: list[str] = field(default_factory=list)
     healthy_excluding_hz: tuple[float, ...] = ()  # points that excluded the healthy hypothesis
     single_channel: LocationResult | None = None  # the same from the rig's actuator -> sensor pair alone
+    ranking: Ranking | None = None
+    certified: bool = True  # the certificates were computed (locate); else the ranking alone (detect)
+    damage: bool | None = None  # the detector's verdict is damage (None: not known; the certificate decides)
+    sensor_advice: str = ""  # when not locatable: the sensor set that would locate it
+
+    @property
+    def damage_found(self) -> bool:
+        """Damage to locate: the detector's verdict, else the healthy hypothesis certified excluded."""
+        return bool(self.healthy_excluded) if self.damage is None else self.damage
+
+    @property
+    def ranked(self) -> list[CandidateResult]:
+        """The ranked candidates, best first."""
+        return sorted((c for c in self.candidates if c.rank is not None), key=lambda c: c.rank or 0)
 
     @property
     def best(self) -> CandidateResult | None:
-        ranked = [c for c in self.candidates if c.rank == 1]
-        return ranked[0] if ranked else None
+        ranked = self.ranked
+        return ranked[0] if ranked and self.damage_found else None
+
+    @property
+    def locatable(self) -> bool:
+        """Some element explains the change better than benign change alone (by :data:`MIN_EVIDENCE`)."""
+        if self.ranking is None:  # a result without a ranking (made by hand): its ranks are its word
+            return bool(self.ranked)
+        return bool(self.ranked) and self.ranking.evidence_over_benign >= MIN_EVIDENCE
+
+    @property
+    def kind(self) -> str:
+        """What the result says: "nothing" (no damage), "located" (one element, likelihood at least
+        :data:`LOCATED_LIKELIHOOD`), "ranked" (candidates with likelihoods), "not locatable"."""
+        if not self.damage_found:
+            return "nothing"
+        if not self.locatable:
+            return "not locatable"
+        b = self.ranked[0]
+        return "located" if b.likelihood is None or b.likelihood >= LOCATED_LIKELIHOOD else "ranked"
 
     def summary(self) -> str:
-        """One line: where and how deep, and what is excluded."""
+        """One line: where and how deep, how sure, and what is excluded."""
         excluded = [c.element for c in self.candidates if c.status == "excluded"]
-        ex = f"; elements {_ranges(excluded)} excluded" if excluded else "; no element excluded"
-        if not self.healthy_excluded:
-            return "no damage to locate: benign change inside the ranges explains every point" + ex
-        b = self.best
-        if b is None:
-            return "every candidate element is excluded: the change is no stiffness loss of one element" + ex
+        ex = ""
+        if self.certified:
+            ex = f"; elements {_ranges(excluded)} excluded" if excluded else "; no element excluded"
+        kind = self.kind
+        if kind == "nothing":
+            why = ("benign change inside the ranges explains every point" if self.damage is None
+                   else "the detector's verdict is not damage")
+            return f"no damage to locate: {why}" + ex
+        ranked = self.ranked
+        if not ranked:
+            return ("damage, but every candidate element is excluded: the change is no stiffness loss of one "
+                    "element" + ex)
+        others = ", ".join(f"element {c.element} {c.likelihood:.2f}" for c in ranked[1:3] if c.likelihood is not None)
+        if kind == "not locatable":
+            advice = f"; {self.sensor_advice}" if self.sensor_advice else ""
+            return ("damage not locatable with these sensors: no element's stiffness loss explains the change better "
+                    f"than benign change alone (best: element {ranked[0].element}, " +
+                    ", ".join(f"{c.element}" for c in ranked[1:4]) + " about as likely)" + advice + ex)
+        b = ranked[0]
+        lead = "crack most likely in element" if kind == "located" else "crack location uncertain: ranked, element"
+        sure = "" if b.likelihood is None else f"; relative likelihood {b.likelihood:.2f}"
+        head = (f"{lead} {b.element} ({b.z_start_m:.3f}-{b.z_end_m:.3f} m{sure}"
+                + (f"; next: {others}" if others else "") + ")")
+        if self.certified and b.status == "consistent":
+            mf = b.modulus_factor_interval
+            size = (f", stiffness loss {100 * b.loss_interval[0]:.1f}-{100 * b.loss_interval[1]:.1f} % certified "
+                    f"(modulus factor {mf[0]:.3f}-{mf[1]:.3f}")
+            size += f"; best fit {100 * b.loss_estimate:.1f} %)" if b.loss_estimate is not None else ")"
+        else:
+            size = (f", stiffness loss about {100 * (b.loss_estimate or 0.0):.1f} % (best fit; certified intervals: "
+                    "rotorcheck locate)")
         text = depth_text(*b.depth_interval)
         depth = f", depth {text} of diameter" if text else ""
-        mf = b.modulus_factor_interval
-        return (f"crack most likely in element {b.element} ({b.z_start_m:.3f}-{b.z_end_m:.3f} m), stiffness loss "
-                f"{100 * b.loss_interval[0]:.1f}-{100 * b.loss_interval[1]:.1f} % (modulus factor "
-                f"{mf[0]:.3f}-{mf[1]:.3f}){depth}" + ex)
+        caveat = ("; benign change alone is not certified excluded at the points the certificate uses"
+                  if self.certified and self.healthy_excluded is False else "")
+        return head + size + depth + caveat + ex
 
     def to_dict(self) -> dict[str, Any]:
         b = self.best
-        return {"best_element": None if b is None else b.element, "hypothesis": self.hypothesis,
-                "healthy_excluded": self.healthy_excluded,
+        return {"best_element": None if b is None else b.element, "kind": self.kind, "hypothesis": self.hypothesis,
+                "healthy_excluded": self.healthy_excluded, "certified": self.certified,
                 "healthy_excluding_frequencies_hz": list(self.healthy_excluding_hz), "summary": self.summary(),
                 "channels": self.channels, "points_used": self.points_used, "point_quantile_z": self.z,
                 "model_relative_error": CRACK_MODEL_ERROR, "rule": self.rule, "notes": list(self.notes),
                 "candidates": [c.to_dict() for c in self.candidates],
+                **({} if self.ranking is None else {"ranking": self.ranking.to_dict()}),
+                **({"sensor_advice": self.sensor_advice} if self.sensor_advice else {}),
                 **({} if self.single_channel is None else {"single_channel": self.single_channel.to_dict()})}
 
 
@@ -201,49 +270,6 @@ def _ranges(xs: Sequence[int]) -> str:
     return ", ".join(out)
 
 
-def _loss_shape(config: RigConfig, sys0: Any, element: int, speed_rpm: float, hypothesis: str
-                ) -> tuple[np.ndarray, np.ndarray | None]:
-    """``(A_K, A_D)``: the change of K (and of C where damping follows K affinely) per unit loss of
-    ``element`` (N/m per 1), to be subtracted; A_D None where the damping is held (modal damping);
-    ``sys0`` the assembled ``config``."""
-    from rotorcheck.fe.assembly import build_system
-
-    _, C0, _, K0 = sys0.matrices(speed_rpm)
-    if hypothesis == "breathing":
-        from rotorcheck.faults.crack import crack_stiffness
-
-        ref = _breathing_crack(config, element, 0.25)
-        ck = crack_stiffness(sys0, ref)
-        s_ref = 0.25 * (ck.delta_xi + ck.delta_eta)
-        return ck.scatter(ck.mean(), sys0.n_dof) / s_ref, None
-    _, C1, _, K1 = build_system(config, modulus_factors={element: 0.5}).matrices(speed_rpm)
-    _, Cq, _, _ = build_system(config, modulus_factors={element: 0.75}).matrices(speed_rpm)
-    dC = (C0 - C1) / 0.5
-    affine = np.allclose(0.5 * (C0 + C1), Cq, rtol=0.0, atol=1e-9 * max(np.abs(C0).max(), 1e-300))
-    return (K0 - K1) / 0.5, (dC if affine and np.abs(dC).max() > 0 else None)
-
-
-def section_length(config: RigConfig, element: int, given: float | None = None) -> float:
-    """The breathing crack's section length ``l`` of eq. 5.25 (m): ``given``, else the rig's own breathing
-    crack's, else the element's outer diameter (the usual estimate of the zone a crack weakens)."""
-    if given is not None:
-        return float(given)
-    own = next((f for f in config.faults.values() if isinstance(f, Crack) and f.model == "mayes_davies"
-                and f.section_length is not None), None)
-    if own is not None and own.section_length is not None:
-        return float(own.section_length)
-    return float(next(e for e in config.shaft if e.start == element).outer_diameter)
-
-
-def _breathing_crack(config: RigConfig, element: int, depth: float, length: float | None = None) -> Crack:
-    """A Mayes-Davies crack ``depth`` (fraction of the diameter) deep in ``element`` (section length by
-    :func:`section_length`; Poisson ratio the rig's crack's, else the material's)."""
-    own = next((f for f in config.faults.values() if isinstance(f, Crack) and f.model == "mayes_davies"), None)
-    return Crack(element=element, model="mayes_davies", depth_ratio=2.0 * depth,
-                 section_length=section_length(config, element, length),
-                 poisson=None if own is None else own.poisson)
-
-
 def _relation(config: RigConfig, element: int, hypothesis: str, length: float | None = None) -> Any:
     """``depth -> loss`` for ``element`` (None for a hollow element: the strip relation needs a solid one)."""
     sh = next(e for e in config.shaft if e.start == element)
@@ -260,30 +286,6 @@ def _relation(config: RigConfig, element: int, hypothesis: str, length: float | 
     own = next((f for f in config.faults.values() if isinstance(f, Crack) and f.model == "open"), None)
     l_o = own.section_length if own is not None and own.section_length is not None else l_e
     return lambda d: open_loss(d, radius, l_o, nu)
-
-
-def natural_frequencies_hz(model: AffineModel) -> np.ndarray:
-    """The undamped-equivalent natural frequencies |lambda| / 2 pi (Hz) of ``model`` at its parameters'
-    zero (state space of M, D, K; each conjugate pair once)."""
-    from scipy.linalg import eig
-
-    n = model.K.shape[0]
-    Minv = np.linalg.inv(model.M)
-    A = np.block([[np.zeros((n, n)), np.eye(n)], [-Minv @ model.K, -Minv @ model.D]])
-    lam = eig(A, right=False)
-    lam = lam[lam.imag > 0]
-    return np.sort(np.abs(lam)) / (2.0 * np.pi)
-
-
-def _near_sideband(model: AffineModel, freq_hz: np.ndarray, speed_rpm: float) -> np.ndarray:
-    """(f,) bool: a sideband f +- Omega, f +- 2 Omega within :data:`SIDEBAND_GUARD` of a natural frequency."""
-    fn = natural_frequencies_hz(model)
-    spin = abs(speed_rpm) / 60.0
-    out = np.zeros(np.asarray(freq_hz).size, dtype=bool)
-    for k in (-2, -1, 1, 2):
-        side = np.abs(np.asarray(freq_hz, dtype=float) + k * spin)
-        out |= np.any(np.abs(side[:, None] - fn[None, :]) <= SIDEBAND_GUARD * fn[None, :], axis=1)
-    return out
 
 
 #: depths (fraction of the diameter) at which the harmonic-balance depth relation is computed
@@ -310,7 +312,7 @@ def _hb_relation(config: RigConfig, sysm: Any, model: AffineModel, element: int,
     g0 = pts.g0
     losses = [0.0]
     for d in HB_DEPTHS:
-        ck = crack_stiffness(sysm, _breathing_crack(config, element, d, length))
+        ck = crack_stiffness(sysm, breathing_crack(config, element, d, length))
         hb = np.zeros(f.size, dtype=complex)
         for dof in sorted(set(in_dofs)):
             at = np.array([i == dof for i in in_dofs])
@@ -342,145 +344,105 @@ def _select_points(change2: np.ndarray, n_top: int, n_spread: int) -> np.ndarray
     return np.unique(np.r_[top, spread])
 
 
-def locate(config: RigConfig, box: Any, pairs: Sequence[ChannelPair], freq_hz: np.ndarray, speed_rpm: float,
-           t_new: np.ndarray, var_new: np.ndarray, t_healthy: np.ndarray, var_healthy: np.ndarray,
-           benign_envelope: np.ndarray, false_alarm: float = 0.01, elements: Sequence[int] | None = None,
-           step: float = 0.01, slices: int = 12, max_boxes: int = 8, refine: int = 2,
-           refine_boxes: int = 48, crack_section_length: float | None = None,
-           exclude: np.ndarray | None = None) -> LocationResult:
+def locate(config: RigConfig, box: Any, pairs: Sequence[ChannelPair], change: SweepChange, false_alarm: float = 0.01,
+           elements: Sequence[int] | None = None, step: float = 0.01, slices: int = 12, max_boxes: int = 8,
+           refine: int = 1, refine_boxes: int = 48, crack_section_length: float | None = None,
+           ranking: Ranking | None = None, certify: bool = True, damage: bool | None = None,
+           progress: Progress | None = None) -> LocationResult:
     """Candidates per element (module docstring). ``box`` the benign parameters as a
-    :class:`rotorcheck.signatures.BenignBox` (its model at ``speed_rpm``); ``t_*``, ``var_*`` (f, P) the
-    new and healthy FRFs (m/N) and the variances of their means (m^2/N^2), one column per pair of
-    ``pairs``; ``benign_envelope`` (P f,) m/N the largest benign change the ranges allow at each point;
-    ``elements`` default: every shaft element; ``step`` the width to which the severity's end slices are
-    halved (loss, fraction); ``slices`` its first division; ``max_boxes`` the branch and bound's budget
-    per slice for every candidate, ``refine_boxes`` for a second pass on the ``refine`` best ranked (a
-    larger budget only narrows a certified interval); ``crack_section_length`` (m) the breathing crack's
-    section length for the depth relation (:func:`section_length`); ``exclude`` (f,) bool: points never used
-    (on a shaft harmonic).
-    ``false_alarm``: the chance that the true element is excluded when its hypothesis holds and the model
-    errs within its stated bounds (Sidak over the points used)."""
-    from rotorcheck.robust.measured import io_model_error
+    :class:`rotorcheck.signatures.BenignBox` (its model at the change's speed); ``change`` the new sweep
+    against the healthy one (:func:`rotorcheck.ranking.sweep_change`, one column per pair of ``pairs``);
+    ``elements`` default: every shaft element; ``ranking`` the candidates' ranking when the caller has it
+    (else :func:`rotorcheck.ranking.rank_elements` here); ``certify``: the certificates too (else the
+    ranking alone); ``damage`` the detector's verdict where known. Certificates: ``step`` the width to
+    which the severity's end slices are halved (loss, fraction); ``slices`` its first division;
+    ``max_boxes`` the branch and bound's budget per slice for every candidate, ``refine_boxes`` for a
+    second pass on the ``refine`` best ranked (a larger budget only narrows a certified interval or
+    excludes); ``crack_section_length`` (m) the breathing crack's section length for the depth relation
+    (:func:`rotorcheck.ranking.section_length`). ``false_alarm``: the chance that the true element is
+    excluded when its hypothesis holds and the model errs within its stated bounds (Sidak over the points
+    used). ``progress`` hears each element ranked and certified."""
     from rotorcheck.robust.severity import Points, severity_interval
     from rotorcheck.signatures import candidate_elements
 
-    f = np.asarray(freq_hz, dtype=float)
-    nf, n_pairs = np.asarray(t_new).reshape(f.size, -1).shape
-    t_new, var_new, t_h, var_h = (np.asarray(x).reshape(nf, n_pairs) for x in (t_new, var_new, t_healthy,
-                                                                                 var_healthy))
-    a = BENIGN_MODEL_ERROR * np.asarray(benign_envelope, dtype=float).reshape(n_pairs, nf).T
-    hypothesis = "breathing" if speed_rpm != 0.0 else "open"
-    views = [box.for_pair(p) if n_pairs > 1 else box for p in pairs]
-    omega = 2.0 * np.pi * f
-    lo_b = np.array([q.lo for q in box.model.parameters], dtype=float)
-    hi_b = np.array([q.hi for q in box.model.parameters], dtype=float)
-    B = np.stack([v.model.b for v in views], axis=1)
-    Cm = np.stack([v.model.c for v in views], axis=1)
-    g_zero = _receptances(box.model, omega, np.zeros(lo_b.size), B, Cm)
-    err = np.stack([io_model_error(g_zero[:, j], t_h[:, j], HALFWIDTH) for j in range(n_pairs)], axis=1)
-    change2 = np.abs(t_new - t_h) ** 2 / (var_new + var_h + a**2)
-    trusted = err <= MAX_MODEL_ERROR
-    if hypothesis == "breathing":
-        trusted &= ~_near_sideband(box.model, f, speed_rpm)[:, None]
-    if exclude is not None:
-        trusted &= ~np.asarray(exclude, dtype=bool).reshape(nf, 1)
-    chosen = _select_points(np.where(trusted, change2, np.nan), N_TOP, N_SPREAD)
+    f = change.freq_hz
+    nf, n_pairs = change.t_new.shape
+    omega = change.omega
+    hypothesis = change.hypothesis
+    chosen = _select_points(np.where(change.trusted, change.change2, np.nan), N_TOP, N_SPREAD)
     m = chosen.size
     z = float(np.sqrt(-np.log1p(-(1.0 - false_alarm) ** (1.0 / max(m, 1)))))  # |r|^2/sigma^2 ~ Exp(1)
     ks, js = chosen // n_pairs, chosen % n_pairs
-    pts = Points(omega[ks], g_zero[ks, js], t_new[ks, js], t_h[ks, js], var_new[ks, js], var_h[ks, js], z,
-                 np.zeros(m), float(box.gain[0]), float(box.gain[1]), a[ks, js], CRACK_MODEL_ERROR + err[ks, js],
-                 B.T[js], Cm.T[js])
-    notes = [f"{m} points of {nf * n_pairs} used (the {N_TOP} largest whitened changes and the rest spread over "
-             f"the band, among the {int(trusted.sum())} where the model errs on the healthy FRF by at most "
-             f"{MAX_MODEL_ERROR:.0%}): a subset keeps every certificate sound, only less sharp; the prediction's "
-             f"error bound there: {BENIGN_MODEL_ERROR:.0%} of the largest benign change the ranges allow, plus "
-             f"{CRACK_MODEL_ERROR:.0%} and the model's error on the healthy FRF times the predicted change"]
+    pts = Points(omega[ks], change.g_zero[ks, js], change.t_new[ks, js], change.t_h[ks, js], change.var_new[ks, js],
+                 change.var_h[ks, js], z, np.zeros(m), change.gain[0], change.gain[1], change.a[ks, js],
+                 CRACK_MODEL_ERROR + change.err[ks, js], change.B.T[js], change.Cm.T[js])
     els = tuple(elements) if elements is not None else candidate_elements(config)
-
-    def model_with(element: int) -> AffineModel:
-        A_K, A_D = _loss_shape(config, box.system, element, speed_rpm, hypothesis)
-        terms: tuple[tuple[str, np.ndarray], ...] = (("K", -A_K),) + ((("D", -A_D),) if A_D is not None else ())
-        return AffineModel(box.model.M, box.model.D, box.model.K, box.model.b, box.model.c,
-                           (*box.model.parameters, AffineParameter(f"loss_{element}", terms, 0.0, MAX_LOSS)))
-
+    models = {e: loss_model(config, box, e, change.speed_rpm, hypothesis) for e in els}
+    if ranking is None:
+        ranking = rank_elements(config, box, change, els, models, progress)
+    notes = [f"ranking: {ranking.n_frequencies} frequencies ({ranking.n_residuals} real residuals) by the misfit of "
+             "each element's best fit; relative likelihoods exp(-chi2/2) over the candidates"]
+    lo_b = np.array([q.lo for q in box.model.parameters], dtype=float)
+    hi_b = np.array([q.hi for q in box.model.parameters], dtype=float)
     p = lo_b.size
     lo, hi = np.r_[lo_b, 0.0], np.r_[hi_b, MAX_LOSS]
-    models = {e: model_with(e) for e in els}
-    # the healthy hypothesis: no loss (the same model whatever the element), benign parameters in their box
-    healthy = severity_interval(models[els[0]], pts, lo, np.r_[hi_b, 0.0], p, step, 1, 4 * refine_boxes)
-    healthy_excluded = healthy.status == "excluded"
-    results = {e: severity_interval(models[e], pts, lo, hi, p, step, slices, max_boxes) for e in els}
-    fits = {e: _fit(models[e], B, Cm, g_zero, omega, t_new, t_h, var_new, var_h, a, CRACK_MODEL_ERROR + err,
-                    trusted, box.gain, (r.lower, r.upper))
-            for e, r in results.items() if r.status == "consistent" and healthy_excluded}
-    order = sorted(fits, key=lambda e: fits[e][1])
-    for e in order[:refine]:
-        results[e] = severity_interval(models[e], pts, lo, hi, p, step, slices, refine_boxes)
-    order = [e for e in order if results[e].status == "consistent"]
+    results: dict[int, Any] = {}
+    healthy = None
+    if certify:
+        notes.append(f"{m} points of {nf * n_pairs} certified (the {N_TOP} largest whitened changes and the rest "
+                     f"spread over the band, among the {int(change.trusted.sum())} where the model errs on the "
+                     f"healthy FRF by at most {MAX_MODEL_ERROR:.0%}): a subset keeps every certificate sound, only "
+                     "less sharp; "
+                     f"the prediction's error bound there: {BENIGN_MODEL_ERROR:.0%} of the largest benign change the "
+                     f"ranges allow, plus {CRACK_MODEL_ERROR:.0%} and the model's error on the healthy FRF times "
+                     "the predicted change")
+        # the healthy hypothesis: no loss (the same model whatever the element), benign parameters in their box
+        healthy = severity_interval(models[els[0]], pts, lo, np.r_[hi_b, 0.0], p, step, 1, 4 * refine_boxes)
+        # a witness of the healthy hypothesis (no loss) is one of every element's at loss 0: no lower-end search
+        at_zero = healthy.status == "consistent" and bool(np.isfinite(healthy.witness_interval[0]))
+        for k, e in enumerate(els):
+            results[e] = severity_interval(models[e], pts, lo, hi, p, step, slices, max_boxes, at_zero)
+            report(progress, k + 1, len(els), f"certifying: element {e}")
+        order = [fit.element for fit in ranking.fits if results[fit.element].status == "consistent"]
+        for e in order[:refine]:
+            results[e] = severity_interval(models[e], pts, lo, hi, p, step, slices, refine_boxes, at_zero)
+    healthy_excluded = None if healthy is None else healthy.status == "excluded"
+    damage_found = bool(healthy_excluded) if damage is None else damage
+    order = [fit.element for fit in ranking.fits if not results or results[fit.element].status == "consistent"]
+    total = float(sum(f.likelihood for f in ranking.fits if f.element in order))
     cands = []
-    for e, r in results.items():
+    for e in els:
+        r = results.get(e)
+        fit = ranking.of(e)
+        assert fit is not None
         rel = _relation(config, e, hypothesis, crack_section_length)
-        if hypothesis == "breathing" and rel is not None and e in order[:refine]:
-            rel = _hb_relation(config, box.system, models[e], e, speed_rpm, pts, crack_section_length)
-        d0, d1 = ((depth_of_loss(r.lower, rel), depth_of_loss(r.upper, rel)) if r.status == "consistent"
-                  and rel is not None else (None, None))
-        freqs = tuple(dict.fromkeys(float(f[ks[k]]) for k in r.excluding))
-        fit = fits.get(e) if r.status == "consistent" else None
-        cands.append(CandidateResult(e, float(config.stations[e - 1]), float(config.stations[e]), r.status,
-                                     order.index(e) + 1 if e in order else None, (r.lower, r.upper), (d0, d1),
-                                     freqs if r.status == "excluded" else (), r.witness_interval, r.witnessed,
-                                     None if fit is None else fit[0], None if fit is None else fit[1]))
-    if hypothesis == "breathing" and order:
+        if hypothesis == "breathing" and rel is not None and e in order[:refine] and damage_found:
+            rel = _hb_relation(config, box.system, models[e], e, change.speed_rpm, pts, crack_section_length)
+        consistent = r is None or r.status == "consistent"
+        if r is not None and consistent and rel is not None:
+            depth: tuple[float | None, float | None] = (depth_of_loss(r.lower, rel), depth_of_loss(r.upper, rel))
+        elif r is None and rel is not None:
+            d = depth_of_loss(fit.loss, rel)
+            depth = (d, d)
+        else:
+            depth = (None, None)
+        ranked = e in order and damage_found
+        cands.append(CandidateResult(
+            e, float(config.stations[e - 1]), float(config.stations[e]),
+            "not certified" if r is None else r.status, order.index(e) + 1 if ranked else None,
+            (float("nan"), float("nan")) if r is None else (r.lower, r.upper), depth,
+            tuple(dict.fromkeys(float(f[ks[k]]) for k in r.excluding)) if r is not None and not consistent else (),
+            (float("nan"), float("nan")) if r is None else r.witness_interval, False if r is None else r.witnessed,
+            fit.loss, fit.chi2, fit.likelihood / total if ranked and total > 0 else None))
+    if hypothesis == "breathing" and order and damage_found and certify:
         notes.append(f"depths of the {min(refine, len(order))} best ranked: the loss that best reproduces the model's "
                      "harmonic-balance response to a breathing crack of each depth (its sidebands included: at 50 % "
                      "depth on the crack rig 15-20 % more than the revolution average); of the others: the average")
-    if not healthy_excluded:
+    if healthy_excluded is False:
         notes.append("the healthy hypothesis (no loss; benign parameters in their ranges, the same at every point) "
-                     "is not excluded: no candidate ranks")
+                     "is not excluded by the certificate" + ("" if damage else ": no candidate ranks"))
     channels = [port_label(q.output) + "<-" + port_label(q.input) for q in pairs]
     return LocationResult(hypothesis, healthy_excluded, cands, channels, m, z, notes=notes,
-                          healthy_excluding_hz=tuple(dict.fromkeys(float(f[ks[k]]) for k in healthy.excluding)))
-
-
-def _fit(model: AffineModel, B: np.ndarray, Cm: np.ndarray, g0: np.ndarray, omega: np.ndarray, t_new: np.ndarray,
-         t_h: np.ndarray, var_new: np.ndarray, var_h: np.ndarray, a: np.ndarray, rel: np.ndarray, used: np.ndarray,
-         gain: tuple[float, float], loss: tuple[float, float]) -> tuple[float, float]:
-    """``(loss, chi2)``: the bounded least-squares fit of the benign parameters, the loss (inside its
-    certified interval) and the gain at the points ``used`` (f, P) of every pair (inputs and outputs the
-    columns of ``B``, ``Cm``; ``g0`` (f, P) their receptances at no change), each residual over its
-    standard deviation with the model's error bounds in it: ``var_new + var_h + a^2 + (rel |T_h| |gain
-    rho - 1|)^2``; two starts along the loss interval."""
-    from scipy.optimize import least_squares
-
-    p = len(model.parameters)
-    lo = np.array([q.lo for q in model.parameters[:-1]] + [loss[0], gain[0]])
-    hi = np.array([q.hi for q in model.parameters[:-1]] + [loss[1], gain[1]])
-    hi = np.where(hi > lo, hi, lo + 1e-12)  # least_squares needs lo < hi (a fixed gain)
-
-    def resid(x: np.ndarray) -> np.ndarray:
-        g = _receptances(model, omega, x[:p], B, Cm)
-        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-            rho = np.where(np.abs(g0) > 0, g / g0, 1.0)
-            pred = x[p] * t_h * rho
-            sd = np.sqrt(var_new + var_h + a**2 + (rel * np.abs(t_h) * np.abs(x[p] * rho - 1.0)) ** 2)
-            r = ((t_new - pred) / sd)[used]
-        return np.r_[r.real, r.imag]
-
-    best: tuple[float, float] | None = None
-    for start in (1.0 / 3.0, 2.0 / 3.0):  # the loss moves resonances: two starts along its interval
-        x0 = 0.5 * (lo + hi)
-        x0[p - 1] = lo[p - 1] + start * (hi[p - 1] - lo[p - 1])
-        sol = least_squares(resid, x0, bounds=(lo, hi), x_scale=hi - lo, max_nfev=20)
-        if best is None or 2.0 * sol.cost < best[1]:
-            best = (float(sol.x[p - 1]), float(2.0 * sol.cost))
-    assert best is not None
-    return best
-
-
-def _receptances(model: AffineModel, omega: np.ndarray, theta: np.ndarray, B: np.ndarray, Cm: np.ndarray
-                 ) -> np.ndarray:
-    """(f, P) receptances ``c_j^T Z(w, theta)^-1 b_j`` of each pair j (columns of B, Cm), batched over w."""
-    Z = model.dynamic_stiffness_stack(omega, theta)
-    X = np.linalg.solve(Z, np.broadcast_to(B, (omega.size, *B.shape)).astype(complex))
-    return np.einsum("nj,fnj->fj", Cm, X)
+                          healthy_excluding_hz=() if healthy is None else
+                          tuple(dict.fromkeys(float(f[ks[k]]) for k in healthy.excluding)),
+                          ranking=ranking, certified=certify, damage=damage)

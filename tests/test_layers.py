@@ -30,6 +30,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("rotorcheck.signatures",),  # crack and benign change shapes by re-solving the model
     ("rotorcheck.rig",),  # a rig's assembled model at one speed as one object
     ("rotorcheck.updating",),  # model updating on the benign parameters
+    ("rotorcheck.ranking",),  # candidate elements ranked by their best fits (one ranking: detect and locate)
     ("rotorcheck.location",),  # candidate elements with certified severity intervals
     ("rotorcheck.detectability",),  # what a rig, its sensors and noise can detect, per element
     ("rotorcheck.baseline", "rotorcheck.report"),

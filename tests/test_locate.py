@@ -71,7 +71,12 @@ def test_detect_report_carries_the_location(base0: Path) -> None:
     base = read_baseline(base0 / "baseline.h5")
     cfg, _, runs = workflow.load_rig_and_runs(S / "open_crack_0rpm.h5", None, base0 / "baseline.h5")
     outcome = workflow.detect(cfg, base, runs[0])
-    assert outcome.verdict.verdict == "damage" and "location" not in outcome.report()
+    # a damage verdict says where: the ranking (issue 30), the sample's crack element first, no certificate yet
+    rep = outcome.report()
+    assert outcome.verdict.verdict == "damage" and rep["location"]["certified"] is False
+    assert rep["best_element"] == 4 and rep["location"]["best_element"] == 4
+    assert "element 4" in rep["location"]["summary"]
+    assert rep["location"]["ranking"]["elements"][0]["element"] == 4
     outcome.location = workflow.locate_damage(cfg, base, runs[0], elements=(4,))
     loc = outcome.report()["location"]
     assert loc["best_element"] == 4 and loc["candidates"][0]["loss_interval"][0] <= 0.54

@@ -33,7 +33,11 @@ def test_own_rig_end_to_end_without_rig_after_fit_noise(tmp_path: Path, capsys: 
     capsys.readouterr()
     assert main(["detect", str(tmp_path / "c.h5"), "--out", str(out), "--no-plots", "--json"]) == EXIT_DAMAGE
     doc = json.loads(capsys.readouterr().out)
-    assert doc["rig_id"] == "overhung_rig" and doc["best_element"] == 4
+    # one probe does not separate elements 1-4 of this rig (issue 30: their best fits' misfits are within
+    # 0.1 chi-square units): the diagnosis ranks them with their relative likelihoods instead of naming one
+    lik = {c["element"]: c["relative_likelihood"] for c in doc["location"]["candidates"]}
+    assert doc["rig_id"] == "overhung_rig" and doc["location"]["kind"] == "ranked" and lik[4] >= 0.15
+    assert doc["best_element"] in (1, 2, 3, 4) and "relative likelihood" in doc["location"]["summary"]
     assert any("no damage port" in n for n in doc["notes"])
     assert main(["detect", str(tmp_path / "r.h5"), "--out", str(out), "--no-plots", "--force"]) == EXIT_OK
 

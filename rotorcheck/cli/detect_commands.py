@@ -20,6 +20,7 @@ from rotorcheck.cli.common import (
     PlotFormatOpt,
     RigOpt,
     RunOpt,
+    Steps,
     app,
     element_list,
     emit_json,
@@ -82,8 +83,9 @@ def detect(
                   if plots else []))
     claim_outputs(targets, force, "detect", fresh=targets)  # one run at a time writes them
     settings = workflow.DetectorSettings(confidence, false_alarm, fail_at_points(fail_at))
-    with progress(f"detecting {sweep.name} against {base_path}"):
-        check = workflow.detect_pairs(cfg, rig_file, sweep, base_path, pairs, rule, settings, locate, say=err.print)
+    with Steps(f"detecting {sweep.name} against {base_path}", quiet=as_json) as tick:
+        check = workflow.detect_pairs(cfg, rig_file, sweep, base_path, pairs, rule, settings, locate, say=err.print,
+                                      progress=tick)
     summary: list[dict[str, Any]] = []
     written: list[Path] = []
     for d, (base, mrun), outcome in zip(dirs, pairs, check.outcomes):
@@ -178,8 +180,8 @@ def locate(
         raise InputError(sweep, "/runs", f"{len(pairs)} runs ({', '.join(r.run_id for _, r in pairs)}); choose one "
                          "with --run")
     base, mrun = pairs[0]
-    with progress(f"locating the change of {sweep.name} (every candidate element, certified)"):
-        res = workflow.locate_damage(cfg, base, mrun, false_alarm, els, section_length)
+    with Steps(f"locating the change of {sweep.name}", quiet=as_json) as tick:
+        res = workflow.locate_damage(cfg, base, mrun, false_alarm, els, section_length, progress=tick)
     report = LocationReport(str(sweep), mrun.sha256, str(base_path), cfg.rig_id, mrun.speed_rpm, res)
     doc = report.to_json()
     atomic_write_text(out / "location.json", render_json(doc))

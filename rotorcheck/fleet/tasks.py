@@ -193,9 +193,12 @@ def summary_row(task: SweepTask, report: DetectionReport, mask: Any) -> dict[str
                                "interval": [_num(b["interval"][0]), _num(b["interval"][1])],
                                "at_range_edge": bool(b.get("at_range_edge", False))}
                               for b in report.benign_parameters or []],
-        "joint_best_element": report.best_element, "stiffness_loss": _num(report.stiffness_loss),
+        "joint_best_element": report.joint_best_element, "stiffness_loss": _num(report.stiffness_loss),
         "stiffness_loss_lo": _num(interval[0]), "stiffness_loss_hi": _num(interval[1]),
-        "location_best_element": None, "location_summary": "",  # filled from the locate stage's result
+        # the diagnosis's where (damage verdicts: the ranked elements); the locate stage's certified one replaces it
+        "location_best_element": report.best_element,
+        "location_summary": "" if report.verdict != "damage" or report.location is None
+        else report.location.summary(),
     }
     return row
 
@@ -283,7 +286,8 @@ def run_locate(task: SweepTask) -> dict[str, Any]:
         _maybe_die(task, tmp)
         with one_blas_thread():
             cfg, _, base, mrun = _inputs(task)
-            res = workflow.locate_damage(cfg, base, mrun, task.settings.false_alarm)
+            # only damaged sweeps are located: the detector's verdict is the row's (no second detection)
+            res = workflow.locate_damage(cfg, base, mrun, task.settings.false_alarm, damage=True)
         report = LocationReport(task.sweep, task.sweep_sha256, task.baseline, cfg.rig_id, mrun.speed_rpm, res)
         atomic_write_text(tmp / "location.json", render_json(report.to_json()))
         atomic_write_text(tmp / DONE, task.task_key + "\n")

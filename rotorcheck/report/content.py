@@ -44,14 +44,12 @@ def headline_damage(report: DetectionReport) -> list[str]:
 
 
 def best_candidate(report: DetectionReport) -> str | None:
-    """The joint test's best candidate element and its loss with the interval, in words; None unless the verdict
-    is damage (a healthy verdict shows no finding) and the report holds one."""
-    interval, loss = report.stiffness_loss_interval, report.stiffness_loss
-    if report.verdict != "damage" or report.best_element is None or not interval or loss is None:
+    """Where, in words: the diagnosis's location summary (the ranked candidate elements with their relative
+    likelihoods; with ``--locate`` the certified intervals and exclusions; or why it is not locatable);
+    None unless the verdict is damage (a healthy verdict shows no finding) and the report holds one."""
+    if report.verdict != "damage" or report.location is None:
         return None
-    lo, hi = interval
-    return (f"element {report.best_element}: stiffness loss {100 * loss:.3g} % [{100 * lo:.3g}, {100 * hi:.3g}] "
-            "(95 %, linearized)")
+    return report.location.summary()
 
 
 def fmt_p(p: float | None) -> str:
@@ -101,12 +99,10 @@ def _rests_on(report: DetectionReport) -> str:
 def _where(report: DetectionReport) -> tuple[str, int | None]:
     """Where, as far as the report says, and the element to name in the next step."""
     loc = report.location
-    if loc is not None and loc.best is not None:
-        return f"located: {loc.summary()}", loc.best.element
-    best = best_candidate(report)
-    if best is not None:
-        e = report.best_element
-        return f"the most likely place is {best.replace(':', element_span(report, e) + ':', 1)}", e
+    if loc is not None and loc.damage_found:  # the one ranking detect and locate report (rotorcheck.ranking)
+        b = loc.best
+        e = None if b is None or loc.kind == "not locatable" else b.element
+        return (loc.summary() if e is None else f"where: element {e}{element_span(report, e)}; {loc.summary()}"), e
     if report.n_fault_points:
         return (f"the change shows at {report.n_fault_points} frequency points; the element is not estimated "
                 "with this rule (run rotorcheck locate)"), None
@@ -165,9 +161,9 @@ def method_paragraphs(report: DetectionReport, ranges: Callable[[list[float]], s
                f"{report.benign_model_error:g}"
                + (f"; {learned} benign directions learned from healthy sweeps." if learned else
                   "; no benign directions learned from healthy sweeps."))
-    best = best_candidate(report)
-    if best is not None:
-        out.append(f"Best candidate: {best}.")
+    if report.joint_best_element is not None and report.verdict == "damage":
+        out.append(f"The joint test's own element (its linearized statistic, not the diagnosis): "
+                   f"{report.joint_best_element}.")
     beyond = report.fault_beyond_benign_frequencies_hz
     if beyond is not None:
         out.append(f"{len(beyond)} points stay unexplained after the fitted benign change (per point, the noise "

@@ -36,7 +36,7 @@ if TYPE_CHECKING:  # annotations only
     from rotorcheck.location import LocationResult
 
 VERDICT_COLOUR = {"damage": "#b00020", "healthy": "#1b7a2f", "inconclusive": "#a66a00", "located": "#b00020",
-                  "nothing to locate": "#1b7a2f"}
+                  "ranked": "#b00020", "not locatable": "#b00020", "nothing to locate": "#1b7a2f"}
 
 _STYLE = """
 body{font-family:system-ui,-apple-system,"Segoe UI",Roboto,Helvetica,Arial,sans-serif;margin:2em auto;
@@ -158,7 +158,7 @@ def _key_numbers(report: DetectionReport) -> list[tuple[str, str]]:
                                           f"false alarm {report.false_alarm:g} per sweep)"))
     best = best_candidate(report)
     if best is not None:
-        rows.append(("best candidate element", best))
+        rows.append(("where", best))
     if report.channel_pairs:
         rows.append(("channel pairs (output<-input)", ", ".join(report.channel_pairs)))
     return rows
@@ -212,7 +212,8 @@ def _percent_interval(lo: float | None, hi: float | None) -> str:
 
 
 def location_table(loc: LocationResult) -> str:
-    """Every candidate element: status, rank, certified loss and depth intervals, what excluded it."""
+    """Every candidate element: status, rank, certified loss and depth intervals, what excluded it; above it
+    the ranking's first with its relative likelihood (the one ranking detect and locate report)."""
     rows = []
     for c in loc.candidates:
         exc = [float(x) for x in c.excluding_frequencies_hz]
@@ -220,7 +221,12 @@ def location_table(loc: LocationResult) -> str:
                      _percent_interval(*c.depth_interval),
                      ", ".join(f"{x:.1f}" for x in exc[:12]) + (f" (+{len(exc) - 12} more)" if len(exc) > 12 else "")])
     best = loc.best
-    head = f"<p>Best element: <b>{_e(best.element)}</b>.</p>" if best is not None else "<p>No element located.</p>"
+    if best is None:
+        head = "<p>No element located.</p>"
+    else:
+        ranked = ", ".join(f"element {c.element} {c.likelihood:.2f}" for c in loc.ranked[:4]
+                           if c.likelihood is not None)
+        head = f"<p>Best element: <b>{_e(best.element)}</b> ({_e(loc.kind)}; relative likelihoods: {_e(ranked)}).</p>"
     return head + table(("element", "status", "rank", "stiffness loss (%)", "crack depth (% of diameter)",
                          "excluded by (Hz)"), rows, (True, False, True, False, False, False))
 
@@ -228,8 +234,8 @@ def location_table(loc: LocationResult) -> str:
 def render_location_html(report: LocationReport, plots: Sequence[str | Path], rig_sha256: str | None = None) -> str:
     """location.html of a locate run: the summary, the figure, every candidate, inputs, software."""
     res = report.result
-    best = res.best
-    parts = [f"<h1>rotorcheck location: {_verdict_badge('located' if best is not None else 'nothing to locate')}</h1>",
+    badge = "nothing to locate" if res.kind == "nothing" else res.kind
+    parts = [f"<h1>rotorcheck location: {_verdict_badge(badge)}</h1>",
              f"<p>Sweep <code>{_e(report.sweep)}</code> on rig <code>{_e(report.rig_id)}</code> at "
              f"{_num(report.speed_rpm, 'g')} rpm.</p>",
              f"<p id=\"reason\">{_e(res.summary())}</p>"]

@@ -111,9 +111,14 @@ class DetectionReport:
     false_alarm: float | None = None  # per-sweep false-alarm rate the threshold gives
     candidate_elements: list[int] | None = None  # shaft elements tested (1-based)
     element_statistic: list[float] | None = None  # T_e per candidate
+    joint_best_element: int | None = None  # the joint test's largest T_e (its linearized GLR; not the diagnosis)
+    joint_stiffness_loss: float | None = None  # its linearized loss estimate (fraction)
+    joint_stiffness_loss_interval: list[float] | None = None  # 95 %, linearized
+    # the diagnosis (damage verdicts): the ranking's first element, as locate names it (rotorcheck.ranking)
     best_element: int | None = None
-    stiffness_loss: float | None = None  # estimated loss of the best element's stiffness (fraction)
-    stiffness_loss_interval: list[float] | None = None  # 95 %, linearized
+    best_element_likelihood: float | None = None  # its relative likelihood among the candidates
+    stiffness_loss: float | None = None  # its best-fit loss (fraction)
+    stiffness_loss_interval: list[float] | None = None  # certified (detect --locate), else None
     detectable_stiffness_loss: list[float] | None = None  # per candidate: 90 % power at false_alarm
     benign_parameters: list[dict[str, Any]] | None = None  # {name, estimate, interval, unit, at_range_edge}
     benign_model_error: float | None = None  # kappa: relative error of the model's benign prediction in H0

@@ -99,6 +99,10 @@ class AffineModel:
                 terms.append((kind, *_factor(A)))
             out.append(tuple(terms))
         object.__setattr__(self, "factors", tuple(out))
+        # every matrix of Z stacked (rows K, M, D, then each parameter's terms), one matrix product per stack
+        mats = [self.K, self.M, self.D, *(A for prm in self.parameters for _, A in prm.terms)]
+        object.__setattr__(self, "_stack", np.stack([np.asarray(A, dtype=float).reshape(-1) for A in mats]))
+        object.__setattr__(self, "_terms", tuple((i, k) for i, prm in enumerate(self.parameters) for k, _ in prm.terms))
 
     @staticmethod
     def _s(kind: str, w: float) -> complex:
@@ -115,16 +119,28 @@ class AffineModel:
 
     def dynamic_stiffness_stack(self, w: np.ndarray, theta: np.ndarray) -> np.ndarray:
         """``Z(w_k, theta_k)`` (m, n, n) complex N/m for frequencies ``w`` (m,) rad/s and parameters
-        ``theta`` (p,) for all or (m, p) one row per frequency."""
-        w = np.asarray(w, dtype=float)
+        ``theta`` (p,) for all or (m, p) one row per frequency: two real matrix products over the stacked
+        matrices (:attr:`_stack`), the real and the imaginary part."""
+        w = np.asarray(w, dtype=float).reshape(-1)
         th = np.broadcast_to(np.asarray(theta, dtype=float), (w.size, len(self.parameters)))
-        Z = self.K[None] - (w**2)[:, None, None] * self.M[None] + 1j * w[:, None, None] * self.D[None]
-        for i, prm in enumerate(self.parameters):
+        terms: tuple[tuple[int, str], ...] = self._terms  # type: ignore[attr-defined]
+        stack: np.ndarray = self._stack  # type: ignore[attr-defined]
+        re = np.zeros((w.size, 3 + len(terms)))
+        im = np.zeros_like(re)
+        re[:, 0], re[:, 1], im[:, 2] = 1.0, -(w**2), w
+        for col, (i, kind) in enumerate(terms, start=3):
             t = th[:, i]
-            if np.any(t != 0.0):
-                for kind, A in prm.terms:
-                    s = {"K": np.ones_like(w), "D": 1j * w, "M": -(w**2)}[kind]
-                    Z = Z + (t * s)[:, None, None] * A[None]
+            if kind == "K":
+                re[:, col] = t
+            elif kind == "D":
+                im[:, col] = t * w
+            else:
+                re[:, col] = -t * w**2
+        n = self.K.shape[0]
+        Z = np.empty((w.size, n, n), dtype=complex)
+        for part, coef in ((Z.real, re), (Z.imag, im)):
+            rows = np.flatnonzero(np.any(coef != 0.0, axis=0))
+            part[...] = (coef[:, rows] @ stack[rows]).reshape(w.size, n, n) if rows.size else 0.0
         return Z
 
     def receptance(self, w: float, theta: np.ndarray) -> complex:

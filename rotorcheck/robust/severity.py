@@ -125,11 +125,12 @@ def _s_of(kind: np.ndarray, w: np.ndarray) -> np.ndarray:
 
 def examine_points(model: AffineModel, fac: _Factors, pts: Points, centre: np.ndarray, half: np.ndarray
                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Every point at once: ``(explained at the centre (m,), margin of the exclusion test (m,) (> 0:
-    excluded; -inf where explained or unbounded) ``centre``, ``half`` (p,) for every point or (m, p) one
-    box per point), each parameter's share of the bound (m, p), the bound
-    on the scaled ``||N||`` (m,): the small-gain bound is finite below 1)`` -- the
-    batched form of :func:`rotorcheck.robust.real_box._examine` (the same bounds)."""
+    """Every point at once, for the box ``centre``, ``half`` (p,) (or (m, p) one box per point): ``(explained
+    at the centre (m,), margin of the exclusion test (m,) (> 0: excluded; -inf where explained or
+    unbounded), each parameter's share of the bound (m, p))`` -- the batched form of
+    :func:`rotorcheck.robust.real_box._examine` (the same bounds). The margin is exact at the largest (the
+    point that decides) and wherever it could be the largest; elsewhere a lower bound (the Frobenius norm
+    for the small-gain condition instead of the spectral norm)."""
     w = pts.w
     p = len(model.parameters)
     half = np.broadcast_to(np.asarray(half, dtype=float), (w.size, p))
@@ -157,14 +158,8 @@ def examine_points(model: AffineModel, fac: _Factors, pts: Points, centre: np.nd
         sc[:, cols] = np.where(good, np.sqrt(np.where(good, nx, 1.0) / np.where(good, ny, 1.0)), 1.0)[:, None]
     xs, ys = x / sc, y * sc
     Ns = sc[:, :, None] * N / sc[:, None, :]
-    nrm = np.sqrt(np.sum(np.abs(Ns) ** 2, axis=(1, 2)))
-    big = nrm >= 0.5  # the exact norm only where the Frobenius bound costs much
-    if np.any(big):
-        Nb = Ns[big]
-        top = np.linalg.eigvalsh(np.conj(np.swapaxes(Nb, 1, 2)) @ Nb)[:, -1]  # ||N||^2, Hermitian: cheaper than svd
-        nrm[big] = np.minimum(nrm[big], np.sqrt(np.maximum(top, 0.0)) * (1.0 + 1e-12))
+    frob = np.sqrt(np.sum(np.abs(Ns) ** 2, axis=(1, 2)))
     with np.errstate(divide="ignore", invalid="ignore"):
-        rad = np.where(nrm < 1.0, np.linalg.norm(xs, axis=1) * np.linalg.norm(ys, axis=1) / (1.0 - nrm), np.inf)
         rho = g_c / pts.g0
         pred = pts.t_healthy * rho
         den = np.abs(pred) ** 2
@@ -173,12 +168,39 @@ def examine_points(model: AffineModel, fac: _Factors, pts: Points, centre: np.nd
         resid = np.abs(pts.t_new - gm * pred)
         extra = pts.tolerance + pts.relative_error * np.abs(pts.t_healthy) * np.abs(gm * rho - 1.0)
         ok = resid <= pts.z * np.sqrt(pts.var_new + np.abs(gm * rho) ** 2 * pts.var_healthy + pts.a2) + extra
-        eps = rad / np.abs(pts.g0)
-        low = resid - pts.g_hi * np.abs(pts.t_healthy) * eps
-        change = np.maximum(np.abs(pts.g_lo * rho - 1.0), np.abs(pts.g_hi * rho - 1.0)) + pts.g_hi * eps
-        extra = pts.tolerance + pts.relative_error * np.abs(pts.t_healthy) * change
-        up = pts.z * np.sqrt(pts.var_new + (pts.g_hi * (np.abs(rho) + eps)) ** 2 * pts.var_healthy + pts.a2) + extra
-        margin = np.where(ok | ~np.isfinite(rad), -np.inf, low - up)
+        gain_change = np.maximum(np.abs(pts.g_lo * rho - 1.0), np.abs(pts.g_hi * rho - 1.0))
+        xy = np.linalg.norm(xs, axis=1) * np.linalg.norm(ys, axis=1)
+
+        def margin_of(nrm: np.ndarray, at: np.ndarray | slice = slice(None)) -> np.ndarray:
+            """The exclusion margin at the points ``at`` for the norm bounds ``nrm`` (falls as nrm grows)."""
+            rad = np.where(nrm < 1.0, xy[at] / (1.0 - nrm), np.inf)
+            eps = rad / np.abs(pts.g0[at])
+            low = resid[at] - pts.g_hi * np.abs(pts.t_healthy[at]) * eps
+            change = gain_change[at] + pts.g_hi * eps
+            extra = pts.tolerance[at] + pts.relative_error[at] * np.abs(pts.t_healthy[at]) * change
+            up = pts.z * np.sqrt(pts.var_new[at] + (pts.g_hi * (np.abs(rho[at]) + eps)) ** 2 * pts.var_healthy[at]
+                                 + pts.a2[at]) + extra
+            return np.where(ok[at] | ~np.isfinite(rad), -np.inf, low - up)
+
+        # the norm bound: Frobenius, and where that costs much (>= 0.5) the exact spectral norm; the exact one
+        # only at the points that can hold the largest margin (the margin falls as the bound grows: a lower
+        # bound of the norm, the largest column or row, bounds each point's margin from above)
+        margin = margin_of(frob)
+        big = np.flatnonzero(frob >= 0.5)
+        if big.size:
+            low_n = np.maximum(np.linalg.norm(Ns[big], axis=1).max(axis=1), np.linalg.norm(Ns[big], axis=2).max(axis=1))
+            best = float(np.max(margin)) if margin.size else -np.inf
+            hope = big[margin_of(low_n, big) >= best] if np.isfinite(best) else big
+            hope = hope[~ok[hope]]
+            if hope.size:
+                # ||N_s|| with N_s = P Q, P = diag(sc) V^T (r, n), Q = Z^-1 U diag(scale / sc) (n, r): with P = Q_p R,
+                # ||N_s|| = ||R Q||, an n x n Hermitian eigenvalue problem instead of r x r (r > n with E and speed)
+                P = sc[hope][:, :, None] * fac.V.T[None]
+                R = np.linalg.qr(P, mode="r")
+                C = R @ (Xu[hope] / sc[hope][:, None, :])
+                top = np.linalg.eigvalsh(C @ np.conj(np.swapaxes(C, 1, 2)))[:, -1]  # ||N||^2, Hermitian
+                nrm = np.minimum(frob[hope], np.sqrt(np.maximum(top, 0.0)) * (1.0 + 1e-12))
+                margin[hope] = margin_of(nrm, hope)
     return ok, margin, share
 
 
@@ -325,17 +347,22 @@ def _end(model: AffineModel, fac: _Factors, pts: Points, lo: np.ndarray, hi: np.
 
 
 def severity_interval(model: AffineModel, pts: Points, lo: np.ndarray, hi: np.ndarray, index: int,
-                      tol: float = 0.01, slices: int = 16, max_boxes: int = 16) -> SeverityInterval:
+                      tol: float = 0.01, slices: int = 16, max_boxes: int = 16, witnessed_at_lo: bool = False
+                      ) -> SeverityInterval:
     """Certify the interval of parameter ``index`` over which the box ``[lo, hi]`` (p,) explains every
     point jointly (module docstring; each point's ``b``, ``c`` in ``pts``); ``tol`` the width to which
     the end slices are halved; ``slices`` the first division of the range; ``max_boxes`` the budget of
-    sub-boxes per slice."""
+    sub-boxes per slice. ``witnessed_at_lo``: the caller holds a witness with the parameter at ``lo[index]``
+    (e.g. the healthy hypothesis's): the lower end is ``lo[index]``, attained, without a search."""
     lo, hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
     used: Counter[int] = Counter()
     cache: dict[tuple[float, float], str] = {}
     fac = _Factors.of(model)
     n_sl = slices if hi[index] > lo[index] else 1
-    lower, w_lo, n1, done1 = _end(model, fac, pts, lo, hi, index, False, tol, n_sl, max_boxes, used, cache)
+    if witnessed_at_lo:
+        lower, w_lo, n1, done1 = float(lo[index]), float(lo[index]), 0, True
+    else:
+        lower, w_lo, n1, done1 = _end(model, fac, pts, lo, hi, index, False, tol, n_sl, max_boxes, used, cache)
     if not np.isfinite(lower):
         return SeverityInterval("excluded", float("nan"), float("nan"), (float("nan"), float("nan")),
                                 tuple(k for k, _ in used.most_common()), n1, False)

@@ -11,6 +11,7 @@ from pathlib import Path
 from rotorcheck.baseline import Baseline, read_baselines
 from rotorcheck.config import RigConfig
 from rotorcheck.errors import InputError
+from rotorcheck.progress import Progress
 from rotorcheck.workflow.detection import EXIT_CODES, DetectionOutcome, baseline_for_speed, check_baseline, detect
 from rotorcheck.workflow.detectors import DetectorSettings
 from rotorcheck.workflow.locating import locate_damage
@@ -69,10 +70,11 @@ def paired_runs(sweep: str | Path, baseline_path: str | Path, rig_path: str | Pa
 def detect_pairs(cfg: RigConfig, rig_file: Path, sweep: str | Path, baseline_path: str | Path,
                  pairs: list[tuple[Baseline, MeasuredRun]], rule: str | None = None,
                  settings: DetectorSettings | None = None, locate: bool = False,
-                 say: Callable[[str], None] | None = None) -> SweepCheck:
+                 say: Callable[[str], None] | None = None, progress: Progress | None = None) -> SweepCheck:
     """Each (baseline run, run) of :func:`paired_runs` detected with the detector ``rule`` (None: the default)
-    and ``settings``; with ``locate``, a damage verdict is located too (``outcome.location``). ``say`` hears
-    progress in words."""
+    and ``settings``, a damage verdict with where (the ranked candidate elements); with ``locate`` the
+    certificates too (``outcome.location``). ``say`` hears progress in words, ``progress`` each element
+    ranked or certified (:data:`rotorcheck.progress.Progress`)."""
     s = settings if settings is not None else DetectorSettings()
     if not pairs:
         raise InputError(sweep, "/runs", "no run to check")
@@ -80,9 +82,12 @@ def detect_pairs(cfg: RigConfig, rig_file: Path, sweep: str | Path, baseline_pat
     for base, run in pairs:
         if say is not None and len(pairs) > 1:
             say(f"run {run.run_id}: detecting against the baseline's run {base.run_id}")
-        outcome = detect(cfg, base, run, s.fail_at, s.confidence, rule, s.false_alarm)
+        outcome = detect(cfg, base, run, s.fail_at, s.confidence, rule, s.false_alarm, progress)
         if locate and outcome.verdict.verdict == "damage":
-            outcome.location = locate_damage(cfg, base, run, s.false_alarm)
+            # the deeper search on detect's own ranking: the same rank 1, with certificates
+            prior = outcome.location
+            outcome.location = locate_damage(cfg, base, run, s.false_alarm, damage=True,
+                                             ranking=None if prior is None else prior.ranking, progress=progress)
         outcomes.append(outcome)
     return SweepCheck(Path(sweep), cfg, rig_file, Path(baseline_path), outcomes)
 
@@ -90,7 +95,7 @@ def detect_pairs(cfg: RigConfig, rig_file: Path, sweep: str | Path, baseline_pat
 def check_sweep(sweep: str | Path, baseline_path: str | Path, rig_path: str | Path | None = None,
                 run_id: str | None = None, rule: str | None = None, settings: DetectorSettings | None = None,
                 resample: bool = False, locate: bool = False, say: Callable[[str], None] | None = None,
-                ) -> SweepCheck:
+                progress: Progress | None = None) -> SweepCheck:
     """A sweep file against a baseline: :func:`paired_runs`, then :func:`detect_pairs`."""
     cfg, rig_file, pairs = paired_runs(sweep, baseline_path, rig_path, run_id, resample, say)
-    return detect_pairs(cfg, rig_file, sweep, baseline_path, pairs, rule, settings, locate, say)
+    return detect_pairs(cfg, rig_file, sweep, baseline_path, pairs, rule, settings, locate, say, progress)

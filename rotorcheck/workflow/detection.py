@@ -15,6 +15,7 @@ from rotorcheck.detectability import Detectability, detectability, linearized
 from rotorcheck.errors import InputError
 from rotorcheck.location import LocationResult
 from rotorcheck.nominal import NominalModel, primary_pair
+from rotorcheck.progress import Progress
 from rotorcheck.report.content import conclusion
 from rotorcheck.report.schema import DetectionReport
 from rotorcheck.robust import identify
@@ -27,6 +28,7 @@ from rotorcheck.workflow.benign import benign_table
 from rotorcheck.workflow.detectors import Detection, DetectorSettings, make_detector
 from rotorcheck.workflow.detectors.base import HARMONICS_KEPT_OUT
 from rotorcheck.workflow.directional import DirectionalDamage, damage_per_direction
+from rotorcheck.workflow.locating import locate_damage
 from rotorcheck.workflow.measured import (
     MeasuredRun,
     _show_pairs,
@@ -34,6 +36,7 @@ from rotorcheck.workflow.measured import (
     baseline_pairs,
     frf_estimate,
     grid_mismatch,
+    healthy_frf_of,
     pair_keys,
     per_pair,
 )
@@ -247,9 +250,9 @@ class DetectionOutcome:
             rep.false_alarm, rep.candidate_elements = j.false_alarm, list(j.elements)
             rep.element_statistic = [float(x) for x in j.t_element]
             if j.elements:
-                rep.best_element = j.elements[j.best]
-                rep.stiffness_loss = float(j.severity[j.best])
-                rep.stiffness_loss_interval = list(j.severity_interval)
+                rep.joint_best_element = j.elements[j.best]
+                rep.joint_stiffness_loss = float(j.severity[j.best])
+                rep.joint_stiffness_loss_interval = list(j.severity_interval)
             rep.detectable_stiffness_loss = [float(x) for x in j.detectable]
             rep.benign_parameters = benign_table(j, self.rig)
             rep.benign_model_error, rep.learned_benign_directions = j.kappa, j.learned
@@ -257,8 +260,15 @@ class DetectionOutcome:
             assert rem is not None
             rep.fault_beyond_benign = rem
             rep.fault_beyond_benign_frequencies_hz = [float(x) for x in f[rem]]
-        if self.location is not None:
-            rep.location = self.location
+        loc = self.location
+        if loc is not None:
+            rep.location = loc
+            b = loc.best
+            if b is not None:  # the diagnosis's element: the ranking's first (detect and locate name the same)
+                rep.best_element, rep.stiffness_loss = b.element, b.loss_estimate
+                rep.best_element_likelihood = b.likelihood
+                if loc.certified and b.status == "consistent":
+                    rep.stiffness_loss_interval = [float(x) for x in b.loss_interval]
         if self.detectability is not None:
             rep.detectability = self.detectability.to_dict()
         dxy = self.damage_xy
@@ -339,7 +349,7 @@ def baseline_for_speed(bases: list[Baseline], rig: RigConfig, run: MeasuredRun, 
 
 def detect(
     rig: RigConfig, baseline: Baseline, run: MeasuredRun, fail_at: tuple[int, ...] = (), confidence: float = 0.99,
-    rule: str | None = None, false_alarm: float = 0.01,
+    rule: str | None = None, false_alarm: float = 0.01, progress: Progress | None = None,
 ) -> DetectionOutcome:
     """Steps 4-5: fault points of ``run`` against the healthy ``baseline`` and the verdict (the detector
     ``rule`` of :mod:`rotorcheck.workflow.detectors`; None: the default for the rig and baseline), then the
@@ -351,13 +361,21 @@ def detect(
     family-wise), 'system' / 'data' (against the nominal model with gamma_h; the baseline's ``enclose``).
     """
     settings = DetectorSettings(confidence, false_alarm, tuple(fail_at))
-    return diagnose(rig, baseline, run, make_detector(rig, baseline, rule, settings).detect(run))
+    return diagnose(rig, baseline, run, make_detector(rig, baseline, rule, settings).detect(run), progress)
 
 
-def diagnose(rig: RigConfig, baseline: Baseline, run: MeasuredRun, found: Detection) -> DetectionOutcome:
+def locatable_with(rig: RigConfig, baseline: Baseline) -> bool:
+    """A damage can be located on ``rig`` against ``baseline``: a rotor and a measured healthy FRF."""
+    return rig.kind == "rotor" and baseline.enclose == "measured" and healthy_frf_of(baseline) is not None
+
+
+def diagnose(rig: RigConfig, baseline: Baseline, run: MeasuredRun, found: Detection,
+             progress: Progress | None = None) -> DetectionOutcome:
     """What follows a detector's answer ``found``: the damage dynamics D_u at the damage port (eq. 3.11) with
     its bound (eq. 3.12), anchored at the measured healthy FRF where the baseline holds it, per direction
-    with several channel pairs, and what the sweep could have revealed (joint test)."""
+    with several channel pairs, what the sweep could have revealed (joint test), and on a damage verdict
+    where (:func:`rotorcheck.workflow.locating.locate_damage` without certificates: the candidate elements
+    ranked by the one machinery ``locate`` uses; ``progress`` hears each element done)."""
     if baseline.gamma is None:
         raise InputError(None, "gamma", "baseline holds only a noise fit; run 'rotorcheck validate'")
     model = nominal_for(rig, run.frequency_hz, run.speed_rpm)
@@ -431,8 +449,12 @@ def diagnose(rig: RigConfig, baseline: Baseline, run: MeasuredRun, found: Detect
                          "functions plus an exact remainder bound), witness_re/witness_im the range attained inside "
                          "it; the model's receptances to and from the damage station taken as exact; "
                          "re_interval/im_interval: 95 % by Monte Carlo over the noise")
+    location = None
+    if found.verdict.verdict == "damage" and locatable_with(rig, baseline):
+        # where: the one ranking of candidate elements that locate reports too (locate adds the certificates)
+        location = locate_damage(rig, baseline, run, certify=False, damage=True, progress=progress)
     diagnosis = Diagnosis(run.frequency_hz, damage, dset, anchored, anchored_set, noise_only, damage_xy,
-                          detectability=sweep_det, notes=notes)
+                          location=location, detectability=sweep_det, notes=notes)
     return DetectionOutcome(rig, baseline, run, model, found, diagnosis)
 
 
@@ -500,12 +522,3 @@ def anchored_summary(outcome: DetectionOutcome) -> str:
     return (f"damage dynamics at {damage_port_name(outcome.rig)} (anchored at the healthy data, median over {where}): "
             f"Re D_u = {np.median(a.real) / 1e3:.4g} kN/m, |D_u| within [{np.median(lo) / 1e3:.4g}, "
             f"{np.median(hi) / 1e3:.4g}] kN/m (positive: stiffness loss)")
-
-
-def healthy_frf_of(baseline: Baseline) -> np.ndarray | None:
-    if baseline.healthy_frf is not None:
-        return np.asarray(baseline.healthy_frf)[:, 0]
-    if baseline.input_phasor is not None and baseline.output_phasor is not None:
-        return np.asarray(baseline.output_phasor[:, 0] / baseline.input_phasor[:, 0])
-    return None
-

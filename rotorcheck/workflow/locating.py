@@ -1,7 +1,11 @@
-"""Where and how big: every shaft element a candidate for a local stiffness loss (``rotorcheck locate``)."""
+"""Where and how big: every shaft element a candidate for a local stiffness loss, ranked by one machinery
+(:func:`rotorcheck.ranking.rank_elements`) for ``detect``'s diagnosis and ``rotorcheck locate`` (which adds
+the certificates: exclusions and certified intervals)."""
 
 from __future__ import annotations
 
+import dataclasses
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -10,43 +14,36 @@ from rotorcheck.baseline import Baseline
 from rotorcheck.config import RigConfig
 from rotorcheck.errors import InputError
 from rotorcheck.location import LocationResult, locate
-from rotorcheck.signatures import benign_box
+from rotorcheck.nominal import ChannelPair
+from rotorcheck.progress import Progress
+from rotorcheck.ranking import Ranking, SweepChange, sweep_change
+from rotorcheck.signatures import BenignBox, benign_box
 from rotorcheck.variability import benign_at
 from rotorcheck.workflow.benign import KAPPA_NOMINAL, benign_model
-from rotorcheck.workflow.detection import healthy_frf_of
-from rotorcheck.workflow.measured import MeasuredRun, frf_estimate, per_pair, run_harmonics
+from rotorcheck.workflow.detectors import DetectorSettings, make_detector
+from rotorcheck.workflow.measured import MeasuredRun, frf_estimate, healthy_frf_of, per_pair, run_harmonics
 from rotorcheck.workflow.rigs import baseline_updates, check_elements, updated_rig
 
 
-def locate_damage(rig: RigConfig, baseline: Baseline, run: MeasuredRun, false_alarm: float = 0.01,
-                  elements: tuple[int, ...] | None = None, section_length: float | None = None,
-                  both: bool = True, **options: Any) -> LocationResult:
-    """Where and how big (:func:`rotorcheck.location.locate`) against a baseline validated with
-    ``--enclose measured``: :func:`locate_run` with its healthy FRF, speed and updated model."""
-    if baseline.enclose != "measured" or healthy_frf_of(baseline) is None:
-        raise InputError(None, "--baseline", "locating needs a baseline validated with --enclose measured "
-                         f"(this one: {baseline.enclose!r})")
-    return locate_run(updated_rig(rig, baseline_updates(baseline)), run, np.asarray(baseline.healthy_frf),
-                      np.asarray(baseline.healthy_frf_var), baseline.speed_rpm, false_alarm, elements,
-                      section_length, both, **options)
+@dataclass(frozen=True)
+class LocationInputs:
+    """What a location reads, made once per run: the benign box, the channel pairs and the sweep's change."""
+
+    rig: RigConfig
+    box: BenignBox
+    pairs: list[ChannelPair]
+    change: SweepChange
+    harmonics_warning: str = ""  # the points left out on a shaft harmonic ('' when none)
 
 
-def locate_run(rig: RigConfig, run: MeasuredRun, healthy_frf: np.ndarray, healthy_var: np.ndarray,
-               speed_rpm: float | None = None, false_alarm: float = 0.01, elements: tuple[int, ...] | None = None,
-               section_length: float | None = None, both: bool = True, **options: Any) -> LocationResult:
-    """Every shaft element (or ``elements``) as a candidate for a local stiffness loss
-    (:func:`rotorcheck.location.locate`), ``run`` against the healthy FRF (f,) or (f, P) and the variance
-    of its mean, the rig's benign parameters real in their ranges (at the healthy ``speed_rpm``; the run's
-    offset from it moves the speed range). With several channel pairs and ``both``, the rig's own actuator
-    -> sensor pair alone is located too (``result.single_channel``). ``section_length`` (m): the breathing
-    crack's, for depths. ``options`` go to :func:`rotorcheck.location.locate`. Points on a shaft harmonic (at
-    the run's or the healthy speed, :func:`~rotorcheck.workflow.measured.run_harmonics`) are not used."""
-
+def location_inputs(rig: RigConfig, run: MeasuredRun, healthy_frf: np.ndarray, healthy_var: np.ndarray,
+                    speed_rpm: float | None = None) -> LocationInputs:
+    """``run`` against the healthy FRF (f,) or (f, P) and the variance of its mean, the rig's benign
+    parameters real in their ranges (at the healthy ``speed_rpm``; the run's offset from it moves the
+    speed range). Points on a shaft harmonic (at the run's or the healthy speed,
+    :func:`~rotorcheck.workflow.measured.run_harmonics`) are not used."""
     if rig.kind != "rotor":
         raise InputError(None, "--rig", "locating needs a rotor's shaft elements; this rig is lumped")
-    if not 0.0 < false_alarm < 1.0:
-        raise InputError(None, "--false-alarm", f"must be in (0, 1), got {false_alarm}")
-    elements = check_elements(rig, elements)
     f = run.frequency_hz
     est = frf_estimate(run)
     n_pairs = est.frf.shape[1]
@@ -58,14 +55,59 @@ def locate_run(rig: RigConfig, run: MeasuredRun, healthy_frf: np.ndarray, health
     bm = benign_model(rig, f, speed, th, KAPPA_NOMINAL, run.speed_rpm - speed, None, pairs if n_pairs > 1 else None)
     env = np.zeros(f.size * n_pairs) if bm is None else np.asarray(bm.envelope, dtype=float)
     harmonics = run_harmonics([run], (speed,))
-    out = harmonics.flagged
-    res = locate(rig, box, pairs, f, speed, est.frf, est.var, th, vh, env, false_alarm, elements,
-                 crack_section_length=section_length, exclude=out, **options)
-    if both and n_pairs > 1:
-        res.single_channel = locate(rig, box.for_pair(pairs[0]), pairs[:1], f, speed, est.frf[:, :1],
-                                    est.var[:, :1], th[:, :1], vh[:, :1], env[:f.size], false_alarm, elements,
-                                    crack_section_length=section_length, exclude=out, **options)
-    if harmonics.n_flagged:
-        res.notes.append(harmonics.warning("the points the location uses"))
+    change = sweep_change(box, pairs, f, speed, est.frf, est.var, th, vh, env, harmonics.flagged)
+    warning = harmonics.warning("the points the location uses") if harmonics.n_flagged else ""
+    return LocationInputs(rig, box, pairs, change, warning)
+
+
+def locate_run(rig: RigConfig, run: MeasuredRun, healthy_frf: np.ndarray, healthy_var: np.ndarray,
+               speed_rpm: float | None = None, false_alarm: float = 0.01, elements: tuple[int, ...] | None = None,
+               section_length: float | None = None, both: bool = False, certify: bool = True,
+               damage: bool | None = None, ranking: Ranking | None = None, progress: Progress | None = None,
+               **options: Any) -> LocationResult:
+    """Every shaft element (or ``elements``) as a candidate for a local stiffness loss
+    (:func:`rotorcheck.location.locate` on :func:`location_inputs`): ranked, and with ``certify`` excluded or
+    given certified intervals. ``damage``: the detector's verdict where known; ``ranking`` one already made
+    for this run (``detect``'s). With several channel pairs and ``both``, the rig's own actuator -> sensor
+    pair alone is located too (``result.single_channel``; twice the time). ``section_length`` (m): the
+    breathing crack's, for depths. ``progress`` hears each element done; ``options`` go to
+    :func:`rotorcheck.location.locate`."""
+    if not 0.0 < false_alarm < 1.0:
+        raise InputError(None, "--false-alarm", f"must be in (0, 1), got {false_alarm}")
+    elements = check_elements(rig, elements)
+    inp = location_inputs(rig, run, healthy_frf, healthy_var, speed_rpm)
+    res = locate(rig, inp.box, inp.pairs, inp.change, false_alarm, elements, crack_section_length=section_length,
+                 ranking=ranking, certify=certify, damage=damage, progress=progress, **options)
+    if both and len(inp.pairs) > 1:
+        one = inp.change
+        cols = ("t_new", "var_new", "t_h", "var_h", "a", "err", "g_zero", "trusted", "change2", "B", "Cm")
+        first = {k: getattr(one, k)[:, :1] for k in cols}
+        single = dataclasses.replace(one, **first)
+        res.single_channel = locate(rig, inp.box.for_pair(inp.pairs[0]), inp.pairs[:1], single, false_alarm, elements,
+                                    crack_section_length=section_length, certify=certify, damage=damage, **options)
+    if inp.harmonics_warning:
+        res.notes.append(inp.harmonics_warning)
     return res
 
+
+def detector_says_damage(rig: RigConfig, baseline: Baseline, run: MeasuredRun, false_alarm: float = 0.01) -> bool:
+    """The default detector's verdict on ``run`` (as ``detect`` with its defaults and ``false_alarm``) is damage."""
+    found = make_detector(rig, baseline, None, DetectorSettings(false_alarm=false_alarm)).detect(run)
+    return found.verdict.verdict == "damage"
+
+
+def locate_damage(rig: RigConfig, baseline: Baseline, run: MeasuredRun, false_alarm: float = 0.01,
+                  elements: tuple[int, ...] | None = None, section_length: float | None = None,
+                  both: bool = False, certify: bool = True, damage: bool | None = None,
+                  ranking: Ranking | None = None, progress: Progress | None = None, **options: Any) -> LocationResult:
+    """Where and how big (:func:`locate_run`) against a baseline validated with ``--enclose measured``: its
+    healthy FRF, speed and updated model. ``damage`` None: the default detector decides first (so that
+    ``locate`` never says "no damage" where ``detect`` says damage)."""
+    if baseline.enclose != "measured" or healthy_frf_of(baseline) is None:
+        raise InputError(None, "--baseline", "locating needs a baseline validated with --enclose measured "
+                         f"(this one: {baseline.enclose!r})")
+    if damage is None:
+        damage = detector_says_damage(rig, baseline, run, false_alarm)
+    return locate_run(updated_rig(rig, baseline_updates(baseline)), run, np.asarray(baseline.healthy_frf),
+                      np.asarray(baseline.healthy_frf_var), baseline.speed_rpm, false_alarm, elements,
+                      section_length, both, certify, damage, ranking, progress, **options)

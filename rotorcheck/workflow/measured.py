@@ -430,3 +430,12 @@ def per_pair(x: np.ndarray, f: np.ndarray, n_pairs: int, run: MeasuredRun) -> np
                          f"healthy baseline {a.shape[1] if a.ndim == 2 else '?'} on {a.shape[0]}")
     return a
 
+
+def healthy_frf_of(baseline: Baseline) -> np.ndarray | None:
+    """The baseline's healthy FRF of the io pair (f,), m/N: stored, else from its phasors; None without."""
+    if baseline.healthy_frf is not None:
+        return np.asarray(baseline.healthy_frf)[:, 0]
+    if baseline.input_phasor is not None and baseline.output_phasor is not None:
+        return np.asarray(baseline.output_phasor[:, 0] / baseline.input_phasor[:, 0])
+    return None
+

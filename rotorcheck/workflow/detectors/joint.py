@@ -34,12 +34,12 @@ def learned_directions(baseline: Baseline) -> LearnedDirections | None:
 def joint_verdict(joint: JointResult, certified: Verdict) -> Verdict:
     """The sweep verdict of the joint test (its rule: :data:`rotorcheck.robust.joint.JOINT_RULE`); the
     certified fault points stay as where in frequency the data depart."""
-    e = joint.elements[joint.best] if joint.elements else 0
-    lo, hi = joint.severity_interval
     if joint.damage:
+        # where the damage is, is the diagnosis's (rotorcheck.ranking: the one ranking detect and locate report);
+        # the test's own linearized best element stays in report.json as joint_best_element
+        benign = "noise" if not joint.theta_names else "benign change inside the configured ranges and noise"
         why = (f"joint test: T = {joint.statistic:.4g} > {joint.threshold:.4g} (p = {joint.p_value:.2g} < "
-               f"{joint.false_alarm:g}); best explained by a stiffness loss of element {e}: "
-               f"{100 * joint.severity[joint.best]:.3g} % [{100 * lo:.3g}, {100 * hi:.3g}] (95 %)")
+               f"{joint.false_alarm:g}); the change is not explained by {benign}")
         return Verdict("damage", why, certified.n_points, certified.n_fault, certified.n_undecided,
                        certified.longest_run, certified.threshold)
     benign = "noise" if not joint.theta_names else "benign change inside the configured ranges and noise"
