@@ -198,7 +198,8 @@ class LocationResult:
         excluded = [c.element for c in self.candidates if c.status == "excluded"]
         ex = ""
         if self.certified:
-            ex = f"; elements {_ranges(excluded)} excluded" if excluded else "; no element excluded"
+            ex = ((f"; element {excluded[0]} excluded" if len(excluded) == 1 else
+                   f"; elements {_ranges(excluded)} excluded") if excluded else "; no element excluded")
         kind = self.kind
         if kind == "nothing":
             why = ("benign change inside the ranges explains every point" if self.damage is None
@@ -253,7 +254,8 @@ def depth_text(lo: float | None, hi: float | None) -> str:
         return ""
     if hi is None:
         return f"at least {100 * lo:.0f} %"
-    return f"{100 * lo:.0f}-{100 * hi:.0f} %"
+    a, b = f"{100 * lo:.0f}", f"{100 * hi:.0f}"
+    return f"about {a} %" if a == b else f"{a}-{b} %"  # a best-fit depth (no interval) reads as one figure
 
 
 def _ranges(xs: Sequence[int]) -> str:

@@ -102,7 +102,7 @@ def _where(report: DetectionReport) -> tuple[str, int | None]:
     if loc is not None and loc.damage_found:  # the one ranking detect and locate report (rotorcheck.ranking)
         b = loc.best
         e = None if b is None or loc.kind == "not locatable" else b.element
-        return (loc.summary() if e is None else f"where: element {e}{element_span(report, e)}; {loc.summary()}"), e
+        return loc.summary(), e  # the summary names the element with its axial span (m)
     if report.n_fault_points:
         return (f"the change shows at {report.n_fault_points} frequency points; the element is not estimated "
                 "with this rule (run rotorcheck locate)"), None

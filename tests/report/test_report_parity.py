@@ -83,7 +83,7 @@ def test_the_conclusion_opens_every_rendering_whole(reports: dict[str, Any], cas
     if report.verdict == "healthy":  # a healthy verdict shows no finding
         assert "most likely place" not in text and "located" not in text
     else:
-        assert re.search(r"element \d+ \(z = [\d.]+-[\d.]+ m", text)  # where: element and axial position
+        assert re.search(r"element \d+ \([\d.]+-[\d.]+ m", text)  # where: element and axial position (m)
 
 
 @pytest.mark.parametrize("case", list(CASES))
