@@ -140,8 +140,8 @@ def test_progress_lines_say_item_elapsed_and_remaining(monkeypatch: pytest.Monke
         tick(1, 4, "element 2")  # t = 3: 1 of 4 done in 3 s -> 9 s left
         tick(4, 4, "element 9")  # t = 6: done, no remaining time
     assert capsys.readouterr().err.splitlines() == [
-        "locating: element 2 (1 of 4), 3 s elapsed, about 9 s left",
-        "locating: element 9 (4 of 4), 6 s elapsed"]
+        "[1/4] locating element 2: elapsed 0:00:03, about 0:00:09 left",
+        "[4/4] locating element 9: elapsed 0:00:06, about 0:00:00 left"]
     with common.Steps("locating", quiet=True) as tick:
         tick(1, 4, "element 2")
     monkeypatch.setitem(common.QUIET, "on", True)  # -q

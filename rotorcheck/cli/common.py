@@ -12,6 +12,7 @@ import typer.core
 from rich.console import Console
 
 from rotorcheck.errors import InputError, finite_positive
+from rotorcheck.progress import ConsoleSteps
 
 EXIT_OK, EXIT_DAMAGE, EXIT_INPUT, EXIT_INCONCLUSIVE = 0, 1, 2, 3
 #: frequency points of a simulated sweep when neither --points nor the rig's analysis.n_points sets them
@@ -128,60 +129,14 @@ def progress(text: str) -> Any:
     return timed()
 
 
-class Steps:
-    """Progress of a long step over items on stderr (a :data:`rotorcheck.progress.Progress` callback):
-    a rich bar with elapsed and remaining time on a terminal; otherwise a plain line after the first
-    :data:`PLAIN_EVERY_S` seconds and then at most every :data:`PLAIN_EVERY_S`; nothing with ``-q`` or
-    ``quiet`` (the commands pass ``--json``).
+class Steps(ConsoleSteps):
+    """Progress of a long step over items on stderr (:class:`rotorcheck.progress.ConsoleSteps` on the CLI's
+    console); nothing with ``-q`` or ``quiet`` (the commands pass ``--json``).
 
     ``with Steps("locating") as tick: library_call(..., progress=tick)``"""
 
     def __init__(self, text: str, quiet: bool = False) -> None:
-        self.text, self.quiet = text, quiet or QUIET["on"]
-        self._bar: Any = None
-        self._task: Any = None
-        self._start = self._last = 0.0
-
-    def __enter__(self) -> Steps:
-        import time
-
-        self._start = self._last = time.monotonic()
-        if not self.quiet and err.is_terminal:
-            from rich.progress import (
-                BarColumn,
-                MofNCompleteColumn,
-                Progress,
-                TextColumn,
-                TimeElapsedColumn,
-                TimeRemainingColumn,
-            )
-
-            self._bar = Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
-                                 TextColumn("{task.fields[label]}"), TimeElapsedColumn(), TimeRemainingColumn(),
-                                 console=err, transient=True)
-            self._bar.start()
-            self._task = self._bar.add_task(self.text, total=None, label="")
-        return self
-
-    def __call__(self, done: int, total: int, label: str) -> None:
-        import time
-
-        if self.quiet:
-            return
-        if self._bar is not None:
-            self._bar.update(self._task, completed=done, total=total, label=label)
-            return
-        now = time.monotonic()
-        if now - self._last < PLAIN_EVERY_S:
-            return
-        self._last = now
-        elapsed = now - self._start
-        left = f", about {elapsed * (total - done) / done:.0f} s left" if 0 < done < total else ""
-        err.print(f"{self.text}: {label} ({done} of {total}), {elapsed:.0f} s elapsed{left}")
-
-    def __exit__(self, *exc: object) -> None:
-        if self._bar is not None:
-            self._bar.stop()
+        super().__init__(err, text, quiet or QUIET["on"], PLAIN_EVERY_S)
 
 DemoOpt = Annotated[bool, typer.Option("--demo", help="Use the bundled sample file when the argument is not given.")]
 RigOpt = Annotated[

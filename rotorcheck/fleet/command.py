@@ -8,13 +8,14 @@ and the time left (a rich progress bar on a terminal, one line per sweep otherwi
 from __future__ import annotations
 
 import sys
-import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Annotated, Any
 
 import typer
+
+from rotorcheck.progress import ConsoleSteps
 
 EXIT_OK, EXIT_ALARM = 0, 1
 
@@ -25,56 +26,26 @@ def _err() -> Any:
     return Console(stderr=True, highlight=False, soft_wrap=True)
 
 
-def _clock(seconds: float) -> str:
-    s = round(seconds)
-    return f"{s // 3600}:{s // 60 % 60:02d}:{s % 60:02d}"
-
-
 @contextmanager
 def progress_reporter(err: Any, quiet: bool) -> Iterator[Callable[[Any, int, int], None]]:
     """A ``tick(task, done, total)`` for :func:`rotorcheck.fleet.runner.run_fleet` (``done`` 0: the stage
-    begins): a rich progress bar per stage (detect, locate) on a terminal, else one line per finished task,
-    both with the time elapsed and the time left (the mean time per task so far times the tasks left);
-    nothing when ``quiet``."""
-    if quiet:
-        yield lambda task, done, total: None
-        return
-    if err.is_terminal:
-        from rich.progress import (
-            BarColumn,
-            MofNCompleteColumn,
-            Progress,
-            TextColumn,
-            TimeElapsedColumn,
-            TimeRemainingColumn,
-        )
+    begins): per stage (detect, locate) the one progress display of the CLI
+    (:class:`rotorcheck.progress.ConsoleSteps`: a bar on a terminal, else one line per finished sweep, both with
+    the time elapsed and the time left); nothing when ``quiet``."""
+    stages: dict[str, ConsoleSteps] = {}
 
-        bar = Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
-                       TextColumn("left"), TimeRemainingColumn(), console=err, transient=False)
-        ids: dict[str, Any] = {}
+    def tick(task: Any, done: int, total: int) -> None:
+        if task.stage not in stages:
+            for running in stages.values():  # stages run one after the other: one display at a time
+                running.__exit__(None, None, None)
+            stages[task.stage] = ConsoleSteps(err, task.stage, quiet, every_s=0.0).__enter__()
+        stages[task.stage](done, total, f"{task.machine} {task.time}")
 
-        def tick_bar(task: Any, done: int, total: int) -> None:
-            if task.stage not in ids:
-                ids[task.stage] = bar.add_task(f"{task.stage} sweeps", total=total)
-            what = f"{task.machine} {task.time}" if done else "sweeps"
-            bar.update(ids[task.stage], completed=done, description=f"{task.stage} {what}")
-
-        with bar:
-            yield tick_bar
-        return
-    start = time.perf_counter()
-    stage_start: dict[str, float] = {}
-
-    def tick_line(task: Any, done: int, total: int) -> None:
-        now = time.perf_counter()
-        t0 = stage_start.setdefault(task.stage, now)
-        if done == 0:
-            return
-        left = (now - t0) / max(done, 1) * (total - done)
-        err.print(f"[{done}/{total}] {task.stage} {task.machine} {task.time}: elapsed {_clock(now - start)}, "
-                  f"about {_clock(left)} left")
-
-    yield tick_line
+    try:
+        yield tick
+    finally:
+        for running in stages.values():
+            running.__exit__(None, None, None)
 
 
 def fleet(
