@@ -22,6 +22,7 @@ COMMANDS = sorted(typer.main.get_command(app).commands)  # type: ignore[attr-def
 NEEDS_ARGUMENT = ("model", "info", "simulate", "convert", "ingest", "fit-noise", "validate", "detect", "locate",
                   "detectability", "crack", "import-ross", "fleet")
 CR = samples_dir() / "crack_rig"
+ROSS = Path(__file__).resolve().parent / "data" / "ross"
 
 
 def test_every_command_is_covered() -> None:
@@ -94,8 +95,10 @@ def _no_foreign_warnings(caught: list[warnings.WarningMessage]) -> list[str]:
 
 def test_normal_runs_print_data_only_and_no_third_party_warning(
         tmp_path: Path, capsys: pytest.CaptureFixture[str], validated_0rpm: object) -> None:
-    """model, info, schema, simulate, convert, detect and locate: stdout is empty, or one JSON
-    document with --json, or the schema; no warning from a third-party library on the way."""
+    """model, info, schema, simulate, convert, detect, locate, detectability, import-ross, ingest (fit-noise and
+    validate through the shared run): stdout is empty, or one JSON document with --json, or the schema; no
+    warning from a third-party library on the way. crack and fleet: their --json tests parse the whole stdout
+    as one document (tests/test_pipeline.py, tests/fleet/test_fleet_runs.py)."""
     out = validated_0rpm.copy_to(tmp_path / "run")  # type: ignore[attr-defined]
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
@@ -111,6 +114,11 @@ def test_normal_runs_print_data_only_and_no_third_party_warning(
              EXIT_DAMAGE, "json"),
             (["locate", str(CR / "open_crack_0rpm.h5"), "--out", str(out), "--elements", "4", "--no-plots"], None,
              "empty"),
+            (["detectability", str(configs_dir() / "crack_rig.yaml"), "--noise-std", "2e-7", "--speed", "0",
+              "--elements", "4", "--no-plots", "--out", str(tmp_path / "d")], EXIT_OK, "empty"),
+            (["import-ross", str(ROSS / "conical_4.toml"), str(tmp_path / "ross.yaml"), "--json"], EXIT_OK, "json"),
+            (["ingest", *_records(tmp_path), str(tmp_path / "ingested.h5"), "--map", str(tmp_path / "map.yaml")],
+             EXIT_OK, "empty"),
         ]
         for argv, code, stdout_kind in steps:
             rc = main(argv)
@@ -124,6 +132,20 @@ def test_normal_runs_print_data_only_and_no_third_party_warning(
             assert "Warning" not in stderr, (argv, stderr)
     assert _no_foreign_warnings(caught) == []
     shutil.rmtree(tmp_path / "run")
+    assert validated_0rpm.stdout == ("", "")  # type: ignore[attr-defined]  # fit-noise and validate, run shared
+
+
+def _records(folder: Path) -> list[str]:
+    """A small stepped-sine time record (HDF5) and its channel map (``folder/map.yaml``), as the ingest tests
+    make them."""
+    import yaml
+
+    from rotorcheck.sim.time_records import channel_map_dict, write_record
+    from tests.ingest.ingest_helpers import small_record
+
+    sim = small_record()
+    (folder / "map.yaml").write_text(yaml.safe_dump(channel_map_dict(sim, "crack_rig")))
+    return [str(write_record(sim, folder / "record.h5"))]
 
 
 def test_progress_lines_say_item_elapsed_and_remaining(monkeypatch: pytest.MonkeyPatch,

@@ -34,8 +34,8 @@ SEVERITY_RULE = ("one severity and one set of benign parameter values (real, in 
                  "exceeds z sqrt(var_new + |gain G/G0|^2 var_h) + tolerance + eps |T_h| |gain G/G0 - 1| for all its "
                  "members (small-gain bound; z Sidak over the points used, complex Gaussian noise with the variances "
                  "as known; tolerance and eps the model's error bounds); the certified interval holds every severity "
-                 "not excluded (branch and bound per slice, outermost slices halved), a candidate is excluded when "
-                 "every slice is")
+                 "not excluded (branch and bound per slice, outermost slices halved); a candidate element is "
+                 "excluded when every one of its slices is excluded.")
 
 
 #: points tried first on every box (the ones that excluded boxes most often)

@@ -115,3 +115,33 @@ def test_p_values_and_undefined_intervals_read_alike() -> None:
     assert fmt_p(0.0) == fmt_p(1e-300) == "< 1e-15" and fmt_p(0.0123) == "0.0123" and fmt_p(None) == "not computed"
     assert fmt_interval(float("nan"), 1.0) == "not defined (at the range edge)"
     assert fmt_interval(-0.5, 0.25) == "[-0.5, +0.25]"
+
+
+RULES = ["rotorcheck.detectability:RULE", "rotorcheck.detectability:DETECTABILITY_RULE_SETS",
+         "rotorcheck.robust.real_box:BOX_RULE", "rotorcheck.robust.joint:JOINT_RULE",
+         "rotorcheck.robust.measured:MEASURED_RULE", "rotorcheck.robust.severity:SEVERITY_RULE",
+         "rotorcheck.workflow.detectors.enclosure:VERDICT_RULE", "rotorcheck.workflow.checking:FILE_RULE",
+         "rotorcheck.ranking:RANKING_RULE"]
+#: words a whole sentence does not end on (location.json once ended "... a candidate is excluded when every slice is")
+DANGLING = {"is", "are", "when", "the", "a", "an", "of", "and", "or", "to", "by", "with", "every", "if", "iff", "at"}
+
+
+@pytest.mark.parametrize("name", RULES)
+def test_no_rule_ends_mid_clause(name: str) -> None:
+    import importlib
+
+    module, attr = name.split(":")
+    rule = getattr(importlib.import_module(module), attr)
+    last = re.findall(r"[A-Za-z]+", rule)[-1].lower()
+    assert last not in DANGLING, f"{name} ends on {last!r}: {rule[-80:]!r}"
+
+
+def test_location_html_and_json_carry_the_rules_whole(located_open_crack: Any) -> None:
+    import html as html_lib
+    import json
+
+    out = located_open_crack.out
+    doc = json.loads((out / "location.json").read_text())
+    page = html_lib.unescape((out / "location.html").read_text())
+    assert doc["rule"] and doc["rule"] in page
+    assert re.findall(r"[A-Za-z]+", doc["rule"])[-1].lower() not in DANGLING
