@@ -223,6 +223,9 @@ def where_paragraphs(report: DetectionReport, ranges: Callable[[list[float]], st
     fault = np.asarray(report.fault, dtype=bool)
     out = [f"{report.n_fault_points} of {report.n_points} points are certified fault points (the healthy uncertain "
            f"model cannot explain them): {ranges(list(f[fault]))}."]
+    if report.verdict == "healthy" and report.n_fault_points and report.joint_statistic is not None:
+        out[0] = out[0][:-1] + ("; the sweep differs from the healthy one there, but the benign change fitted (Method) "
+                                "explains them: no damage.")
     status = np.asarray(report.status).astype(str)
     for s in (s for s in np.unique(status) if s not in ("ok", "fault", "excluded")):
         out.append(f"{int(np.count_nonzero(status == s))} points with status '{s}': {ranges(list(f[status == s]))}.")
