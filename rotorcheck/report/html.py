@@ -203,11 +203,14 @@ def render_detection_html(report: DetectionReport, plots: Sequence[str | Path],
 
 
 def _percent_interval(lo: float | None, hi: float | None) -> str:
-    """A fraction interval in %: ``[lo, hi]``; an undefined (None or not finite) lower end left blank, an
-    undefined upper end "50+" (a depth beyond the strip relation's 50 % of the diameter)."""
+    """A fraction interval in %: ``[lo, hi]``; none where the lower end is undefined (None or not finite: an
+    excluded candidate), an undefined upper end "50+" (a depth beyond the strip relation's 50 % of the
+    diameter)."""
     def pct(x: float | None) -> str:
         return "" if x is None or not np.isfinite(x) else format(100.0 * float(x), ".3g")
 
+    if not pct(lo):  # no interval: an excluded candidate (every loss excluded) has none
+        return "none (excluded)"
     return f"[{pct(lo)}, {pct(hi) or '50+'}]"
 
 

@@ -16,8 +16,9 @@ from rotorcheck.report.html import location_table, render_detection_html
 from rotorcheck.report.schema import DetectionReport, LocationReport
 from tests.shared_runs import CliRun
 
-_ROW = re.compile(r"<tr><td class=\"num\">(\d+)</td><td>(\w+)</td><td class=\"num\">(\d*)</td><td>\[([^\]]*)\]</td>"
-                  r"<td>\[([^\]]*)\]</td><td>([^<]*)</td></tr>")
+_CELL = r"<td>\[?([^\]<]*)\]?</td>"  # "[lo, hi]", or "none (excluded)" for an excluded element
+_ROW = re.compile(r"<tr><td class=\"num\">(\d+)</td><td>(\w+)</td><td class=\"num\">(\d*)</td>" + _CELL + _CELL
+                  + r"<td>([^<]*)</td></tr>")
 
 
 def _rows(text: str, after: str) -> list[tuple[str, ...]]:
@@ -27,7 +28,9 @@ def _rows(text: str, after: str) -> list[tuple[str, ...]]:
 
 
 def _percent(cell: str) -> tuple[float | None, float | None]:
-    """"12.3, 55.7" -> fractions (0.123, 0.557); a blank lower end and "50+" are None."""
+    """"12.3, 55.7" -> fractions (0.123, 0.557); "50+" is None; "none (excluded)" is (None, None)."""
+    if cell == "none (excluded)":
+        return None, None
     lo, hi = (s.strip() for s in cell.split(","))
     return (None if lo == "" else float(lo) / 100.0, None if hi == "50+" else float(hi) / 100.0)
 
@@ -85,7 +88,7 @@ def test_a_hand_made_result_renders_to_its_rows() -> None:
     res = _result()
     text = location_table(res)
     assert _rows(text, "<table>") == [
-        ("1", "excluded", "", ", 50+", ", 50+",
+        ("1", "excluded", "", "none (excluded)", "none (excluded)",
          "10.0, 12.5, 15.0, 17.5, 20.0, 22.5, 25.0, 27.5, 30.0, 32.5, 35.0, 37.5 (+3 more)"),
         ("2", "consistent", "1", "12.3, 55.7", "30, 50+", ""),
         ("3", "consistent", "2", "0, 25", "0, 20.5", ""),
