@@ -97,8 +97,8 @@ def test_normal_runs_print_data_only_and_no_third_party_warning(
         tmp_path: Path, capsys: pytest.CaptureFixture[str], validated_0rpm: object) -> None:
     """model, info, schema, simulate, convert, detect, locate, detectability, import-ross, ingest (fit-noise and
     validate through the shared run): stdout is empty, or one JSON document with --json, or the schema; no
-    warning from a third-party library on the way. crack and fleet: their --json tests parse the whole stdout
-    as one document (tests/test_pipeline.py, tests/fleet/test_fleet_runs.py)."""
+    warning from a third-party library on the way. crack and fleet: their own tests parse the whole stdout as one
+    JSON document and record the warnings (tests/test_pipeline.py, tests/fleet/test_fleet_runs.py)."""
     out = validated_0rpm.copy_to(tmp_path / "run")  # type: ignore[attr-defined]
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import time
+import warnings
 from pathlib import Path
 from typing import Any
 
@@ -22,8 +23,20 @@ def full_run(small_fleet: tuple[Path, dict[str, Any]], tmp_path_factory: pytest.
              ) -> tuple[Path, Any]:
     root, _ = small_fleet
     out = tmp_path_factory.mktemp("full") / "results"
-    res = run_fleet(root, FleetOptions(out=out, workers=2, locate="none", limit="3000"))
+    with warnings.catch_warnings(record=True) as caught:  # issue 31: no third-party warning on a normal run
+        warnings.simplefilter("always")
+        res = run_fleet(root, FleetOptions(out=out, workers=2, locate="none", limit="3000"))
+    FOREIGN_WARNINGS.extend(f"{w.filename}:{w.lineno}: {w.message}" for w in caught if "rotorcheck" not in w.filename)
     return out, res
+
+
+#: warnings from outside rotorcheck raised while the full run summarised, plotted and wrote its pages
+FOREIGN_WARNINGS: list[str] = []
+
+
+def test_the_full_run_raises_no_third_party_warning(full_run: tuple[Path, Any]) -> None:
+    assert (full_run[0] / "index.html").exists()
+    assert FOREIGN_WARNINGS == []
 
 
 def test_cracks_alarmed_others_not(full_run: tuple[Path, Any], small_fleet: tuple[Path, dict[str, Any]]) -> None:
