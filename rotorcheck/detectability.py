@@ -262,43 +262,46 @@ def detectability(
     if elements is not None and not wanted <= set(els):
         unseen = sorted(wanted - set(els))
         notes.append(f"elements {unseen}: not seen by these channels (no bending moment there): undetectable")
-    zero = np.zeros(var.size, dtype=complex)
-    noise_only = joint_test(zero, var, S, els, None, None, false_alarm)
-    # without a nuisance the test's standard error of a loss is 1 / ||s_e||_w (the whitened signature norm)
-    lr = (z_upper(false_alarm) + POWER_Z) * noise_only.severity_se
     bm = benign
     k = float(bm.kappa) if bm is not None else 0.0
     if bm is None:
         notes.append("no benign variability ranges at this speed: the benign case equals noise only")
-    # the benign search starts at the test's linear prediction with the benign tangent projected out (the
-    # box and the model-error allowance only make it harder)
-    start = joint_test(zero, var, S, els, bm, None, false_alarm, draws=DRAWS).detectable if bm is not None else None
     rows: list[ElementDetectability] = []
     stations = config.stations
-    a_noise_all = [float(x) if np.isfinite(x) else None for x in noise_only.detectable]
-    a_benign_all: list[float | None] = list(a_noise_all)
-    if bm is not None and start is not None:
-        todo = [i for i, a in enumerate(a_noise_all) if a is not None and els[i] in wanted]
-        job = _BenignSearch(var, S, els, bm, false_alarm)
-        starts = [max(float(a_noise_all[i] or 0.0), float(min(start[i], MAX_LOSS))) for i in todo]
-        found = _map(job, list(zip(todo, starts)), workers, progress, [f"element {els[i]}" for i in todo])
-        for i, a in zip(todo, found):
-            a_benign_all[i] = a
-    for i, e in enumerate(els):
-        if e not in wanted:
-            continue
-        a_noise, a_benign = a_noise_all[i], a_benign_all[i]
-        relation = _relation(config, e, "breathing", section_length)
+    if not els:  # e.g. y probes of an x force at standstill (the planes decouple): every element undetectable
+        notes.append("these channels see no shaft element: no crack is detectable with them")
+    else:
+        zero = np.zeros(var.size, dtype=complex)
+        noise_only = joint_test(zero, var, S, els, None, None, false_alarm)
+        # without a nuisance the test's standard error of a loss is 1 / ||s_e||_w (the whitened signature norm)
+        lr = (z_upper(false_alarm) + POWER_Z) * noise_only.severity_se
+        # the benign search starts at the test's linear prediction with the benign tangent projected out (the
+        # box and the model-error allowance only make it harder)
+        start = joint_test(zero, var, S, els, bm, None, false_alarm, draws=DRAWS).detectable if bm is not None else None
+        a_noise_all = [float(x) if np.isfinite(x) else None for x in noise_only.detectable]
+        a_benign_all: list[float | None] = list(a_noise_all)
+        if bm is not None and start is not None:
+            todo = [i for i, a in enumerate(a_noise_all) if a is not None and els[i] in wanted]
+            job = _BenignSearch(var, S, els, bm, false_alarm)
+            starts = [max(float(a_noise_all[i] or 0.0), float(min(start[i], MAX_LOSS))) for i in todo]
+            found = _map(job, list(zip(todo, starts)), workers, progress, [f"element {els[i]}" for i in todo])
+            for i, a in zip(todo, found):
+                a_benign_all[i] = a
+        for i, e in enumerate(els):
+            if e not in wanted:
+                continue
+            a_noise, a_benign = a_noise_all[i], a_benign_all[i]
+            relation = _relation(config, e, "breathing", section_length)
 
-        def depth(loss: float | None, rel: Any = relation) -> float | None:
-            return None if loss is None or rel is None else depth_of_loss(loss, rel)
+            def depth(loss: float | None, rel: Any = relation) -> float | None:
+                return None if loss is None or rel is None else depth_of_loss(loss, rel)
 
-        a_lr = float(lr[i]) if np.isfinite(lr[i]) else None
-        rows.append(ElementDetectability(
-            element=int(e), z_start_m=float(stations[e - 1]), z_end_m=float(stations[e]),
-            open_loss_min=a_benign, open_loss_min_noise_only=a_noise, limit_open_loss_noise_only=a_lr,
-            breathing_depth_min=depth(a_benign), breathing_depth_min_noise_only=depth(a_noise),
-            limit_breathing_depth_noise_only=depth(a_lr)))
+            a_lr = float(lr[i]) if np.isfinite(lr[i]) else None
+            rows.append(ElementDetectability(
+                element=int(e), z_start_m=float(stations[e - 1]), z_end_m=float(stations[e]),
+                open_loss_min=a_benign, open_loss_min_noise_only=a_noise, limit_open_loss_noise_only=a_lr,
+                breathing_depth_min=depth(a_benign), breathing_depth_min_noise_only=depth(a_noise),
+                limit_breathing_depth_noise_only=depth(a_lr)))
     seen = {r.element for r in rows}
     for e in (elements if elements is not None else range(1, len(stations))):
         if e not in seen:
@@ -381,10 +384,6 @@ def score_sensor_set(config: RigConfig, freq_hz: np.ndarray, speed_rpm: float, v
     prs = [ChannelPair(o, i, "") for o in sensors for i in actuators]
     multi = prs if len(prs) > 1 else None
     th = io_frf(config, freq_hz, speed_rpm, multi)
-    if not crack_signatures(config, freq_hz, speed_rpm, th, pairs=multi, model_frf=th)[0]:
-        # the set sees no element at all (e.g. y probes of an x force at standstill: the planes decouple)
-        return SensorSetScore(tuple(dict.fromkeys(p.key()[0] for p in prs)), int(elements[0]) if elements else 0,
-                              None, None)
     bm = benign_for(prs, th)
     det = detectability(config, freq_hz, speed_rpm, np.full(th.shape, variance), np.full(th.shape, variance), prs,
                         th, false_alarm, None if bm is None else linearized(bm), elements, workers=1, model_frf=th)

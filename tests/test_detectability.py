@@ -176,3 +176,21 @@ def test_sensor_ranking_with_only_blind_candidates_is_an_input_error_not_a_crash
     cfg = load_config(configs_dir() / "crack_rig.yaml")
     with pytest.raises(InputError, match="--candidate-sensors: no candidate sensor sees any shaft element"):
         sensor_ranking_for_rig(cfg, ["2y", "6y"], 1, speed_rpm=0.0, noise_std_m=2e-7)
+
+
+def test_channels_that_see_no_element_give_undetectable_rows_not_a_crash() -> None:
+    """Two y probes of an x force at standstill: the planes decouple, the receptances are exactly 0, no element
+    changes them; every element reported undetectable, with the reason in the notes."""
+    from rotorcheck.nominal import parse_port
+    from rotorcheck.signatures import io_frf
+
+    cfg = load_config(configs_dir() / "crack_rig.yaml")
+    f = np.linspace(30.0, 600.0, 40)
+    pairs = [ChannelPair(parse_port(s, "--sensor"), parse_port("8x", "--actuator"), "") for s in ("2y", "6y")]
+    th = io_frf(cfg, f, 0.0, pairs)
+    assert np.all(th == 0.0)
+    var = np.full(th.shape, 1e-17)
+    det = detectability(cfg, f, 0.0, var, var, pairs, th, 0.01, None, [3, 4], workers=1, model_frf=th)
+    assert [(r.element, r.open_loss_min, r.breathing_depth_min_noise_only) for r in det.elements] == [
+        (3, None, None), (4, None, None)]
+    assert any("see no shaft element" in n for n in det.notes)
