@@ -182,6 +182,12 @@ def method_paragraphs(report: DetectionReport, ranges: Callable[[list[float]], s
     return out
 
 
+def grid_step(report: DetectionReport) -> float:
+    """The report's grid step (Hz, the median spacing; 1 for a single point), for writing frequency ranges."""
+    f = np.asarray(report.frequency_hz, dtype=float)
+    return float(np.median(np.diff(f))) if f.size > 1 else 1.0
+
+
 def frequency_ranges(freqs: list[float], step: float) -> str:
     """Frequencies (Hz) as ranges of consecutive grid points (``step`` the grid step, Hz): "12.0-14.5, 30.0 Hz"."""
     if not freqs:

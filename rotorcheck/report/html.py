@@ -26,6 +26,7 @@ from rotorcheck.report.content import (
     fault_table,
     fmt_p,
     frequency_ranges,
+    grid_step,
     headline_damage,
     method_paragraphs,
     where_paragraphs,
@@ -177,7 +178,7 @@ def render_detection_html(report: DetectionReport, plots: Sequence[str | Path],
              f"<p id=\"reason\"><b>{_e(verdict)}</b>: {_e(report.verdict_reason)}.</p>"]
     parts += [f"<p>{_e(line)}</p>" for line in headline_damage(report) if line]
     parts.append("<h2>The numbers</h2>" + table(("quantity", "value"), _key_numbers(report)))
-    step = float(np.median(np.diff(np.asarray(report.frequency_hz, dtype=float)))) if report.n_points > 1 else 1.0
+    step = grid_step(report)
     where = where_paragraphs(report, lambda fs: frequency_ranges(fs, step))
     parts.append("<h2>Where</h2>" + "".join(f"<p>{_e(para)}</p>" for para in where))
     parts.append("<h2>Figures</h2>" + figures_html(plots))

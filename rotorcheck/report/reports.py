@@ -25,6 +25,7 @@ from rotorcheck.report.content import (
     fault_table,
     fmt_p,
     frequency_ranges,
+    grid_step,
     headline_damage,
     method_paragraphs,
     where_paragraphs,
@@ -76,7 +77,7 @@ def render_csv(report: DetectionReport) -> str:
 def render_markdown(report: DetectionReport, plots: list[str]) -> str:
     """report.md: the verdict, where, and what changed."""
     pairs = report.channel_pairs or []
-    step = _step(report)
+    step = grid_step(report)
     fault = np.asarray(report.fault, dtype=bool)
     lines = [
         f"# rotorcheck detection: {report.verdict.upper()}",
@@ -123,16 +124,11 @@ def render_markdown(report: DetectionReport, plots: list[str]) -> str:
     return "\n".join(lines) + "\n"
 
 
-def _step(report: DetectionReport) -> float:
-    """The grid step (Hz) for writing frequency ranges."""
-    f = np.asarray(report.frequency_hz, dtype=float)
-    return float(np.median(np.diff(f))) if f.size > 1 else 1.0
-
-
 def _method_section(report: DetectionReport) -> list[str]:
     """The method (rule, joint test, benign change fitted): report.content's paragraphs and table."""
     lines = ["## Method", ""]
-    for para in method_paragraphs(report, lambda fs: frequency_ranges(fs, _step(report))):
+    step = grid_step(report)
+    for para in method_paragraphs(report, lambda fs: frequency_ranges(fs, step)):
         lines += [para, ""]
     rows = benign_rows(report)
     if rows:
