@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from typing import TYPE_CHECKING, Literal
 
 from pydantic import Field, model_validator
@@ -164,7 +165,7 @@ class Disc(Strict):
                 raise ValueError(f"{k}: required field is missing (or give the disc's material, width and diameters)")
         return self
 
-    def inertias(self, materials: dict[str, Material]) -> tuple[float, float, float]:
+    def inertias(self, materials: Mapping[str, Material]) -> tuple[float, float, float]:
         """(mass kg, polar inertia kg m^2, transverse inertia kg m^2)."""
         if self.material is None:
             assert self.mass is not None and self.polar_inertia is not None and self.transverse_inertia is not None

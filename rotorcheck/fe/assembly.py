@@ -231,7 +231,7 @@ def _rotor_structure(config: MechanicalDescription, modulus_factors: Mapping[int
           if isinstance(damping, RayleighDamping) and damping.scope == "shaft_elements" else np.zeros_like(M))
     features: list[tuple[str, str, int]] = []
     for d in config.discs:
-        m, ip, it = d.inertias(dict(config.materials))
+        m, ip, it = d.inertias(config.materials)
         disc = RigidDisc(m, it, ip)
         node = station_node[d.station - 1]
         _node_block(M, node, disc.mass_matrix())
