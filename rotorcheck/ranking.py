@@ -172,7 +172,7 @@ def breathing_crack(config: RigConfig, element: int, depth: float, length: float
     """A Mayes-Davies crack ``depth`` (fraction of the diameter) deep in ``element`` (section length by
     :func:`section_length`; Poisson ratio the rig's crack's, else the material's)."""
     own = next((f for f in config.faults.values() if isinstance(f, Crack) and f.model == "mayes_davies"), None)
-    return Crack(element=element, model="mayes_davies", depth_ratio=2.0 * depth,
+    return Crack(element=element, model="mayes_davies", depth=depth,
                  section_length=section_length(config, element, length),
                  poisson=None if own is None else own.poisson)
 

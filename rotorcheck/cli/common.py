@@ -223,7 +223,7 @@ def element_list(values: list[str] | str | None) -> tuple[int, ...] | None:
 def fail_at_points(spec: str) -> tuple[int, ...]:
     """Testing hook ``--fail-at 3,17`` (hidden): the solver fails at those point indices."""
     try:
-        return tuple(int(x) for x in spec.split(",") if x.strip())
+        return tuple(int(x) for x in split_list(spec))
     except ValueError:
         raise InputError(None, "--fail-at", f"expected comma-separated point indices, got {spec!r}") from None
 
