@@ -6,7 +6,8 @@ drifted uniformly inside the ranges the rig file declares (E +-2 %, each bearing
 speed +-20 rpm): healthy (false alarms) at 0 and 1000 rpm, open cracks in element 4 (stiffness loss) at 0 rpm
 and a breathing crack at 1000 rpm. Seeded; prints a Markdown table, one column per variant.
 
-``python -m bench.independent_physics [--healthy 20 --cracks 10] [--variants truth,dampers]``
+``python -m bench.independent_physics [--healthy 20 --cracks 10] [--variants truth,dampers] [--losses 0.05,0.1,0.2]
+[--depths 0.2,0.3,0.4]``
 """
 
 from __future__ import annotations
@@ -36,8 +37,9 @@ def _called(nom: Any, base: Any, run: Any) -> bool:
     return workflow.detect(nom, base, run).verdict.verdict == "damage"
 
 
-def run_variant(name: str, n_healthy: int, n_cracks: int, log: Any) -> dict[str, str]:
-    """``{row label: 'k/n'}`` for one variant."""
+def run_variant(name: str, n_healthy: int, n_cracks: int, log: Any, losses: tuple[float, ...] = LOSSES,
+                depths: tuple[float, ...] = DEPTHS) -> dict[str, str]:
+    """``{row label: 'k/n'}`` for one variant (open-crack ``losses`` at 0 rpm, breathing ``depths`` at 1000 rpm)."""
     nom = nominal()
     truth = truth_variant(name, nom)
     out: dict[str, str] = {}
@@ -50,14 +52,14 @@ def run_variant(name: str, n_healthy: int, n_cracks: int, log: Any) -> dict[str,
         out[f"false alarms, healthy drifted inside the ranges, {speed:g} rpm"] = f"{k}/{n_healthy}"
         log(f"{name} {speed:g} rpm healthy: {k}/{n_healthy} ({time.perf_counter() - t0:.0f} s)")
         if speed == 0.0:
-            for loss in LOSSES:
+            for loss in losses:
                 cfg = _open_crack(truth, 1.0 - loss)
                 k = sum(_called(nom, base, sweep_run(cfg, nom, 0.0, 1.0, 33_000_000 + int(loss * 1e4) * 100 + i,
                                                      "open_crack", benign=_inside(rng))) for i in range(n_cracks))
                 out[f"open crack element 4, {100 * loss:g} % loss, drift, 0 rpm: detected"] = f"{k}/{n_cracks}"
                 log(f"{name} open {loss}: {k}/{n_cracks}")
         else:
-            for depth in DEPTHS:
+            for depth in depths:
                 cfg = workflow.rig_with_crack_depth(truth, None, "breathing_crack", depth)
                 k = sum(_called(nom, base, sweep_run(cfg, nom, 1000.0, 1.0, 34_000_000 + int(depth * 1e3) * 100 + i,
                                                      "breathing_crack", benign=_inside(rng)))
@@ -72,11 +74,15 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--healthy", type=int, default=20)
     ap.add_argument("--cracks", type=int, default=10)
     ap.add_argument("--variants", default=",".join(VARIANTS))
+    ap.add_argument("--losses", default=",".join(f"{x:g}" for x in LOSSES), help="open-crack losses, fractions")
+    ap.add_argument("--depths", default=",".join(f"{x:g}" for x in DEPTHS), help="breathing depths, of the diameter")
     a = ap.parse_args(argv)
+    losses = tuple(float(x) for x in a.losses.split(","))
+    depths = tuple(float(x) for x in a.depths.split(","))
     names = a.variants.split(",")
     def log(msg: str) -> None:
         print(msg, file=sys.stderr, flush=True)
-    cols = {n: run_variant(n, a.healthy, a.cracks, log) for n in names}
+    cols = {n: run_variant(n, a.healthy, a.cracks, log, losses, depths) for n in names}
     rows = list(next(iter(cols.values())))
     print("| case | " + " | ".join(names) + " |")
     print("|---|" + "---:|" * len(names))
