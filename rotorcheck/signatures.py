@@ -20,7 +20,18 @@ import numpy as np
 from rotorcheck.config import RigConfig
 from rotorcheck.fe.assembly import build_system, config_key
 from rotorcheck.fe.system import MechanicalSystem
+from rotorcheck.modal_anchor import (
+    POLE_SENSITIVITY_ERROR,
+    RESIDUE_SENSITIVITY_ERROR,
+    ModalAnchor,
+    ModalSensitivity,
+    fe_modes,
+    fit_anchor,
+    sensitivity,
+)
+from rotorcheck.modal_anchor import SILENT as MODAL_SILENT
 from rotorcheck.nominal import ChannelPair, nominal_model, pair_receptance, primary_pair
+from rotorcheck.robust.joint import ModelForm
 from rotorcheck.robust.real_box import AffineModel, AffineParameter
 from rotorcheck.variability import BenignParameter, benign_parameters, with_benign
 
@@ -69,10 +80,57 @@ def _frf_key(config: RigConfig, freq_hz: np.ndarray, speed_rpm: float,
     return content, f.shape, f.tobytes(), float(speed_rpm), ports
 
 
+#: relative step of a factor parameter or an element's loss (and rpm of a speed offset) at which the model's modes
+#: are re-solved for a modal-anchored sensitivity: small beside the spacing of close modes (3.5e-4 between the
+#: forward and backward whirl at 172.7 Hz and 1000 rpm), large beside the eigenvalues' round-off
+MODAL_STEP = 1e-5
+MODAL_STEP_RPM = 0.01
+#: the model's relative error in the change of its modes outside the fitted band (the quasi-static compliance
+#: inside it) that a benign parameter makes
+OUT_OF_BAND_ERROR = 0.5
+
+
+def _dofs(system: MechanicalSystem, config: RigConfig, pairs: Sequence[ChannelPair] | None) -> list[tuple[int, int]]:
+    """(input DOF, output DOF) of each channel pair (the rig's own pair without ``pairs``)."""
+    return [(system.port_dof(p.input), system.port_dof(p.output)) for p in (pairs or [primary_pair(config)])]
+
+
+#: :func:`modal_anchor` results by rig, grid, speed, pairs and the healthy FRF's bytes
+_ANCHORS: dict[tuple[Any, ...], ModalAnchor | None] = {}
+
+
+def modal_anchor(config: RigConfig, freq_hz: np.ndarray, speed_rpm: float, healthy_frf: np.ndarray,
+                 pairs: Sequence[ChannelPair] | None = None) -> ModalAnchor | None:
+    """The healthy FRF's modal model (:func:`rotorcheck.modal_anchor.fit_anchor`) with the rig's modes as the
+    start; ``healthy_frf`` (f,) or (f, P) m/N (stacked pair after pair is read too). None when the fit is
+    refused (the caller then anchors the model's own relative change). Kept for equal arguments."""
+    f = np.asarray(freq_hz, dtype=float)
+    P = 1 if not pairs else len(pairs)
+    th = unstacked(np.asarray(healthy_frf, dtype=complex), (f.size, P))
+    base = _frf_key(config, f, speed_rpm, pairs)
+    key = None if base is None else (*base, th.tobytes())
+    if key is not None and key in _ANCHORS:
+        return _ANCHORS[key]
+    system = build_system(config)
+    out = fit_anchor(system, speed_rpm, _dofs(system, config, pairs), f, th)
+    if key is not None:
+        _ANCHORS[key] = out
+        _bounded(_ANCHORS, 32)
+    return out
+
+
+def _modal_sensitivity(anchor: ModalAnchor, config: RigConfig, speed_rpm: float, step: float,
+                       pairs: Sequence[ChannelPair] | None) -> ModalSensitivity | None:
+    """The anchor's sensitivity to a change that gives the rig ``config`` at ``speed_rpm`` when made ``step``
+    units large (the change's own size: a loss, a relative change, rpm)."""
+    system = build_system(config)
+    return sensitivity(anchor, fe_modes(system, speed_rpm, _dofs(system, config, pairs)), step)
+
+
 #: a channel pair whose model receptance is below this fraction of the largest pair's is one the model
 #: says does not respond (x force -> y probe at standstill: the planes decouple); its predicted relative
-#: change is taken as none
-SILENT = 1e-9
+#: change is taken as none (the modal anchor's own :data:`rotorcheck.modal_anchor.SILENT`)
+SILENT = MODAL_SILENT
 
 
 def relative(g: np.ndarray, g0: np.ndarray) -> np.ndarray:
@@ -112,19 +170,29 @@ def candidate_elements(config: RigConfig) -> tuple[int, ...]:
 
 def crack_signatures(config: RigConfig, freq_hz: np.ndarray, speed_rpm: float, healthy_frf: np.ndarray,
                      elements: Sequence[int] | None = None, loss: float = SIGNATURE_LOSS,
-                     pairs: Sequence[ChannelPair] | None = None, model_frf: np.ndarray | None = None
-                     ) -> tuple[tuple[int, ...], np.ndarray]:
+                     pairs: Sequence[ChannelPair] | None = None, model_frf: np.ndarray | None = None,
+                     modal: bool = True) -> tuple[tuple[int, ...], np.ndarray]:
     """``(elements, S)``: S (n_e, f) complex, the FRF change per unit stiffness loss (m/N per 1) of
-    each element, re-solved at ``loss`` and anchored at ``healthy_frf``; with ``pairs`` (``healthy_frf``
-    (f, P)) each row is stacked over the pairs (P f,), pair after pair. ``model_frf``: the model's
-    :func:`io_frf` at these arguments when the caller has it (else solved here)."""
+    each element, anchored at ``healthy_frf``: with ``modal`` (default) the healthy FRF's fitted modes moved
+    by the model's sensitivities (:mod:`rotorcheck.modal_anchor`), else (or when that fit is refused) the
+    model re-solved at ``loss`` as a relative change; with ``pairs`` (``healthy_frf`` (f, P)) each row is
+    stacked over the pairs (P f,), pair after pair. ``model_frf``: the model's :func:`io_frf` at these
+    arguments when the caller has it (else solved here)."""
     f = np.asarray(freq_hz, dtype=float)
     els = tuple(elements) if elements is not None else candidate_elements(config)
     g0 = model_frf if model_frf is not None else io_frf(config, f, speed_rpm, pairs)
     th = unstacked(healthy_frf, g0.shape)
-    S = np.array([stacked(th * (relative(io_frf(with_element_loss(config, e, loss), f, speed_rpm, pairs), g0) - 1.0)
-                          / loss)
-                  for e in els], dtype=complex).reshape(len(els), th.size)
+    anchor = modal_anchor(config, f, speed_rpm, th, pairs) if modal else None
+
+    def signature(e: int) -> np.ndarray:
+        if anchor is not None:
+            sens = _modal_sensitivity(anchor, with_element_loss(config, e, MODAL_STEP), speed_rpm, MODAL_STEP, pairs)
+            if sens is not None:
+                return stacked(anchor.derivative(sens.d_lnpole, sens.d_res, sens.d_out))
+        changed = with_element_loss(config, e, loss)
+        return stacked(th * (relative(io_frf(changed, f, speed_rpm, pairs), g0) - 1.0) / loss)
+
+    S = np.array([signature(e) for e in els], dtype=complex).reshape(len(els), th.size)
     healthy_frf = stacked(th)
     # an element the channel cannot see (an overhang with a free end carries no bending moment): its
     # "signature" is round-off, not a shape; it is no candidate
@@ -148,6 +216,8 @@ class BenignPrediction:
 
     parameters: tuple[BenignParameter, ...]
     predict: Callable[[np.ndarray], np.ndarray]
+    model_form: ModelForm | None = None  # the prediction's own bounded error (modal anchor only)
+    cheap: bool = False  # ``predict`` is a closed form (modal anchor), no model re-solved
 
     @property
     def lo(self) -> np.ndarray:
@@ -164,14 +234,21 @@ class BenignPrediction:
 
 def benign_prediction(config: RigConfig, freq_hz: np.ndarray, speed_rpm: float, healthy_frf: np.ndarray,
                       parameters: Sequence[BenignParameter] | None = None,
-                      pairs: Sequence[ChannelPair] | None = None) -> BenignPrediction:
-    """The model's benign change around ``config`` at ``speed_rpm``, anchored at ``healthy_frf``:
-    ``T_h (g_s g_a G(theta) / G - 1)`` with the model re-solved at ``theta`` (gains multiply); with
-    ``pairs`` (``healthy_frf`` (f, P)) stacked over the pairs (P f,)."""
+                      pairs: Sequence[ChannelPair] | None = None, modal: bool = True) -> BenignPrediction:
+    """The model's benign change around ``config`` at ``speed_rpm``, anchored at ``healthy_frf``: with
+    ``modal`` (default) the healthy FRF's fitted modes moved by the model's sensitivities,
+    ``g_s g_a (T_h + dT(theta)) - T_h`` (:mod:`rotorcheck.modal_anchor`); else (or when that fit is refused)
+    ``T_h (g_s g_a G(theta) / G - 1)`` with the model re-solved at ``theta``; gains multiply; with ``pairs``
+    (``healthy_frf`` (f, P)) stacked over the pairs (P f,)."""
     f = np.asarray(freq_hz, dtype=float)
     params = tuple(parameters) if parameters is not None else benign_parameters(config)
     g0 = io_frf(config, f, speed_rpm, pairs)
     th = unstacked(healthy_frf, g0.shape)
+    anchor = modal_anchor(config, f, speed_rpm, th, pairs) if modal else None
+    if anchor is not None:
+        modal_prediction = _modal_benign(anchor, config, speed_rpm, th, params, pairs)
+        if modal_prediction is not None:
+            return modal_prediction
     cache: dict[tuple[float, ...], np.ndarray] = {}
     # the model re-solved depends on the parameters that change the rig and on the speed offset only: a
     # gain (the finite-difference column of a Jacobian, the exact part of the model-error allowance) or a
@@ -206,6 +283,94 @@ def benign_prediction(config: RigConfig, freq_hz: np.ndarray, speed_rpm: float, 
         return cache[key]
 
     return BenignPrediction(params, predict)
+
+
+def _modal_benign(anchor: ModalAnchor, config: RigConfig, speed_rpm: float, th: np.ndarray,
+                  params: tuple[BenignParameter, ...], pairs: Sequence[ChannelPair] | None) -> BenignPrediction | None:
+    """:func:`benign_prediction` on the modal anchor: each parameter's sensitivity from the model's modes
+    re-solved at :data:`MODAL_STEP` (a speed offset: :data:`MODAL_STEP_RPM`); gains multiply. None when a
+    mode cannot be followed."""
+    sens: list[ModalSensitivity | None] = []
+    for p in params:
+        if p.is_gain:
+            sens.append(None)
+            continue
+        step = MODAL_STEP_RPM if p.is_speed else MODAL_STEP
+        cfg, d_rpm, _, _ = with_benign(config, {p.name: step})
+        s = _modal_sensitivity(anchor, cfg, speed_rpm + d_rpm, step, pairs)
+        if s is None:
+            return None
+        sens.append(s)
+    gains = [i for i, p in enumerate(params) if p.is_gain]
+    moving = [i for i, s in enumerate(sens) if s is not None]
+    given = [s for s in sens if s is not None]
+    d_ln = np.array([s.d_lnpole for s in given]).reshape(len(given), anchor.poles.size)
+    d_res = np.array([s.d_res for s in given]).reshape(len(given), *anchor.residues.shape)
+    d_out = np.array([s.d_out for s in given]).reshape(len(given), th.shape[0], anchor.residues.shape[1])
+    cache: dict[tuple[float, ...], np.ndarray] = {}
+    th = th.reshape(th.shape[0], -1)
+
+    def predict(theta: np.ndarray) -> np.ndarray:
+        key = tuple(float(x) for x in theta)
+        if key not in cache:
+            x = np.asarray(theta, dtype=float)
+            xm = x[moving]
+            change = anchor.change(xm @ d_ln, np.tensordot(xm, d_res, axes=1), np.tensordot(xm, d_out, axes=1))
+            g = float(np.prod([1.0 + x[i] for i in gains])) if gains else 1.0
+            cache[key] = stacked(g * (th + change) - th)
+            _bounded(cache)
+        return cache[key]
+
+    # how far each fitted pole may sit from its predicted place: the model's pole sensitivities are uncertain by
+    # POLE_SENSITIVITY_ERROR (absolute) for a relative parameter, by their own size for an offset, times the range
+    reach = 0.0
+    reach_r = 0.0
+    for i in moving:
+        p = params[i]
+        if not p.changes_model:
+            continue
+        size = max(abs(p.lo), abs(p.hi))
+        own = float(np.max(np.abs(d_ln[moving.index(i)])))
+        reach += size * (POLE_SENSITIVITY_ERROR if p.kind == "factor" else own)
+        reach_r += size * (RESIDUE_SENSITIVITY_ERROR if p.kind == "factor" else own)
+    # the change of the modes outside the fit (a quasi-static compliance inside the band) is the model's too: it
+    # may be off by OUT_OF_BAND_ERROR of its largest size over the ranges, as a constant (real and imaginary) and a
+    # 1 / w^2 line per channel pair
+    out_reach = OUT_OF_BAND_ERROR * np.max(sum(max(abs(params[i].lo), abs(params[i].hi)) * np.abs(d_out[k])
+                                              for k, i in enumerate(moving) if params[i].changes_model)
+                                          if moving else np.zeros(1), axis=0)
+    dirs: list[np.ndarray] = []
+    bounds: list[float] = []
+    if reach > 0:
+        dirs.extend(stacked(v) for v in anchor.pole_directions())
+        bounds.extend([reach] * (2 * anchor.poles.size))
+    if reach_r > 0:
+        for r, per_mode in enumerate(anchor.residue_directions()):
+            for part in per_mode:
+                for q in range(th.shape[1]):
+                    dirs.append(stacked(part[..., q]))
+                    bounds.append(reach_r * float(abs(anchor.residues[r, q])))
+    w = anchor.omega
+    for k, size in enumerate(np.atleast_1d(out_reach)):
+        if size <= 0:
+            continue
+        for shape in (np.ones_like(w), 1j * np.ones_like(w), (w.min() / w) ** 2):
+            one = np.zeros((w.size, th.shape[1]), dtype=complex)
+            one[:, k] = shape
+            dirs.append(stacked(one))
+            bounds.append(float(size))
+    # a direction with no prior scale (a silent pair's residue or compliance) is no freedom at all
+    scales = np.array(bounds, dtype=float)
+    keep = scales > 0
+    dirs = [d for d, k in zip(dirs, keep) if k]
+    bounds = [float(b) for b, k in zip(scales, keep) if k]
+    form = None
+    if dirs:
+        form = ModelForm(np.array(dirs), np.array(bounds),
+                         "each fitted mode's pole moved beyond its predicted shift (the model's pole sensitivities "
+                         f"uncertain by {POLE_SENSITIVITY_ERROR:g} per unit relative change) and the other modes' "
+                         f"change off by {OUT_OF_BAND_ERROR:g} of itself")
+    return BenignPrediction(params, predict, form, True)
 
 
 @dataclass(frozen=True)

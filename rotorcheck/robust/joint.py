@@ -44,6 +44,22 @@ MC_SEED = 20261124
 
 
 @dataclass(frozen=True)
+class ModelForm:
+    """The benign model's own error as real-coefficient directions of H0 with a Gaussian prior (a low-rank error
+    covariance ``V^T diag(scale^2) V`` added to the noise's): ``V`` (r, n) complex m/N per unit coefficient, each
+    coefficient ~ N(0, ``scale``^2) (r,), fitted with that penalty (bounded at :data:`FORM_BOX` scales); ``what``
+    says what they stand for (e.g. each fitted mode's pole moved beyond the model's predicted shift)."""
+
+    V: np.ndarray
+    scale: np.ndarray
+    what: str = ""
+
+
+#: a model-form coefficient is kept within this many of its prior scales (the penalty does the rest)
+FORM_BOX = 6.0
+
+
+@dataclass(frozen=True)
 class BenignModel:
     """Benign change predicted by the model: ``predict(theta)`` (n,) complex, m/N, with ``theta``
     (p,) real inside ``[lo, hi]``; ``kappa`` the relative error of that prediction carried in H0."""
@@ -56,6 +72,8 @@ class BenignModel:
     step: np.ndarray | float = 1e-4  # finite-difference step(s) of theta for the Jacobian (theta's units)
     envelope: np.ndarray | None = None  # (n,) largest benign change the ranges allow at each point, m/N
     exact: np.ndarray | None = None  # (p,) bool: parameters whose predicted change is exact (gains): no kappa
+    form: ModelForm | None = None  # the prediction's own bounded error as H0 nuisance (joint_test's model_form)
+    cheap: bool = False  # ``predict`` is a closed form (no re-solve): the fit may scan the ranges first
 
 
 @dataclass(frozen=True)
@@ -199,12 +217,14 @@ def _max_one_sided(C: np.ndarray, draws: int, seed: int) -> np.ndarray:
 def joint_test(residual: np.ndarray, var_total: np.ndarray, signatures: np.ndarray,
                elements: Sequence[int], benign: BenignModel | None = None,
                learned: LearnedDirections | None = None, false_alarm: float = 0.01,
-               draws: int = MC_DRAWS, seed: int = MC_SEED, exclude: np.ndarray | None = None) -> JointResult:
+               draws: int = MC_DRAWS, seed: int = MC_SEED, exclude: np.ndarray | None = None,
+               model_form: ModelForm | None = None) -> JointResult:
     """The joint GLR test (module docstring). ``residual`` (n,) complex m/N; ``var_total`` (n,) m^2/N^2;
     ``signatures`` (n_e, n) complex m/N per unit stiffness loss of each candidate element. ``exclude`` (n,)
     bool: points that carry no evidence (weight 0 in every fit and statistic, not counted in ``n_points``,
     the per-point Sidak threshold or the dof; their ``point_statistic`` is 0), e.g. points on a shaft
-    harmonic."""
+    harmonic. ``model_form``: the model's bounded error in predicting benign change as real-coefficient
+    directions (:class:`ModelForm`), part of H0."""
     if not 0.0 < false_alarm < 1.0:
         raise ValueError(f"false_alarm must be in (0, 1), got {false_alarm}")
     r = np.asarray(residual, dtype=complex).ravel()
@@ -221,6 +241,11 @@ def joint_test(residual: np.ndarray, var_total: np.ndarray, signatures: np.ndarr
     p = 0 if benign is None else len(benign.lo)
     q = 0 if learned is None else learned.U.shape[0]
     U = learned.U if learned is not None else np.zeros((0, r.size), dtype=complex)
+    if model_form is None and benign is not None:
+        model_form = benign.form
+    nf = 0 if model_form is None else model_form.V.shape[0]
+    V = model_form.V.reshape(nf, r.size) if model_form is not None else np.zeros((0, r.size), dtype=complex)
+    f0 = p + 2 * q  # where the model-form coefficients start
 
     def model_ri(x: np.ndarray) -> np.ndarray:
         b = np.zeros_like(r)
@@ -228,21 +253,25 @@ def joint_test(residual: np.ndarray, var_total: np.ndarray, signatures: np.ndarr
             assert benign is not None
             b = b + benign.predict(x[:p])
         if q:
-            c = x[p:p + q] + 1j * x[p + q:]
+            c = x[p:p + q] + 1j * x[p + q:f0]
             b = b + c @ U
+        if nf:
+            b = b + x[f0:] @ V
         return b
 
-    # unknowns: the benign parameters, then the learned coefficients' real and imaginary parts
+    # unknowns: the benign parameters, the learned coefficients' real and imaginary parts, the model-form ones
     c_max = learned.c_max if learned is not None else np.zeros(0)
-    lo = np.concatenate([benign.lo if benign is not None else np.zeros(0), -c_max, -c_max])
-    hi = np.concatenate([benign.hi if benign is not None else np.zeros(0), c_max, c_max])
+    form_scale = np.asarray(model_form.scale, dtype=float) if model_form is not None else np.zeros(0)
+    form_max = FORM_BOX * form_scale
+    lo = np.concatenate([benign.lo if benign is not None else np.zeros(0), -c_max, -c_max, -form_max])
+    hi = np.concatenate([benign.hi if benign is not None else np.zeros(0), c_max, c_max, form_max])
     x0 = np.zeros(lo.size)
     if benign is not None:
         x0[:p] = np.clip(0.0, benign.lo, benign.hi)
     kappa = benign.kappa if benign is not None else 0.0
 
     def jac_at(x: np.ndarray, w: np.ndarray) -> np.ndarray:
-        J = np.zeros((2 * r.size, x.size))
+        J = np.zeros((2 * r.size + nf, x.size))
         if p:
             assert benign is not None
             b0 = benign.predict(x[:p])
@@ -251,15 +280,19 @@ def joint_test(residual: np.ndarray, var_total: np.ndarray, signatures: np.ndarr
                 h = float(steps[j]) if x[j] + steps[j] <= hi[j] else -float(steps[j])
                 xj = x[:p].copy()
                 xj[j] += h
-                J[:, j] = _ri((benign.predict(xj) - b0) / h) * w
+                J[:2 * r.size, j] = _ri((benign.predict(xj) - b0) / h) * w
         if q:
-            J[:, p:p + q] = _ri(U).T * w[:, None]
-            J[:, p + q:] = _ri(1j * U).T * w[:, None]
+            J[:2 * r.size, p:p + q] = _ri(U).T * w[:, None]
+            J[:2 * r.size, p + q:f0] = _ri(1j * U).T * w[:, None]
+        if nf:
+            J[:2 * r.size, f0:] = _ri(V).T * w[:, None]
+            J[2 * r.size:, f0:] = -np.diag(1.0 / form_scale)  # the prior's rows: d(x / scale) = -d model
         return J
 
     def whitened(x: np.ndarray, ww: np.ndarray) -> np.ndarray:
-        """The residual left by the nuisance at ``x``, whitened by ``ww`` (2n,)."""
-        return _ri(r - model_ri(x)) * ww
+        """The residual left by the nuisance at ``x``, whitened by ``ww`` (2n,), then the model-form prior's rows."""
+        out = _ri(r - model_ri(x)) * ww
+        return np.concatenate([out, x[f0:] / form_scale]) if nf else out
 
     def allowance_at(x: np.ndarray) -> np.ndarray:
         """kappa times the predicted (inexact) benign change at ``x`` (m/N per point)."""
@@ -283,9 +316,20 @@ def joint_test(residual: np.ndarray, var_total: np.ndarray, signatures: np.ndarr
     if lo.size:
         # start from the better of x0 and the bounded linear fit at x0 (a large change such as E at the
         # edge of its range is far outside the first-order region)
-        lin = optimize.lsq_linear(jac_at(x0, w), whitened(x0, w), bounds=(lo - x0, hi - x0), method="bvls")
-        x_lin = np.clip(x0 + lin.x, lo, hi)
-        theta = min((x0, x_lin), key=lambda x: float(np.sum(whitened(x, w) ** 2)))
+        def cost(x: np.ndarray) -> float:
+            return float(np.sum(whitened(x, w) ** 2))
+        start = x0
+        if p and benign is not None and benign.cheap:
+            # a cheap prediction (the modal anchor): scan each benign parameter over its range, twice round, so
+            # that the fit starts in the right valley (E moves a mode by a half-power bandwidth over its range)
+            for _ in range(2):
+                for j in range(p):
+                    trial = [start] + [np.where(np.arange(lo.size) == j, v, start)
+                                       for v in np.linspace(lo[j], hi[j], 9)]
+                    start = min(trial, key=cost)
+        lin = optimize.lsq_linear(jac_at(start, w), whitened(start, w), bounds=(lo - start, hi - start), method="bvls")
+        x_lin = np.clip(start + lin.x, lo, hi)
+        theta = min((x0, start, x_lin), key=cost)
         for _ in range(2 if kappa > 0 else 1):  # refit once with the model-error variance
             theta = refine(theta, w)
             allowance = allowance_at(theta)
@@ -313,6 +357,8 @@ def joint_test(residual: np.ndarray, var_total: np.ndarray, signatures: np.ndarr
     # free nuisance columns: the linearized H0 tangent space (bound-active ones held)
     Jf = J[:, ~at_bound]
     Sw = _ri(S) * w  # (n_e, 2n)
+    if nf:
+        Sw = np.concatenate([Sw, np.zeros((Sw.shape[0], nf))], axis=1)  # a crack is no model-form coefficient
     if Jf.shape[1]:
         Q, _ = np.linalg.qr(Jf)
         Sp = Sw - (Sw @ Q) @ Q.T
@@ -367,7 +413,7 @@ def joint_test(residual: np.ndarray, var_total: np.ndarray, signatures: np.ndarr
         theta_se=theta_se, theta_names=benign.names if benign is not None else (),
         theta_at_bound=at_bound[:p], chi2_h0=chi2_h0, dof_h0=int(2 * n_used - int(np.count_nonzero(~at_bound))),
         learned=q, kappa=kappa, n_points=n_used, unexplained=r - model_ri(theta),
-        point_statistic=res0[: r.size] ** 2 + res0[r.size:] ** 2,
+        point_statistic=res0[: r.size] ** 2 + res0[r.size:2 * r.size] ** 2,
         point_threshold=float(-2.0 * np.log(-np.expm1(np.log1p(-false_alarm) / max(n_used, 1)))),
         model_error=allowance, notes=notes, benign=benign,
     )

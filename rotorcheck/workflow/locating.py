@@ -19,7 +19,7 @@ from rotorcheck.progress import Progress
 from rotorcheck.ranking import Ranking, SweepChange, sweep_change
 from rotorcheck.signatures import BenignBox, benign_box
 from rotorcheck.variability import benign_at
-from rotorcheck.workflow.benign import KAPPA_NOMINAL, benign_model
+from rotorcheck.workflow.benign import benign_model
 from rotorcheck.workflow.detectors import DetectorSettings, make_detector
 from rotorcheck.workflow.measured import MeasuredRun, frf_estimate, healthy_frf_of, per_pair, run_harmonics
 from rotorcheck.workflow.rigs import baseline_updates, check_elements, updated_rig
@@ -52,7 +52,7 @@ def location_inputs(rig: RigConfig, run: MeasuredRun, healthy_frf: np.ndarray, h
     params = benign_at(rig, speed) if rig.variability else ()
     box = benign_box(rig, speed, params, run.speed_rpm - speed)
     pairs = list(run.pairs)
-    bm = benign_model(rig, f, speed, th, KAPPA_NOMINAL, run.speed_rpm - speed, None, pairs if n_pairs > 1 else None)
+    bm = benign_model(rig, f, speed, th, None, run.speed_rpm - speed, None, pairs if n_pairs > 1 else None)
     env = np.zeros(f.size * n_pairs) if bm is None else np.asarray(bm.envelope, dtype=float)
     harmonics = run_harmonics([run], (speed,))
     change = sweep_change(box, pairs, f, speed, est.frf, est.var, th, vh, env, harmonics.flagged)

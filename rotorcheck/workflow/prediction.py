@@ -21,7 +21,7 @@ from rotorcheck.errors import InputError
 from rotorcheck.nominal import ChannelPair, parse_port
 from rotorcheck.progress import Progress
 from rotorcheck.signatures import io_frf
-from rotorcheck.workflow.benign import KAPPA_NOMINAL, benign_model
+from rotorcheck.workflow.benign import benign_model
 from rotorcheck.workflow.rigs import check_elements
 
 DETECTABILITY_POINTS = 262  # grid of a prediction from stated noise without analysis.n_points
@@ -115,7 +115,7 @@ def detectability_for_rig(
         noise = (f"noise from the baseline {source} (healthy variance per point, {baseline.n_healthy} healthy "
                  "sweep(s); the new sweep as one)")
         th = th.reshape(f.size, -1)
-        kappa = KAPPA_NOMINAL if baseline.benign_kappa is None else float(baseline.benign_kappa)
+        kappa = None if baseline.benign_kappa is None else float(baseline.benign_kappa)
         bm = benign_model(config, f, speed, th[:, 0], kappa)
         return detectability(config, f, speed, var_n.reshape(f.size, -1), var_b.reshape(f.size, -1), pairs,
                              th, false_alarm, bm, elements, None, noise, workers, progress=progress)
@@ -123,7 +123,7 @@ def detectability_for_rig(
     var = np.full((f.size, len(pairs)), v)
     multi = pairs if len(pairs) > 1 else None
     th = io_frf(config, f, speed, multi)
-    bm = benign_model(config, f, speed, th, KAPPA_NOMINAL, 0.0, None, multi)
+    bm = benign_model(config, f, speed, th, None, 0.0, None, multi)
     return detectability(config, f, speed, var, var, pairs, th, false_alarm, bm, elements, None, noise, workers,
                          model_frf=th, progress=progress)
 
@@ -152,7 +152,7 @@ def sensor_ranking_for_rig(
                                         "ranking sensors needs stated noise: give --noise-std (m)")
 
     def benign_for(pairs: list[ChannelPair], th: np.ndarray) -> Any:
-        return benign_model(config, f, speed, th, KAPPA_NOMINAL, 0.0, None, pairs if len(pairs) > 1 else None)
+        return benign_model(config, f, speed, th, None, 0.0, None, pairs if len(pairs) > 1 else None)
 
     try:
         ranked, method, seen = rank_sensor_sets(config, f, speed, v, cand, acts, max_sensors, benign_for, false_alarm)

@@ -18,7 +18,7 @@ from rotorcheck.robust.noise import NoiseBound
 from rotorcheck.robust.validation import STATUS_EXCLUDED, ValidationResult
 from rotorcheck.signal.harmonics import ShaftHarmonics
 from rotorcheck.updating import Update, update_parameters
-from rotorcheck.workflow.benign import KAPPA_NOMINAL, BenignLearning, learn_benign
+from rotorcheck.workflow.benign import BenignLearning, learn_benign
 from rotorcheck.workflow.measured import (
     MeasuredRun,
     aligned_pairs,
@@ -153,7 +153,7 @@ def validate(
     learning = None
     if enclose == "measured":
         learning = (learn_benign(model_rig, runs, exclude=harmonics.flagged) if learn_drift
-                    else BenignLearning(KAPPA_NOMINAL))
+                    else BenignLearning(None))
     learned = learning.learned if learning is not None else None
     for r in runs[1:]:
         if pair_keys(r) != pair_keys(first):
@@ -182,7 +182,7 @@ def learning_summary(outcome: ValidationOutcome) -> str:
         return ""
     lines = [f"benign drift learned from {len(outcome.runs)} healthy sweeps: the named parameters (model + "
              f"learned correction) explain in sample {100 * (lrn.explained or 0.0):.1f} % of their spread "
-             f"(whitened); kappa = {lrn.kappa:g}; "
+             f"(whitened); kappa = {'default' if lrn.kappa is None else f'{lrn.kappa:g}'}; "
              f"{0 if lrn.learned is None else lrn.learned.U.shape[0]} further directions"]
     for name, (sh, cos) in lrn.model_share.items():
         lines.append(f"  {name}: the model predicts {100 * sh:.0f} % of the data's response (cosine {cos:.2f})")

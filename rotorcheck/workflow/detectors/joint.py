@@ -16,7 +16,7 @@ from rotorcheck.baseline import Baseline
 from rotorcheck.config import RigConfig
 from rotorcheck.robust.joint import JOINT_RULE, JointResult, LearnedDirections
 from rotorcheck.robust.validation import Verdict
-from rotorcheck.workflow.benign import KAPPA_NOMINAL, certify_beyond_benign, joint_detection
+from rotorcheck.workflow.benign import certify_beyond_benign, joint_detection
 from rotorcheck.workflow.detectors.base import Detection, DetectorSettings
 from rotorcheck.workflow.detectors.certified import CertifiedDetector
 from rotorcheck.workflow.measured import MeasuredRun
@@ -75,7 +75,7 @@ class JointDetector:
         if rig is None or b is None:
             raise RuntimeError("prepare() the detector first")
         found = self.points.detect(run)
-        kappa = KAPPA_NOMINAL if b.benign_kappa is None else float(b.benign_kappa)
+        kappa = None if b.benign_kappa is None else float(b.benign_kappa)
         th, var = np.asarray(b.healthy_frf), np.asarray(b.healthy_frf_var)
         out = None if found.harmonics is None else found.harmonics.flagged
         joint = joint_detection(rig, th, var, run, kappa, learned_directions(b), self.settings.false_alarm,
