@@ -38,7 +38,7 @@ import numpy as np
 
 from rotorcheck.config import RigConfig
 from rotorcheck.location import _relation, depth_of_loss
-from rotorcheck.nominal import ChannelPair
+from rotorcheck.nominal import ChannelPair, model_pairs
 from rotorcheck.progress import Progress, report
 from rotorcheck.robust.joint import POWER_Z, BenignModel, joint_test
 from rotorcheck.signatures import crack_signatures, io_frf, stacked, unstacked
@@ -243,7 +243,7 @@ def detectability(
 
     f = np.asarray(freq_hz, dtype=float)
     P = len(pairs)
-    multi = list(pairs) if P > 1 else None
+    multi = model_pairs(config, pairs)  # a single pair other than the rig's own is that pair
     if model_frf is None and healthy_frf is None:
         model_frf = io_frf(config, f, speed_rpm, multi)
     th = np.asarray(healthy_frf) if healthy_frf is not None else np.asarray(model_frf)
@@ -371,7 +371,7 @@ def visible_elements(config: RigConfig, freq_hz: np.ndarray, speed_rpm: float, s
                      actuators: Sequence[Any]) -> tuple[int, ...]:
     """The shaft elements that at least one sensor-actuator pair sees (a crack there changes an FRF)."""
     prs = [ChannelPair(o, i, "") for o in sensors for i in actuators]
-    multi = prs if len(prs) > 1 else None
+    multi = model_pairs(config, prs)
     th = io_frf(config, freq_hz, speed_rpm, multi)
     return crack_signatures(config, freq_hz, speed_rpm, th, pairs=multi, model_frf=th)[0]
 
@@ -382,7 +382,7 @@ def score_sensor_set(config: RigConfig, freq_hz: np.ndarray, speed_rpm: float, v
     """The worst of ``elements`` for one sensor set (every sensor with every actuator), the benign model
     ``benign_for(pairs, healthy_frf)`` linearized; an element the set cannot see counts as undetectable."""
     prs = [ChannelPair(o, i, "") for o in sensors for i in actuators]
-    multi = prs if len(prs) > 1 else None
+    multi = model_pairs(config, prs)
     th = io_frf(config, freq_hz, speed_rpm, multi)
     bm = benign_for(prs, th)
     det = detectability(config, freq_hz, speed_rpm, np.full(th.shape, variance), np.full(th.shape, variance), prs,

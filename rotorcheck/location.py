@@ -159,6 +159,7 @@ class LocationResult:
     certified: bool = True  # the certificates were computed (locate); else the ranking alone (detect)
     damage: bool | None = None  # the detector's verdict is damage (None: not known; the certificate decides)
     sensor_advice: str = ""  # when not locatable: the sensor set that would locate it
+    sensor_advice_detail: dict[str, Any] | None = None  # its figures (rotorcheck.sensor_advice.SensorAdvice)
 
     @property
     def damage_found(self) -> bool:
@@ -244,6 +245,7 @@ class LocationResult:
                 "candidates": [c.to_dict() for c in self.candidates],
                 **({} if self.ranking is None else {"ranking": self.ranking.to_dict()}),
                 **({"sensor_advice": self.sensor_advice} if self.sensor_advice else {}),
+                **({"sensor_advice_detail": self.sensor_advice_detail} if self.sensor_advice_detail else {}),
                 **({} if self.single_channel is None else {"single_channel": self.single_channel.to_dict()})}
 
 

@@ -211,6 +211,18 @@ def primary_pair(config: RigConfig) -> ChannelPair:
                        config.io_ports("validation and detection").actuator, "sensor/actuator")
 
 
+def model_pairs(config: RigConfig, pairs: Sequence[ChannelPair] | None) -> list[ChannelPair] | None:
+    """``pairs`` as the model functions (:func:`rotorcheck.signatures.io_frf` and those built on it) take
+    them: None for the rig's own actuator -> sensor pair alone (the primary path), else the list, one
+    pair included (a single pair other than the primary is that pair, never the primary)."""
+    if pairs is None:
+        return None
+    prs = list(pairs)
+    if len(prs) == 1 and config.ports is not None and prs[0].key() == primary_pair(config).key():
+        return None
+    return prs
+
+
 def pair_receptance(config: RigConfig, freq_hz: np.ndarray, speed_rpm: float, pairs: Sequence[ChannelPair],
                     system: MechanicalSystem | None = None) -> np.ndarray:
     """The model's receptance of each channel pair (f, P), m/N, from one engine receptance."""

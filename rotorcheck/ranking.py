@@ -209,7 +209,14 @@ def loss_model(config: RigConfig, box: Any, element: int, speed_rpm: float, hypo
 def fit_frequencies(change: SweepChange, n_top: int = N_FIT_TOP, n_spread: int = N_FIT_SPREAD) -> np.ndarray:
     """Indices of the fit frequencies: the ``n_top`` largest whitened changes (largest over the trusted
     pairs) and ``n_spread`` more spread evenly over the rest."""
-    c = np.where(change.trusted, change.change2, -np.inf).max(axis=1)
+    return fit_indices(change.change2, change.trusted, n_top, n_spread)
+
+
+def fit_indices(change2: np.ndarray, trusted: np.ndarray, n_top: int = N_FIT_TOP, n_spread: int = N_FIT_SPREAD
+                ) -> np.ndarray:
+    """:func:`fit_frequencies` of a whitened change ``change2`` (f, P) trusted at ``trusted`` (f, P) bool (a
+    predicted change too: :mod:`rotorcheck.sensor_advice`)."""
+    c = np.where(trusted, change2, -np.inf).max(axis=1)
     ok = np.flatnonzero(np.isfinite(c))
     top = ok[np.argsort(c[ok])[::-1][:n_top]]
     rest = np.setdiff1d(ok, top)

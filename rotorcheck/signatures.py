@@ -30,7 +30,7 @@ from rotorcheck.modal_anchor import (
     sensitivity,
 )
 from rotorcheck.modal_anchor import SILENT as MODAL_SILENT
-from rotorcheck.nominal import ChannelPair, nominal_model, pair_receptance, primary_pair
+from rotorcheck.nominal import ChannelPair, model_pairs, nominal_model, pair_receptance, primary_pair
 from rotorcheck.robust.joint import ModelForm
 from rotorcheck.robust.real_box import AffineModel, AffineParameter
 from rotorcheck.variability import BenignParameter, benign_parameters, with_benign
@@ -58,8 +58,9 @@ def io_frf(config: RigConfig, freq_hz: np.ndarray, speed_rpm: float,
                 _IO_FRF[key] = hit
                 _bounded(_IO_FRF, 64)
         return hit.copy()
-    if pairs is not None and len(pairs) > 1:
-        return pair_receptance(config, freq_hz, speed_rpm, pairs, system)
+    several = model_pairs(config, pairs)  # any list but the rig's own pair alone
+    if several is not None:
+        return pair_receptance(config, freq_hz, speed_rpm, several, system)
     g = nominal_model(config, freq_hz, speed_rpm, system).frf
     return g[:, None] if pairs is not None else g
 

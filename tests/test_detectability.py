@@ -200,3 +200,52 @@ def test_channels_that_see_no_element_give_undetectable_rows_not_a_crash() -> No
     assert [(r.element, r.open_loss_min, r.breathing_depth_min_noise_only) for r in det.elements] == [
         (3, None, None), (4, None, None)]
     assert any("see no shaft element" in n for n in det.notes)
+
+
+def _with_sensor(cfg: RigConfig, sensor: Port) -> RigConfig:
+    """``cfg`` whose own sensor (the primary pair's output) is ``sensor``: the same mechanics."""
+    assert cfg.ports is not None
+    return cfg.model_copy(update={"ports": cfg.ports.model_copy(update={"sensor": sensor})})
+
+
+def test_a_single_channel_other_than_the_rigs_own_is_scored_as_that_channel(rig: RigConfig) -> None:
+    """One channel pair that is not the rig's own is that pair (a defect scored every single pair as the rig's
+    own s6.x): its figures equal those of a rig whose own sensor it is (the primary path, nominal model) and
+    the rig's own pair's equal those of a rig that sees it as another pair (the several-pair path); the two
+    channels differ (s2.x sits beside a bearing: 20-80x larger limits)."""
+    cfg = _noise_only(rig)
+    act = cfg.io_ports("test").actuator
+    s2, s6 = Port(station=2, direction="x"), Port(station=6, direction="x")
+    var = np.full(F.size, V)
+    as_other = detectability(cfg, F, 1000.0, var, var, [ChannelPair(s2, act, "")])
+    as_own = detectability(_with_sensor(cfg, s2), F, 1000.0, var, var, [primary_pair(_with_sensor(cfg, s2))])
+    own = detectability(cfg, F, 1000.0, var, var, [primary_pair(cfg)])
+    own_as_other = detectability(_with_sensor(cfg, s2), F, 1000.0, var, var, [ChannelPair(s6, act, "")])
+    for a, b in ((as_other, as_own), (own, own_as_other)):
+        assert [e.element for e in a.elements] == [e.element for e in b.elements]
+        for x, y in zip(a.elements, b.elements):
+            for key in ("open_loss_min_noise_only", "limit_open_loss_noise_only"):
+                u, v = getattr(x, key), getattr(y, key)
+                assert (u is None) == (v is None) and (u is None or u == pytest.approx(v, rel=1e-9))
+    e4 = {d.sensors: next(e for e in d.elements if e.element == 4) for d in (own, as_other)}
+    limit_6, limit_2 = e4[("s6.x",)].limit_open_loss_noise_only, e4[("s2.x",)].limit_open_loss_noise_only
+    assert limit_6 is not None and limit_2 is not None and limit_2 > 20 * limit_6
+
+
+def test_single_sensor_sets_are_ranked_by_their_own_channel(rig: RigConfig) -> None:
+    """The sensor ranking with the benign ranges: the candidate sets s2.x and s6.x score differently (they
+    scored alike when a single pair was taken as the rig's own), and each as the same set does on a rig whose
+    own sensor it is (the rig's current set, scored by the primary path)."""
+    from rotorcheck.workflow import sensor_ranking_for_rig
+
+    got = sensor_ranking_for_rig(rig, ["2x", "6x"], 1, speed_rpm=0.0, noise_std_m=2e-7)
+    by = {tuple(s["sensors"]): s for s in got["best"]}
+    assert set(by) == {("s2.x",), ("s6.x",)}
+    assert by[("s2.x",)]["worst_open_loss_min"] != pytest.approx(by[("s6.x",)]["worst_open_loss_min"], rel=0.05)
+    assert got["current"] == by[("s6.x",)]  # the rig's own sensor, by the primary path
+    other = sensor_ranking_for_rig(_with_sensor(rig, Port(station=2, direction="x")), ["6x"], 1, speed_rpm=0.0,
+                                   noise_std_m=2e-7)
+    for key in ("worst_open_loss_min", "worst_breathing_depth_min"):
+        for a, b in ((other["current"], by[("s2.x",)]), (other["best"][0], by[("s6.x",)])):
+            assert (a[key] is None) == (b[key] is None) and (a[key] is None or a[key] == pytest.approx(b[key],
+                                                                                                      rel=1e-6))

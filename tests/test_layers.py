@@ -33,6 +33,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("rotorcheck.ranking",),  # candidate elements ranked by their best fits (one ranking: detect and locate)
     ("rotorcheck.location",),  # candidate elements with certified severity intervals
     ("rotorcheck.detectability",),  # what a rig, its sensors and noise can detect, per element
+    ("rotorcheck.sensor_advice",),  # the sensor set that would locate a change not locatable (issue 30)
     ("rotorcheck.baseline", "rotorcheck.report"),
     ("rotorcheck.workflow",),
     ("rotorcheck.fleet",),  # many machines over time: tasks over the workflow, summary, trends (issue 15)

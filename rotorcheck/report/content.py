@@ -119,6 +119,10 @@ def conclusion(report: DetectionReport) -> str:
         where, element = _where(report)
         nxt = (f"inspect element {element}, or repeat the sweep to confirm and run rotorcheck locate for certified "
                "intervals" if element is not None else "repeat the sweep to confirm, then run rotorcheck locate")
+        advice = None if report.location is None else report.location.sensor_advice_detail
+        if element is None and advice and advice.get("best"):
+            added = [s for s in advice["best"]["sensors"] if s not in (advice.get("current") or {}).get("sensors", [])]
+            nxt = f"add the probes {', '.join(added)} named above and sweep again, or " + nxt
         return (f"Damage: this sweep differs from the healthy baseline beyond noise and beyond every benign change "
                 f"inside the rig's ranges; {where}. How sure: {sure}. It rests on: {rests}. Next: {nxt}.")
     if verdict == "healthy":

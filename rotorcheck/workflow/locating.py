@@ -11,12 +11,13 @@ from typing import Any
 import numpy as np
 
 from rotorcheck.baseline import Baseline
-from rotorcheck.config import RigConfig
+from rotorcheck.config import Port, RigConfig
 from rotorcheck.errors import InputError
 from rotorcheck.location import LocationResult, locate
-from rotorcheck.nominal import ChannelPair
+from rotorcheck.nominal import ChannelPair, model_pairs, port_label
 from rotorcheck.progress import Progress
 from rotorcheck.ranking import Ranking, SweepChange, sweep_change
+from rotorcheck.sensor_advice import SensorAdvice, advise_sensors, hypotheses_of
 from rotorcheck.signatures import BenignBox, benign_box
 from rotorcheck.variability import benign_at
 from rotorcheck.workflow.benign import benign_model
@@ -85,9 +86,33 @@ def locate_run(rig: RigConfig, run: MeasuredRun, healthy_frf: np.ndarray, health
         single = dataclasses.replace(one, **first)
         res.single_channel = locate(rig, inp.box.for_pair(inp.pairs[0]), inp.pairs[:1], single, false_alarm, elements,
                                     crack_section_length=section_length, certify=certify, damage=damage, **options)
+    if res.kind == "not locatable":
+        advice = sensor_advice(inp, run, res, speed_rpm, false_alarm)
+        res.sensor_advice, res.sensor_advice_detail = advice.text(), advice.to_dict()
     if inp.harmonics_warning:
         res.notes.append(inp.harmonics_warning)
     return res
+
+
+def sensor_advice(inp: LocationInputs, run: MeasuredRun, result: LocationResult, speed_rpm: float | None = None,
+                  false_alarm: float = 0.01, candidates: list[Port] | None = None) -> SensorAdvice:
+    """The smallest set of probes that would locate what ``result`` (not locatable) left open
+    (:func:`rotorcheck.sensor_advice.advise_sensors`): the run's actuators, its FRF noise per point (the
+    median over its pairs), the frequencies every measured pair trusts, the benign ranges at the healthy
+    ``speed_rpm`` (default the run's) moved by the run's offset from it; ``candidates`` default: x and y
+    probes at every station."""
+    rig, ch = inp.rig, inp.change
+    f = ch.freq_hz
+    speed = run.speed_rpm if speed_rpm is None else speed_rpm
+
+    def benign_for(pairs: list[ChannelPair], th: np.ndarray) -> Any:
+        return benign_model(rig, f, speed, th, None, run.speed_rpm - speed, None, model_pairs(rig, pairs))
+
+    sensors = list({port_label(p.output): p.output for p in inp.pairs}.values())
+    actuators = list({port_label(p.input): p.input for p in inp.pairs}.values())
+    trusted = np.all(ch.trusted, axis=1, keepdims=False).astype(bool)  # by every measured pair
+    return advise_sensors(rig, f, speed, np.median(ch.var_new, axis=1), np.median(ch.var_h, axis=1), sensors,
+                          actuators, hypotheses_of(result), benign_for, candidates, trusted, false_alarm)
 
 
 def detector_says_damage(rig: RigConfig, baseline: Baseline, run: MeasuredRun, false_alarm: float = 0.01) -> bool:

@@ -18,7 +18,7 @@ from rotorcheck.detectability import (
     stated_noise_variance,
 )
 from rotorcheck.errors import InputError
-from rotorcheck.nominal import ChannelPair, parse_port
+from rotorcheck.nominal import ChannelPair, model_pairs, parse_port
 from rotorcheck.progress import Progress
 from rotorcheck.signatures import io_frf
 from rotorcheck.workflow.benign import benign_model
@@ -121,7 +121,7 @@ def detectability_for_rig(
                              th, false_alarm, bm, elements, None, noise, workers, progress=progress)
     f, speed, v, noise = _stated_prediction(config, speed_rpm, noise_std_m, periods, source)
     var = np.full((f.size, len(pairs)), v)
-    multi = pairs if len(pairs) > 1 else None
+    multi = model_pairs(config, pairs)
     th = io_frf(config, f, speed, multi)
     bm = benign_model(config, f, speed, th, None, 0.0, None, multi)
     return detectability(config, f, speed, var, var, pairs, th, false_alarm, bm, elements, None, noise, workers,
@@ -152,7 +152,7 @@ def sensor_ranking_for_rig(
                                         "ranking sensors needs stated noise: give --noise-std (m)")
 
     def benign_for(pairs: list[ChannelPair], th: np.ndarray) -> Any:
-        return benign_model(config, f, speed, th, None, 0.0, None, pairs if len(pairs) > 1 else None)
+        return benign_model(config, f, speed, th, None, 0.0, None, model_pairs(config, pairs))
 
     try:
         ranked, method, seen = rank_sensor_sets(config, f, speed, v, cand, acts, max_sensors, benign_for, false_alarm)
