@@ -80,10 +80,7 @@ def test_xy_end_to_end_detects_at_least_as_much_as_one_channel(files, xy_validat
                                                                 capsys: pytest.CaptureFixture) -> None:
     """fit-noise, validate and detect (per-point certified rule) on the x/y files: the crack is damage
     (exit 1) with at least as many certified fault points as the one-channel sweep of the same crack and
-    seed, and the joint test's detectable stiffness loss is smaller; the healthy repeat is healthy (exit
-    0, default rule). (The joint verdict on this 40 % breathing crack: damage on one channel, T = 17, but
-    not on x/y, T = 2.6: the benign parameters at their range edges with the model-error allowance
-    absorb it; noted in the issue.)"""
+    seed; the healthy repeat is healthy (exit 0, default rule)."""
     docs = {}
     for tag in ("xy", "one"):
         out = tmp_path / tag
@@ -101,7 +98,12 @@ def test_xy_end_to_end_detects_at_least_as_much_as_one_channel(files, xy_validat
         assert main(["detect", str(files[f"{tag}_repeat"]), "--out", str(out), "--no-plots", "--force"]) == EXIT_OK
     xy, one = docs["xy"], docs["one"]
     assert xy["n_fault_points"] >= one["n_fault_points"] > 0
-    assert min(docs["xy_joint"]["detectable_stiffness_loss"]) < min(docs["one_joint"]["detectable_stiffness_loss"])
+    # the joint test: one channel predicts benign change on the modal anchor (kappa 0.1); the x/y sweep does
+    # not (the isotropic model's repeated x/y modes cannot describe the anisotropic rig's split ones: its fit
+    # is refused) and falls back to the re-solved model (kappa 2), so its detectable loss is no longer the
+    # smaller one (issue 29's note: x/y probes do not get the modal anchor yet)
+    assert docs["one_joint"]["benign_model_error"] == workflow.KAPPA_MODAL
+    assert docs["xy_joint"]["benign_model_error"] == workflow.KAPPA_NOMINAL
 
 
 def test_detect_refuses_other_channels_than_the_baseline(files, xy_validated: Path, tmp_path: Path,  # type: ignore[no-untyped-def]

@@ -20,6 +20,7 @@ One module per pipeline step (frequencies in Hz, receptances in m/N, D_u in N/m)
 from rotorcheck.errors import InputError
 from rotorcheck.workflow.benign import (
     KAPPA_GRID,
+    KAPPA_MODAL,
     KAPPA_NOMINAL,
     BenignLearning,
     benign_model,
@@ -102,6 +103,7 @@ __all__ = [
     "FILE_RULE",
     "GRID_TOLERANCE_HZ",
     "KAPPA_GRID",
+    "KAPPA_MODAL",
     "KAPPA_NOMINAL",
     "NOISE_METHODS",
     "PLOT_FORMATS",
