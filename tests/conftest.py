@@ -1,10 +1,14 @@
 """Suite-wide: the order the files run in under xdist, and artefacts that several test files share.
 
-Order. ``pytest -n 2 --dist loadfile`` hands each worker whole files. xdist sorts the files by their number
-of tests (``loadscopereorder``), which puts the few slow end-to-end files last, where one worker ends up
-running them alone while the other idles. Here xdist's reorder is off and the files known to be slow
-(:data:`SLOW_FIRST`, measured CPU time, longest first) run first; the rest keep the collection's order and
-fill in behind them, so the two workers finish together (longest processing time first).
+Order. ``pytest -n 2 --dist loadgroup`` (``make test``) hands each worker whole groups: a file, or the files
+of one of :data:`SHARED_GROUPS` together (each test is marked ``xdist_group`` here: its group or its file), so
+that what those files share per worker (:func:`sample_pipeline`, tests/report/figure_checks.py's figures) is
+computed once; ``--dist loadfile`` still runs (files apart, the shared work then done in each worker that
+needs it). xdist sorts the units by their number of tests (``loadscopereorder``), which puts the few slow
+end-to-end files last, where one worker ends up running them alone while the other idles. Here xdist's
+reorder is off and the files known to be slow (:data:`SLOW_FIRST`, measured CPU time, longest first) run
+first, a group where its first file ranks; the rest keep the collection's order and fill in behind them, so
+the two workers finish together (longest processing time first).
 
 Shared artefacts. A sequence of ``rotorcheck`` commands on the bundled samples that several files need (a
 validated baseline, a location) runs once per pytest run (:func:`cli_once`): its output folder is kept under
@@ -64,14 +68,31 @@ SLOW_FIRST: tuple[str, ...] = (
 )
 
 
+#: files that share per-worker work, run by one worker under ``--dist loadgroup`` (group name: files)
+SHARED_GROUPS: dict[str, tuple[str, ...]] = {
+    # sample_pipeline: the open crack at standstill (measured), the breathing crack and the healthy repeat at
+    # 1000 rpm against the measured baseline, each wanted by two of these files
+    "sample_pipeline": ("tests/test_multichannel.py", "tests/report/test_report_parity.py",
+                        "tests/report/test_detection_figures.py", "tests/test_pipeline.py"),
+    # figure_checks.rotor_fig and mode_shapes_fig: the rotor drawings and the compressor's mode shapes
+    "figures": ("tests/report/test_model_figures.py", "tests/report/test_figure_layout.py"),
+}
+
+
 def pytest_configure(config: pytest.Config) -> None:
     if hasattr(config.option, "loadscopereorder"):  # xdist: keep the order below, not "most tests first"
         config.option.loadscopereorder = False
 
 
+@pytest.hookimpl(tryfirst=True)  # before xdist's worker reads the xdist_group marks (--dist loadgroup)
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
     rank = {path: k for k, path in enumerate(SLOW_FIRST)}
     items.sort(key=lambda item: rank.get(item.nodeid.split("::", 1)[0], len(rank)))  # stable: files stay whole
+    if getattr(config.option, "dist", None) == "loadgroup":
+        group = {path: name for name, paths in SHARED_GROUPS.items() for path in paths}
+        for item in items:
+            path = item.nodeid.split("::", 1)[0]
+            item.add_marker(pytest.mark.xdist_group(group.get(path, path)))
 
 
 @pytest.fixture(scope="session")
