@@ -1,10 +1,14 @@
 """Suite-wide: the order the files run in under xdist, and artefacts that several test files share.
 
-Order. ``pytest -n 2 --dist loadfile`` hands each worker whole files. xdist sorts the files by their number
-of tests (``loadscopereorder``), which puts the few slow end-to-end files last, where one worker ends up
-running them alone while the other idles. Here xdist's reorder is off and the files known to be slow
-(:data:`SLOW_FIRST`, measured CPU time, longest first) run first; the rest keep the collection's order and
-fill in behind them, so the two workers finish together (longest processing time first).
+Order. ``pytest -n 2 --dist loadgroup`` (``make test``) hands each worker whole groups: a file, or the files
+of one of :data:`SHARED_GROUPS` together (each test is marked ``xdist_group`` here: its group or its file), so
+that what those files share per worker (:func:`sample_pipeline`, tests/report/figure_checks.py's figures) is
+computed once; ``--dist loadfile`` still runs (files apart, the shared work then done in each worker that
+needs it). xdist sorts the units by their number of tests (``loadscopereorder``), which puts the few slow
+end-to-end files last, where one worker ends up running them alone while the other idles. Here xdist's
+reorder is off and the files known to be slow (:data:`SLOW_FIRST`, measured CPU time, longest first) run
+first, a group where its first file ranks; the rest keep the collection's order and fill in behind them, so
+the two workers finish together (longest processing time first).
 
 Shared artefacts. A sequence of ``rotorcheck`` commands on the bundled samples that several files need (a
 validated baseline, a location) runs once per pytest run (:func:`cli_once`): its output folder is kept under
@@ -25,43 +29,57 @@ import pytest
 
 from tests.shared_runs import CliRun, cli_run, crack_rig_sample, shared_root, validate_0rpm_steps
 
-#: the slowest test files, longest first (CPU seconds of a whole-suite run on 2026-11-27 with the machine shared,
-#: rounded): scheduled first under xdist. test_locate.py makes the shared open-crack location
-#: (conftest.located_open_crack) that report/test_html_report.py reads later on.
+#: the slowest test files, longest first (CPU seconds of a whole-suite run with -n 2 --dist loadgroup on 2026-11-27,
+#: the machine shared: load average 10-12, rounded): scheduled first under xdist, a SHARED_GROUPS group where its
+#: first file ranks. test_locate.py makes the shared open-crack location (conftest.located_open_crack) that
+#: report/test_html_report.py reads later on; the fleet files share tests/fleet/conftest.small_fleet.
 SLOW_FIRST: tuple[str, ...] = (
-    "tests/fleet/test_fleet_demo_trends.py",  # ~60 (measured alone): the demo's 3 changing machines x 10 sweeps
-    "tests/test_multichannel.py",  # 47: x/y end to end, the x/y standstill detection
-    "tests/faults/test_faults_time_sim.py",  # 36: harmonic balance against time integration
-    "tests/test_locate.py",  # 29: the shared locate; detect and locate one element
-    "tests/fleet/test_fleet_executors.py",  # 29: serial, processes, Dask
-    "tests/test_pipeline.py",  # 27
-    "tests/robust/test_damage_block.py",  # 26
-    "tests/robust/test_robust_mu.py",  # 26: brute-force references
-    "tests/test_measured_detection.py",  # 24: Monte Carlo coverage
-    "tests/sweep/test_sweep_simulator.py",  # 20: ODE time integration
-    "tests/test_sigkill.py",  # 20: commands in subprocesses, killed at four moments each
-    "tests/report/test_model_figures.py",  # 20
-    "tests/fleet/test_fleet_runs.py",  # 20
-    "tests/test_golden.py",  # 17: 14 cases through the command line
-    "tests/test_compressor_rig.py",  # 15
-    "tests/test_detectability.py",  # 15
-    "tests/fleet/test_fleet_dask_kill.py",  # 14
-    "tests/test_samples.py",  # 13: regenerates every bundled sample
-    "tests/test_rig_features.py",  # 12
-    "tests/test_install.py",  # 11: builds and installs the wheel
-    "tests/robust/test_robust_defects.py",  # 10
-    "tests/test_uff_detect.py",  # 9
-    "tests/report/test_html_report.py",  # 6
-    "tests/test_baseline_digest.py",  # 6
-    "tests/test_multirun.py",  # 6
-    "tests/robust/test_mixed_mu.py",  # 5
-    "tests/robust/test_joint.py",  # 5
-    "tests/report/test_detection_figures.py",  # 5
-    "tests/robust/test_severity.py",  # 4
-    "tests/fe/test_fe_plots.py",  # 4
-    "tests/robust/test_robust_identify.py",  # 4
-    "tests/test_own_rig.py",  # 4
+    "tests/test_multichannel.py",  # 37, group sample_pipeline (75 with the three below): x/y end to end
+    "tests/test_pipeline.py",  # 19
+    "tests/report/test_detection_figures.py",  # 17
+    "tests/report/test_report_parity.py",  # 0.1 (its detections are the two files' above)
+    "tests/report/test_model_figures.py",  # 24, group figures (45 with the file below)
+    "tests/report/test_figure_layout.py",  # 21
+    "tests/fleet/test_fleet_demo_trends.py",  # 27: the demo's 3 changing machines x 10 sweeps
+    "tests/faults/test_faults_time_sim.py",  # 26: harmonic balance against time integration
+    "tests/fleet/test_fleet_runs.py",  # 27 (with small_fleet)
+    "tests/fleet/test_fleet_executors.py",  # 22: serial, processes, Dask
+    "tests/test_locate.py",  # 22: the shared locate; detect and locate one element
+    "tests/test_sigkill.py",  # 19: commands in subprocesses, killed at four moments each
+    "tests/robust/test_robust_mu.py",  # 18: brute-force references
+    "tests/robust/test_damage_block.py",  # 17
+    "tests/test_measured_detection.py",  # 17: Monte Carlo coverage
+    "tests/sweep/test_sweep_simulator.py",  # 15: ODE time integration
+    "tests/test_cli_streams.py",  # 14
+    "tests/test_compressor_rig.py",  # 14
+    "tests/test_harden_claims.py",  # 13
+    "tests/test_rig_features.py",  # 13
+    "tests/test_golden.py",  # 12: 14 cases through the command line
+    "tests/report/test_html_report.py",  # 11
+    "tests/test_detectability.py",  # 9
+    "tests/test_open_crack_series.py",  # 8
+    "tests/test_samples.py",  # 8: regenerates every bundled sample
+    "tests/fleet/test_fleet_dask_kill.py",  # 8
+    "tests/test_install.py",  # 8: builds and installs the wheel
+    "tests/test_uff_detect.py",  # 7
+    "tests/robust/test_robust_defects.py",  # 6
+    "tests/test_ross_import.py",  # 6
+    "tests/test_baseline_digest.py",  # 5
+    "tests/fe/test_fe_plots.py",  # 5
+    "tests/robust/test_mixed_mu.py",  # 4
+    "tests/test_multirun.py",  # 4
 )
+
+
+#: files that share per-worker work, run by one worker under ``--dist loadgroup`` (group name: files)
+SHARED_GROUPS: dict[str, tuple[str, ...]] = {
+    # sample_pipeline: the open crack at standstill (measured), the breathing crack and the healthy repeat at
+    # 1000 rpm against the measured baseline, each wanted by two of these files
+    "sample_pipeline": ("tests/test_multichannel.py", "tests/report/test_report_parity.py",
+                        "tests/report/test_detection_figures.py", "tests/test_pipeline.py"),
+    # figure_checks.rotor_fig and mode_shapes_fig: the rotor drawings and the compressor's mode shapes
+    "figures": ("tests/report/test_model_figures.py", "tests/report/test_figure_layout.py"),
+}
 
 
 def pytest_configure(config: pytest.Config) -> None:
@@ -69,9 +87,15 @@ def pytest_configure(config: pytest.Config) -> None:
         config.option.loadscopereorder = False
 
 
+@pytest.hookimpl(tryfirst=True)  # before xdist's worker reads the xdist_group marks (--dist loadgroup)
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
     rank = {path: k for k, path in enumerate(SLOW_FIRST)}
     items.sort(key=lambda item: rank.get(item.nodeid.split("::", 1)[0], len(rank)))  # stable: files stay whole
+    if getattr(config.option, "dist", None) == "loadgroup":
+        group = {path: name for name, paths in SHARED_GROUPS.items() for path in paths}
+        for item in items:
+            path = item.nodeid.split("::", 1)[0]
+            item.add_marker(pytest.mark.xdist_group(group.get(path, path)))
 
 
 @pytest.fixture(scope="session")

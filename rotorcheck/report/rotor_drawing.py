@@ -19,10 +19,11 @@ from weakref import WeakKeyDictionary
 
 import numpy as np
 from matplotlib.figure import Figure
+from matplotlib.layout_engine import PlaceHolderLayoutEngine
 from matplotlib.lines import Line2D
 from matplotlib.patches import Patch, PathPatch, Polygon, Rectangle
 from matplotlib.path import Path
-from matplotlib.text import Text
+from matplotlib.text import Annotation, Text
 
 from rotorcheck.config import DamagePort, Port, RigConfig
 from rotorcheck.faults.kinds import fault_elements
@@ -283,9 +284,26 @@ def boxes_overlap(a: Any, b: Any, pad: float = 1.0) -> bool:
 
 
 def text_extent(t: Text) -> Any:
-    """Display-space box of a text's own glyphs (an annotation's arrow left out)."""
-    t.get_window_extent()  # an annotation updates its text position here
+    """Display-space box of a text's own glyphs (an annotation's arrow left out).
+
+    An annotation's text position is updated first, as ``Annotation.get_window_extent`` does, but without
+    the arrow's extent that call also computes (clipping the arrow's path: most of the labels' layout time,
+    and not part of the box returned)."""
+    if isinstance(t, Annotation):
+        renderer = t._renderer  # type: ignore[attr-defined]
+        if t.get_visible() and t._check_xy(renderer):  # type: ignore[attr-defined]
+            if renderer is None:
+                renderer = t._renderer = t.get_figure(root=True)._get_renderer()  # type: ignore[attr-defined, union-attr]
+            t.update_positions(renderer)
     return Text.get_window_extent(t)
+
+
+def _layout(fig: Any) -> None:
+    """Lay the figure out (a draw without rendering) for the text boxes in display space. Not once
+    :func:`settle_labels` froze the layout (``set_layout_engine("none")``): nothing then moves an axes, a
+    draw changes no text box (the same figure, pixel for pixel) and costs a full pass over every artist."""
+    if not isinstance(fig.get_layout_engine(), PlaceHolderLayoutEngine):
+        fig.draw_without_rendering()
 
 
 def declutter(fig: Any, texts: Sequence[Any], avoid: Sequence[Any] = (), max_moves: int = 12) -> None:
@@ -293,7 +311,7 @@ def declutter(fig: Any, texts: Sequence[Any], avoid: Sequence[Any] = (), max_mov
     (up when it sits above its anchor, down when below) by its own height until it overlaps none placed
     before it and none of ``avoid`` (boxes in display space). Texts in data or offset-point coordinates.
     """
-    fig.draw_without_rendering()  # layout: positions in display space
+    _layout(fig)  # positions in display space
     placed: list[Any] = list(avoid)
     for t in texts:
         box = text_extent(t)
@@ -333,7 +351,7 @@ def fit_texts(ax: Any, texts: Sequence[Any], reset: Callable[[], None], margin_p
         return
     fig = ax.figure
     for _ in range(tries):
-        fig.draw_without_rendering()
+        _layout(fig)
         reset()
         _inside_x(ax, texts)
         declutter(fig, texts)

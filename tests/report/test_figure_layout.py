@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Callable
+from functools import cache
 from pathlib import Path
 
 import numpy as np
@@ -22,7 +23,7 @@ from rotorcheck.config import RigConfig, load_config
 from rotorcheck.detectability import Detectability, ElementDetectability
 from rotorcheck.location import CandidateResult, LocationResult
 from rotorcheck.resources import configs_dir
-from tests.report.figure_checks import drawn_texts, overlapping_texts, texts_outside
+from tests.report.figure_checks import drawn_texts, mode_shapes_fig, overlapping_texts, rotor_fig, texts_outside
 
 RIGS = ("crack_rig", "overhung_rig", "compressor_rig", "crack_rig_truth")
 
@@ -53,16 +54,18 @@ def _location(cfg: RigConfig) -> LocationResult:
 
 
 def _rotor(name: str) -> Figure:
-    from rotorcheck.report.rotor_drawing import rotor_figure
-
-    return rotor_figure(load_config(configs_dir() / f"{name}.yaml"))
+    return rotor_fig(name)  # rotor_figure of the bundled config, shared with test_model_figures.py (figure_checks)
 
 
+@cache
 def _detectability_many_ports() -> Figure:
+    """Built once for the two tests that check it (every warning an error while building, as in the first)."""
     from rotorcheck.report.plots import detectability_figure
 
     cfg = load_config(configs_dir() / "crack_rig.yaml")
-    return detectability_figure(cfg, _detectability(cfg, ("6x", "6y", "7x", "2x", "2y"), ("8x", "8y", "7y")))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        return detectability_figure(cfg, _detectability(cfg, ("6x", "6y", "7x", "2x", "2y"), ("8x", "8y", "7y")))
 
 
 def _location_figure() -> Figure:
@@ -74,11 +77,7 @@ def _location_figure() -> Figure:
 
 
 def _mode_shapes() -> Figure:
-    from rotorcheck.fe.assembly import build_system
-    from rotorcheck.report.campbell import mode_shape_figure
-
-    cfg = load_config(configs_dir() / "compressor_rig.yaml")
-    return mode_shape_figure(build_system(cfg), 6000.0, config=cfg)
+    return mode_shapes_fig("compressor_rig", 6000.0)  # shared with test_model_figures.py (figure_checks)
 
 
 def _crack_stiffness() -> Figure:
@@ -106,11 +105,11 @@ def test_texts_do_not_overlap_and_stay_inside(name: str, tmp_path: Path) -> None
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         fig = FIGURES[name]()
-        boxes = drawn_texts(fig)
         fig.savefig(tmp_path / "fig.png", dpi=150)
+        boxes = drawn_texts(fig)  # drawn after saving: at the figure's own dpi, as the checks below see it
     assert len(boxes) > 10  # tick labels, axis labels, titles, legend, annotations: the check sees them
-    assert overlapping_texts(fig) == [], name
-    assert texts_outside(fig) == [], name
+    assert overlapping_texts(fig, boxes) == [], name
+    assert texts_outside(fig, boxes=boxes) == [], name
 
 
 def test_port_labels_sit_above_their_ports_inside_the_drawing() -> None:

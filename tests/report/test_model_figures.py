@@ -18,10 +18,11 @@ from rotorcheck.errors import InputError
 from rotorcheck.fe.assembly import build_system
 from rotorcheck.fe.modal import campbell, model_summary, modes
 from rotorcheck.fe.system import MechanicalSystem
-from rotorcheck.report.campbell import WHIRL_STYLE, campbell_figure, mode_shape_figure, order_criticals
+from rotorcheck.report.campbell import WHIRL_STYLE, campbell_figure, order_criticals
 from rotorcheck.report.crack_plots import crack_figures
-from rotorcheck.report.rotor_drawing import boxes_overlap, rotor_figure, text_extent
+from rotorcheck.report.rotor_drawing import boxes_overlap, text_extent
 from rotorcheck.workflow import model_report
+from tests.report.figure_checks import mode_shapes_fig, rotor_fig
 
 CONFIGS = Path(__file__).resolve().parents[2] / "configs"
 RIGS = ("crack_rig", "overhung_rig", "compressor_rig")
@@ -58,23 +59,29 @@ def assert_no_overlap(texts: list[Text]) -> None:
         assert not boxes_overlap(ba, bb, pad=0.0), f"labels {a!r} and {b!r} overlap"
 
 
+#: brute_criticals' forward frequencies on its grid, per (id of a system of rig(), max rpm, branches)
+_GRID_MODES: dict[tuple[int, float, int], list[np.ndarray]] = {}
+
+
 def brute_criticals(system: MechanicalSystem, max_rpm: float, order: int, n_branches: int) -> list[float]:
     """Independent reference: forward modes by frequency on a fine grid, sign changes of
-    f_k(rpm) - order rpm / 60 bisected."""
+    f_k(rpm) - order rpm / 60 bisected to 1e-4 rpm (the tests compare at 0.5 rpm: 5000 times coarser; the
+    50 halvings used before went to round-off, 1e-12 rpm, at 2.5 times the modal solves)."""
 
     def forward(rpm: float) -> np.ndarray:
         md = modes(system, rpm, n_modes=2 * n_branches)
         return np.array([f for f, w in zip(md.frequency_hz, md.whirl) if w == "forward"])
 
     grid = np.linspace(50.0, max_rpm, 81)
-    vals = [forward(s) for s in grid]
+    key = (id(system), max_rpm, n_branches)  # the grid's modes are the same for every order: solved once
+    vals = _GRID_MODES[key] if key in _GRID_MODES else _GRID_MODES.setdefault(key, [forward(s) for s in grid])
     k_max = min(len(v) for v in vals)
     out = []
     for k in range(k_max):
         g = np.array([v[k] for v in vals]) - order * grid / 60.0
         for i in np.nonzero(np.sign(g[:-1]) != np.sign(g[1:]))[0]:
             lo, hi = grid[i], grid[i + 1]
-            for _ in range(50):
+            while hi - lo > 1e-4:
                 mid = 0.5 * (lo + hi)
                 if np.sign(forward(mid)[k] - order * mid / 60.0) == np.sign(g[i]):
                     lo = mid
@@ -84,7 +91,9 @@ def brute_criticals(system: MechanicalSystem, max_rpm: float, order: int, n_bran
     return sorted(out)
 
 
+@cache
 def campbell_fig(name: str, speed_unit: str = "rpm") -> Figure:
+    """The drawn Campbell figure of ``name``, built once per module run (the tests read its artists only)."""
     config, _ = rig(name)
     camp, crit = campbell_of(name)
     return drawn(campbell_figure(camp, (1, 2), rig_id=config.rig_id, operating_speed_rpm=OPERATING[name],
@@ -185,9 +194,9 @@ def test_campbell_operating_speed_and_hz_unit() -> None:
 
 @pytest.mark.parametrize(("name", "speed"), [("crack_rig", 0.0), ("crack_rig", 1000.0), ("compressor_rig", 6000.0)])
 def test_mode_shapes_are_the_tables_modes(name: str, speed: float) -> None:
-    config, system = rig(name)
+    config, _ = rig(name)
     table = model_summary(config, speed)["modes"]
-    fig = mode_shape_figure(system, speed, config=config)
+    fig = mode_shapes_fig(name, speed)  # mode_shape_figure(system, speed, config=config), shared (figure_checks)
     panels = [ax for ax in fig.axes if lines_by_gid_ax(ax, "shape")]
     assert len(panels) == len(table)
     for i, (ax, row) in enumerate(zip(panels, table)):
@@ -204,7 +213,7 @@ def lines_by_gid_ax(ax, prefix: str) -> list:
 
 def test_mode_shapes_mark_the_rigs_parts_and_split_degenerate_pairs() -> None:
     config, system = rig("crack_rig")
-    fig = mode_shape_figure(system, 0.0, config=config)
+    fig = mode_shapes_fig("crack_rig", 0.0)  # the figure of test_mode_shapes_are_the_tables_modes[crack_rig-0.0]
     z = system.station_positions
     panels = [ax for ax in fig.axes if lines_by_gid_ax(ax, "shape")]
     for ax in panels:
@@ -264,7 +273,7 @@ def test_crack_figures_both_speeds_arrows_and_order_ticks() -> None:
 @pytest.mark.parametrize("name", [*RIGS, "crack_rig_truth"])
 def test_rotor_drawing(name: str) -> None:
     config = load_config(CONFIGS / f"{name}.yaml")
-    fig = drawn(rotor_figure(config))
+    fig = drawn(rotor_fig(name))  # rotor_figure(config), shared with test_figure_layout.py (figure_checks)
     ax = fig.axes[0]
     z = np.asarray(config.stations)
     patches = {p.get_gid(): p for p in ax.patches}
@@ -292,8 +301,7 @@ def test_rotor_drawing(name: str) -> None:
 
 
 def test_rotor_drawing_taper_and_layers() -> None:
-    config = load_config(CONFIGS / "compressor_rig.yaml")
-    ax = rotor_figure(config).axes[0]
+    ax = rotor_fig("compressor_rig").axes[0]  # rotor_figure of configs/compressor_rig.yaml, shared (figure_checks)
     patches = {p.get_gid(): p for p in ax.patches}
     verts = patches["element 10"].get_path().vertices  # impeller fit: 90 -> 70 mm
     left = verts[np.isclose(verts[:, 0], 0.80)][:, 1]
