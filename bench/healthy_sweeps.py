@@ -1,0 +1,85 @@
+"""Power against the number of healthy sweeps (issue 29), per truth variant (:mod:`bench.truth_variants`).
+
+For K = 1, 3, 10 (and more if asked) healthy training sweeps of the truth drifted uniformly inside the declared
+ranges, the product's baseline (``validate --enclose measured``; ``--learn-drift`` from 3 sweeps on) and its joint
+test at 1 % false alarms on new sweeps, drifted inside the ranges as well: healthy ones (false alarms) and open
+cracks in element 4 (stiffness loss) at 0 rpm. Also the coverage of the fitted Young's modulus's 95 % interval on
+the healthy sweeps. Seeded; prints a Markdown table, one row per variant and K.
+
+``python -m bench.healthy_sweeps [--counts 1,3,10] [--healthy 20 --cracks 10] [--variants truth,dampers]
+[--losses 0.02,0.05]``
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+
+import numpy as np
+
+from bench.detection_limit import _inside, sweep_run
+from bench.detection_power import _open_crack
+from bench.truth_variants import VARIANTS, nominal, truth_variant
+from rotorcheck import workflow
+
+
+def run(name: str, count: int, n_healthy: int, n_cracks: int, losses: tuple[float, ...]) -> dict[str, str]:
+    """``{column: value}`` for one variant and training-set size (0 rpm)."""
+    nom = nominal()
+    truth = truth_variant(name, nom)
+    rng = np.random.default_rng([count, 2901])
+    train_values = [_inside(rng) if count > 1 else {} for _ in range(count)]
+    train = [sweep_run(truth, nom, 0.0, 1.0, 35_000_000 + 100 * count + k, benign=v)
+             for k, v in enumerate(train_values)]
+    base = workflow.validate(nom, train, workflow.fit_noise(train[0]), enclose="measured",
+                             learn_drift=count >= 3).baseline
+    # the healthy mean of drifted sweeps sits at their mean drift: the truth's E relative to it
+    e_mean = float(np.mean([v.get("youngs_modulus", 0.0) for v in train_values]))
+    test_rng = np.random.default_rng([29, 0])
+    alarms = covered = 0
+    for i in range(n_healthy):
+        values = _inside(test_rng)
+        out = workflow.detect(nom, base, sweep_run(truth, nom, 0.0, 1.0, 36_000_000 + i, benign=values))
+        alarms += out.verdict.verdict == "damage"
+        j = out.joint
+        k = j.theta_names.index("youngs_modulus")
+        e_true = (1.0 + values["youngs_modulus"]) / (1.0 + e_mean) - 1.0
+        half = 1.96 * float(j.theta_se[k])
+        covered += bool(abs(float(j.theta[k]) - e_true) <= half)
+    row = {"false alarms": f"{alarms}/{n_healthy}", "E interval covers": f"{covered}/{n_healthy}"}
+    for loss in losses:
+        cfg = _open_crack(truth, 1.0 - loss)
+        found = sum(workflow.detect(nom, base, sweep_run(cfg, nom, 0.0, 1.0, 37_000_000 + int(loss * 1e4) * 100 + i,
+                                                        "open_crack", benign=_inside(test_rng))).verdict.verdict
+                    == "damage" for i in range(n_cracks))
+        row[f"{100 * loss:g} % loss found"] = f"{found}/{n_cracks}"
+    return row
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--counts", default="1,3,10")
+    ap.add_argument("--healthy", type=int, default=20)
+    ap.add_argument("--cracks", type=int, default=10)
+    ap.add_argument("--variants", default=",".join(VARIANTS))
+    ap.add_argument("--losses", default="0.02,0.05")
+    a = ap.parse_args(argv)
+    losses = tuple(float(x) for x in a.losses.split(","))
+    rows = []
+    for name in a.variants.split(","):
+        for count in (int(c) for c in a.counts.split(",")):
+            t = time.perf_counter()
+            r = run(name, count, a.healthy, a.cracks, losses)
+            print(f"{name} K={count}: {r} ({time.perf_counter() - t:.0f} s)", file=sys.stderr, flush=True)
+            rows.append((name, count, r))
+    cols = list(rows[0][2])
+    print("| variant | healthy sweeps | " + " | ".join(cols) + " |")
+    print("|---|---:|" + "---:|" * len(cols))
+    for name, count, r in rows:
+        print(f"| {name} | {count} | " + " | ".join(r[c] for c in cols) + " |")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
