@@ -52,8 +52,8 @@ POLE_SENSITIVITY_ERROR = 0.002
 RESIDUE_SENSITIVITY_ERROR = 0.01
 #: the fit's residual norm relative to the healthy FRF's above which the anchor is refused (the model's modes do not
 #: describe the data: x and y probes on a rotor whose model is isotropic and whose truth is not, 1.09; the bundled
-#: samples' single probe at 0, 1000 and 2000 rpm: 0.0008-0.004)
-MAX_MISFIT = 0.01
+#: samples' single probe at 0, 1000 and 2000 rpm: 0.0008-0.004; bearing dampers at 1000 rpm: 0.012)
+MAX_MISFIT = 0.05
 #: a channel pair whose model receptance is below this fraction of the largest pair's is silent (as
 #: :data:`rotorcheck.signatures.SILENT`)
 SILENT = 1e-9
