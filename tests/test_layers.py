@@ -27,6 +27,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("rotorcheck.ingest",),  # time records in (issue 33): writes sweeps, below the simulators
     ("rotorcheck.sim",),  # simulators: above fe, faults and sweep
     ("rotorcheck.nominal",),
+    ("rotorcheck.modal_anchor",),  # the healthy FRF's fitted modes moved by the model's sensitivities (issue 29)
     ("rotorcheck.signatures",),  # crack and benign change shapes by re-solving the model
     ("rotorcheck.rig",),  # a rig's assembled model at one speed as one object
     ("rotorcheck.updating",),  # model updating on the benign parameters
