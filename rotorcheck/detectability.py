@@ -256,7 +256,9 @@ def detectability(
     var = stacked(as_th(var_new) + as_th(var_base))
     # the detector's candidates are every element the channels see (or ``candidates``); ``elements`` only
     # chooses which of them are reported (the threshold is that of the whole candidate set)
-    els, S = crack_signatures(config, f, speed_rpm, th, candidates, pairs=multi, model_frf=model_frf)
+    # the model's own FRF (stated noise) is re-solved; a measured healthy FRF anchors its fitted modes
+    els, S = crack_signatures(config, f, speed_rpm, th, candidates, pairs=multi, model_frf=model_frf,
+                              modal=model_frf is None)
     notes: list[str] = []
     wanted = set(els) if elements is None else set(elements)
     if elements is not None and not wanted <= set(els):
@@ -373,7 +375,7 @@ def visible_elements(config: RigConfig, freq_hz: np.ndarray, speed_rpm: float, s
     prs = [ChannelPair(o, i, "") for o in sensors for i in actuators]
     multi = model_pairs(config, prs)
     th = io_frf(config, freq_hz, speed_rpm, multi)
-    return crack_signatures(config, freq_hz, speed_rpm, th, pairs=multi, model_frf=th)[0]
+    return crack_signatures(config, freq_hz, speed_rpm, th, pairs=multi, model_frf=th, modal=False)[0]
 
 
 def score_sensor_set(config: RigConfig, freq_hz: np.ndarray, speed_rpm: float, variance: float,

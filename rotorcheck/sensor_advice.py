@@ -243,7 +243,7 @@ def candidate_model(config: RigConfig, freq_hz: np.ndarray, speed_rpm: float, po
     f = np.asarray(freq_hz, dtype=float)
     pairs = [ChannelPair(o, i, "") for o in ports for i in actuators]
     th = io_frf(config, f, speed_rpm, pairs)
-    seen, S_seen = crack_signatures(config, f, speed_rpm, th, pairs=pairs, model_frf=th)
+    seen, S_seen = crack_signatures(config, f, speed_rpm, th, pairs=pairs, model_frf=th, modal=False)
     els = candidate_elements(config)
     S = np.zeros((len(els), th.size), dtype=complex)
     for e, row in zip(seen, S_seen):

@@ -87,7 +87,7 @@ def test_the_advice_quotes_detectability_for_its_set(rigs: tuple[RigConfig, RigC
     vn = np.tile(np.median(inp.change.var_new, axis=1)[:, None], (1, len(pairs)))
     vh = np.tile(np.median(inp.change.var_h, axis=1)[:, None], (1, len(pairs)))
     th = workflow.prediction.io_frf(cfg, GRID, 0.0, pairs)
-    bm = benign_model(cfg, GRID, 0.0, th, KAPPA_NOMINAL, 0.0, None, pairs)
+    bm = benign_model(cfg, GRID, 0.0, th, KAPPA_NOMINAL, 0.0, None, pairs, modal=False)  # as the advice does
     assert bm is not None
     det = detectability(cfg, GRID, 0.0, vn, vh, pairs, None, 0.01, linearized(bm), [4], workers=1)
     want = det.elements[0].open_loss_min
@@ -106,7 +106,8 @@ def test_a_set_is_predicted_alike_from_every_candidate_or_from_its_own_channels(
 
     def model(ports: list[Port]) -> Any:
         return candidate_model(cfg, GRID, 0.0, ports, [ACT], var,
-                               lambda pairs, th: benign_model(cfg, GRID, 0.0, th, KAPPA_NOMINAL, 0.0, None, pairs))
+                               lambda pairs, th: benign_model(cfg, GRID, 0.0, th, KAPPA_NOMINAL, 0.0, None, pairs,
+                                                              modal=False))
 
     every = [Port(station=s, direction="x") for s in (6, 2, 3, 9)]
     big = model(every)

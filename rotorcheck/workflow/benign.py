@@ -16,7 +16,7 @@ from rotorcheck.nominal import ChannelPair
 from rotorcheck.robust.joint import BenignModel, JointResult, LearnedDirections, joint_test, learn_directions
 from rotorcheck.robust.real_box import BoxCertificate, certify_points, merge_certificates
 from rotorcheck.robust.validation import STATUS_EXCLUDED
-from rotorcheck.signatures import SILENT, benign_box, benign_prediction, crack_signatures, io_frf, modal_anchor, stacked
+from rotorcheck.signatures import SILENT, benign_box, benign_prediction, crack_signatures, io_frf, stacked
 from rotorcheck.variability import benign_at, benign_parameters
 from rotorcheck.workflow.measured import MeasuredRun, frf_estimate, per_pair
 
@@ -65,7 +65,7 @@ def default_kappa(modal: bool) -> float:
 
 def benign_model(rig: RigConfig, f: np.ndarray, speed_rpm: float, Th: np.ndarray, kappa: float | None,
                   speed_offset: float = 0.0, correction: np.ndarray | None = None,
-                  pairs: Sequence[ChannelPair] | None = None) -> BenignModel | None:
+                  pairs: Sequence[ChannelPair] | None = None, modal: bool = True) -> BenignModel | None:
     """The model's benign change (anchored at ``Th``: :func:`rotorcheck.signatures.benign_prediction`) for the joint
     test, with the model-error factor ``kappa`` (None: :func:`default_kappa` of the anchor in use); None without a
     ``variability`` section. A recorded speed offset shifts the speed parameter's range. ``correction``
@@ -76,7 +76,7 @@ def benign_model(rig: RigConfig, f: np.ndarray, speed_rpm: float, Th: np.ndarray
     params = benign_at(rig, speed_rpm)
     if not params:  # at standstill a speed tolerance changes nothing
         return None
-    pred = benign_prediction(rig, f, speed_rpm, Th, params, pairs)
+    pred = benign_prediction(rig, f, speed_rpm, Th, params, pairs, modal)
     n = int(np.asarray(Th).size)  # points of every channel pair
     lo, hi = pred.lo.copy(), pred.hi.copy()
     step = np.array([1e-4 if p.kind == "factor" else 1e-3 * max(p.hi - p.lo, 1e-9) for p in pred.parameters])
@@ -114,7 +114,7 @@ def benign_model(rig: RigConfig, f: np.ndarray, speed_rpm: float, Th: np.ndarray
 def joint_detection(rig: RigConfig, Th: np.ndarray, var_h: np.ndarray, run: MeasuredRun, kappa: float | None,
                     learned: LearnedDirections | None = None, false_alarm: float = 0.01,
                     speed_rpm: float | None = None, correction: np.ndarray | None = None,
-                    exclude: np.ndarray | None = None) -> JointResult:
+                    exclude: np.ndarray | None = None, modal: bool = True) -> JointResult:
     """The joint test (:mod:`rotorcheck.robust.joint`) of ``run`` against the healthy FRF ``Th`` (f,) or
     (f, P), one column per channel pair, with the variance of its mean ``var_h`` (same shape), m^2/N^2;
     every point of every pair enters one statistic, but those of ``exclude`` (f,) bool (points on a shaft
@@ -125,8 +125,8 @@ def joint_detection(rig: RigConfig, Th: np.ndarray, var_h: np.ndarray, run: Meas
     est = frf_estimate(run)
     th, vh = per_pair(Th, f, est.frf.shape[1], run), per_pair(var_h, f, est.frf.shape[1], run)
     pairs = run.pairs if run.n_pairs > 1 else None
-    els, S = crack_signatures(rig, f, speed, th, pairs=pairs)
-    benign = benign_model(rig, f, speed, th, kappa, run.speed_rpm - speed, correction, pairs)
+    els, S = crack_signatures(rig, f, speed, th, pairs=pairs, modal=modal)
+    benign = benign_model(rig, f, speed, th, kappa, run.speed_rpm - speed, correction, pairs, modal)
     out = None if exclude is None else np.tile(np.asarray(exclude, dtype=bool), est.frf.shape[1])
     return joint_test(stacked(est.frf - th), stacked(est.var + vh), S, els, benign, learned, false_alarm,
                       exclude=out)
@@ -214,15 +214,16 @@ def learn_benign(rig: RigConfig, runs: list[MeasuredRun], false_alarm: float = 0
        ``e_k``; the model's benign change is corrected by the regression ``e ~ theta C`` (the data's own
        response to each named parameter, so the ranges keep their meaning), refitted ``iterations`` times;
     2. benign directions in what remains (:func:`rotorcheck.robust.joint.learn_directions`);
-    3. kappa: the smallest of the grid (:data:`KAPPA_GRID`; on the modal anchor 0.1, 0.3 and 1 before it) under
-       which no sweep, left out and tested against the
+    3. kappa: the smallest of :data:`KAPPA_GRID` under which no sweep, left out and tested against the
        others (correction and directions learned without it), is called damage (the largest if none);
-       on the re-solved model the grid starts at :data:`KAPPA_NOMINAL`: sweeps drawn inside the ranges do not show their
+       the grid starts at :data:`KAPPA_NOMINAL`: sweeps drawn inside the ranges do not show their
        corners (on the crack rig, with an earlier allowance, 8 training sweeps gave 1.0 and 4 of 10
        benign corners were then called damage).
 
-    One sweep: kappa None (the default of the anchor in use), nothing learned; two: directions only (no
-    leave-one-out).
+    All of it on the model re-solved (``modal=False``), and a baseline that learned drift is tested so (the modal
+    anchor of a mean of drifted sweeps, no single state of the machine, predicted less well: with 3 training sweeps
+    on the truth rig and kappa from 0.1 up, 3-4 of 15 drifted healthy sweeps were called damage). One sweep:
+    kappa None (the default of the anchor in use), nothing learned; two: directions only (no leave-one-out).
     Points of ``exclude`` (f,) bool (on a shaft harmonic) teach nothing: no weight in the fits, zero in what
     is learned from."""
 
@@ -240,7 +241,8 @@ def learn_benign(rig: RigConfig, runs: list[MeasuredRun], false_alarm: float = 0
                                                                                  var_flat.size // frfs[0].shape[0])
 
     def fits(C: np.ndarray | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        js = [joint_detection(rig, mean, var_mean, r, 0.0, None, false_alarm, speed, C, exclude) for r in runs]
+        js = [joint_detection(rig, mean, var_mean, r, 0.0, None, false_alarm, speed, C, exclude, modal=False)
+              for r in runs]
         th = np.array([j.theta for j in js], dtype=float)
         left = np.array([j.unexplained for j in js]) * used
         raw = left + (th @ C if C is not None else 0.0) * used  # what the uncorrected model leaves
@@ -269,7 +271,7 @@ def learn_benign(rig: RigConfig, runs: list[MeasuredRun], false_alarm: float = 0
     share: dict[str, tuple[float, float]] = {}
     if C is not None:
         bm = benign_model(rig, runs[0].frequency_hz, speed, mean, 0.0,
-                           pairs=runs[0].pairs if runs[0].n_pairs > 1 else None)
+                           pairs=runs[0].pairs if runs[0].n_pairs > 1 else None, modal=False)
         assert bm is not None, "a correction was learned, so the rig has benign parameters"
         zero = np.zeros(len(params))
         for j, prm in enumerate(params):
@@ -285,7 +287,7 @@ def learn_benign(rig: RigConfig, runs: list[MeasuredRun], false_alarm: float = 0
     spread = np.array([stacked(x - mean) for x in frfs]) * used
     explained = 1.0 - float(np.sum(wgt * np.abs(left) ** 2) / np.sum(wgt * np.abs(spread) ** 2))
     if len(runs) < 3:
-        return BenignLearning(None, C, learned, th, share, explained)
+        return BenignLearning(KAPPA_NOMINAL, C, learned, th, share, explained)  # learned on the model re-solved
 
     def left_out_called_damage(i: int, kappa: float) -> bool:
         rest = [j for j in range(len(runs)) if j != i]
@@ -293,14 +295,10 @@ def learn_benign(rig: RigConfig, runs: list[MeasuredRun], false_alarm: float = 0
         v = np.sum([ests[j].var for j in rest], axis=0) / len(rest) ** 2
         Ci = regress(th[rest], raw[rest]) if C is not None else None
         lrn = learn_directions([left[j] for j in rest], 2.0 * var_flat)
-        return bool(joint_detection(rig, c, v, runs[i], kappa, lrn, false_alarm, speed, Ci, exclude).damage)
+        return bool(joint_detection(rig, c, v, runs[i], kappa, lrn, false_alarm, speed, Ci, exclude,
+                                    modal=False).damage)
 
-    modal = modal_anchor(rig, runs[0].frequency_hz, speed, mean, runs[0].pairs if runs[0].n_pairs > 1 else None)
-    # on the modal anchor the grid climbs from its default to the re-solved model's own (a mean of drifted sweeps
-    # is no single state of the machine: its fitted modes predict less well; measured with 3 training sweeps on the
-    # truth rig, kappa held at 0.1-0.15: 4 of 15 drifted healthy sweeps called damage)
-    grid = tuple(sorted({KAPPA_MODAL * k for k in (1.0, 3.0, 10.0)} | set(KAPPA_GRID))) if modal is not None \
-        else KAPPA_GRID
-    kappa = next((k for k in grid if not any(left_out_called_damage(i, k) for i in range(len(runs)))), grid[-1])
+    kappa = next((k for k in KAPPA_GRID if not any(left_out_called_damage(i, k) for i in range(len(runs)))),
+                 KAPPA_GRID[-1])
     return BenignLearning(kappa, C, learned, th, share, explained)
 

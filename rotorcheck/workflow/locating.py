@@ -106,7 +106,8 @@ def sensor_advice(inp: LocationInputs, run: MeasuredRun, result: LocationResult,
     speed = run.speed_rpm if speed_rpm is None else speed_rpm
 
     def benign_for(pairs: list[ChannelPair], th: np.ndarray) -> Any:
-        return benign_model(rig, f, speed, th, None, run.speed_rpm - speed, None, model_pairs(rig, pairs))
+        return benign_model(rig, f, speed, th, None, run.speed_rpm - speed, None, model_pairs(rig, pairs),
+                            modal=False)  # candidate channels have no measured FRF: the model's own, re-solved
 
     sensors = list({port_label(p.output): p.output for p in inp.pairs}.values())
     actuators = list({port_label(p.input): p.input for p in inp.pairs}.values())

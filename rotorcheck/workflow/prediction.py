@@ -116,14 +116,14 @@ def detectability_for_rig(
                  "sweep(s); the new sweep as one)")
         th = th.reshape(f.size, -1)
         kappa = None if baseline.benign_kappa is None else float(baseline.benign_kappa)
-        bm = benign_model(config, f, speed, th[:, 0], kappa)
+        bm = benign_model(config, f, speed, th[:, 0], kappa, modal=baseline.benign_kappa is None)
         return detectability(config, f, speed, var_n.reshape(f.size, -1), var_b.reshape(f.size, -1), pairs,
                              th, false_alarm, bm, elements, None, noise, workers, progress=progress)
     f, speed, v, noise = _stated_prediction(config, speed_rpm, noise_std_m, periods, source)
     var = np.full((f.size, len(pairs)), v)
     multi = model_pairs(config, pairs)
     th = io_frf(config, f, speed, multi)
-    bm = benign_model(config, f, speed, th, None, 0.0, None, multi)
+    bm = benign_model(config, f, speed, th, None, 0.0, None, multi, modal=False)  # the model's own FRF: re-solved
     return detectability(config, f, speed, var, var, pairs, th, false_alarm, bm, elements, None, noise, workers,
                          model_frf=th, progress=progress)
 
@@ -152,7 +152,7 @@ def sensor_ranking_for_rig(
                                         "ranking sensors needs stated noise: give --noise-std (m)")
 
     def benign_for(pairs: list[ChannelPair], th: np.ndarray) -> Any:
-        return benign_model(config, f, speed, th, None, 0.0, None, model_pairs(config, pairs))
+        return benign_model(config, f, speed, th, None, 0.0, None, model_pairs(config, pairs), modal=False)
 
     try:
         ranked, method, seen = rank_sensor_sets(config, f, speed, v, cand, acts, max_sensors, benign_for, false_alarm)

@@ -78,8 +78,9 @@ class JointDetector:
         kappa = None if b.benign_kappa is None else float(b.benign_kappa)
         th, var = np.asarray(b.healthy_frf), np.asarray(b.healthy_frf_var)
         out = None if found.harmonics is None else found.harmonics.flagged
+        # a baseline that learned drift (--learn-drift) learned it on the model re-solved: tested so
         joint = joint_detection(rig, th, var, run, kappa, learned_directions(b), self.settings.false_alarm,
-                                b.speed_rpm, b.benign_correction, exclude=out)
+                                b.speed_rpm, b.benign_correction, exclude=out, modal=b.benign_kappa is None)
         found.detector, found.rule, found.joint = self.name, JOINT_RULE, joint
         found.verdict = joint_verdict(joint, found.verdict)
         found.statistic, found.threshold, found.p_value = joint.statistic, joint.threshold, joint.p_value
