@@ -375,9 +375,11 @@ def _modal_benign(anchor: ModalAnchor, config: RigConfig, speed_rpm: float, th: 
     form = None
     if dirs:
         form = ModelForm(np.array(dirs), np.array(bounds),
-                         "each fitted mode's pole moved beyond its predicted shift (the model's pole sensitivities "
-                         f"uncertain by {POLE_SENSITIVITY_ERROR:g} per unit relative change) and the other modes' "
-                         f"change off by {OUT_OF_BAND_ERROR:g} of itself")
+                         f"each fitted mode's pole off its predicted place by {POLE_SENSITIVITY_ERROR:g}, each residue "
+                         f"by {RESIDUE_SENSITIVITY_ERROR:g} of itself, per unit of the summed relative ranges, and the "
+                         f"other modes' change by {OUT_OF_BAND_ERROR:g} of itself (1 sigma"
+                         + (f"; x {widen:.2g}: the healthy sweep's modal fit leaves {anchor.misfit:.2g} of it"
+                            if widen > 1 else "") + ")")
     return BenignPrediction(params, predict, form, True)
 
 

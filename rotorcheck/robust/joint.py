@@ -243,6 +243,8 @@ def joint_test(residual: np.ndarray, var_total: np.ndarray, signatures: np.ndarr
     U = learned.U if learned is not None else np.zeros((0, r.size), dtype=complex)
     if model_form is None and benign is not None:
         model_form = benign.form
+    if model_form is not None and model_form.what:
+        notes.append(f"the benign prediction's own error is part of H0 as a Gaussian prior: {model_form.what}")
     nf = 0 if model_form is None else model_form.V.shape[0]
     V = model_form.V.reshape(nf, r.size) if model_form is not None else np.zeros((0, r.size), dtype=complex)
     f0 = p + 2 * q  # where the model-form coefficients start
