@@ -98,7 +98,7 @@ def fe_modes(system: MechanicalSystem, speed_rpm: float, dofs: Sequence[tuple[in
             V, W = vr[:, members], wl[:, members]
             block = V[out, :] @ np.linalg.solve(W.conj().T @ V, W.conj().T @ B)  # (P, P): rows outputs
             res[members] = 0.0
-            res[members[0]] = np.diagonal(block) if block.ndim == 2 else block
+            res[members[0]] = np.diagonal(block)
     tol = 1e-9 * np.maximum(np.abs(lam), 1e-300)
     real = np.abs(lam.imag) <= tol
     keep = (lam.imag > tol) | real
@@ -146,7 +146,8 @@ class ModalAnchor:
     fe_poles: np.ndarray
     fe_residues: np.ndarray
     fe: FEModes
-    fitted: np.ndarray  # (m,) bool: the FE modes (of ``fe``) the fitted ones stand for
+    group: np.ndarray  # (m,) int: the fitted mode each FE mode (of ``fe``) stands for; -1: not fitted, the model's
+    fe_out: np.ndarray  # (f, P) m/N: the FE modes not fitted, summed (:meth:`out_of_band` of ``fe``)
     misfit: float
     heard: np.ndarray  # (P,) bool: pairs the model says respond (x force -> y probe at rest: no); others change 0
 
@@ -194,10 +195,10 @@ class ModalAnchor:
             out[:, 1, :, q, q] = b.T
         return out
 
-    def out_of_band(self, modes: FEModes, member: np.ndarray | None = None) -> np.ndarray:
-        """(f, P) m/N: ``modes``' sum over the modes not fitted (``member`` (m,) int: the fitted mode each of
-        ``modes`` follows, -1 for none; default: ``self.fitted``)."""
-        rest = ~self.fitted if member is None else member < 0
+    def out_of_band(self, modes: FEModes, member: np.ndarray) -> np.ndarray:
+        """(f, P) m/N: ``modes``' sum over the modes that follow no fitted one (``member`` (m,) int: the fitted mode
+        each of ``modes`` follows, -1 for none)."""
+        rest = member < 0
         return modal_frf(modes.poles[rest], modes.residues[rest], modes.real[rest], self.omega)
 
 
@@ -221,34 +222,35 @@ def fit_anchor(system: MechanicalSystem, speed_rpm: float, dofs: Sequence[tuple[
     if not np.any(visible) or f.size < 8:
         return None
     idx = np.flatnonzero(visible)
-    lam0, r0, _ = _merged(fe, idx)
+    lam0, r0, member = _merged(fe, idx)
+    group = np.full(fe.poles.size, -1, dtype=int)
+    group[idx] = member
     g = modal_frf(fe.poles, fe.residues, fe.real, w)
     heard = np.max(np.abs(g), axis=0) > SILENT * np.max(np.abs(g))
     T = T * heard  # a pair the model says is silent is fitted as none (its data are noise)
+    rest = ~visible
+    fe_out = modal_frf(fe.poles[rest], fe.residues[rest], fe.real[rest], w)
     pinned = np.zeros(lam0.size, dtype=bool)
     for _ in range(lam0.size):
-        lam, R, misfit, moved = _fit(fe, visible, w, T, pinned)
+        lam, R, misfit, moved = _fit(lam0, fe_out, w, T, pinned)
         if not np.any(moved & ~pinned):
             if misfit > MAX_MISFIT:
                 return None
-            return ModalAnchor(w, lam, R * heard, lam0, r0 * heard, fe, visible, misfit, heard)
+            return ModalAnchor(w, lam, R * heard, lam0, r0 * heard, fe, group, fe_out, misfit, heard)
         # a mode the data do not pin (a y mode seen by an x probe) would wander off: its pole stays the model's,
         # its residue the data's
         pinned |= moved
     return None
 
 
-def _fit(fe: FEModes, visible: np.ndarray, w: np.ndarray, T: np.ndarray, pinned: np.ndarray
+def _fit(lam0: np.ndarray, fe_out: np.ndarray, w: np.ndarray, T: np.ndarray, pinned: np.ndarray
          ) -> tuple[np.ndarray, np.ndarray, float, np.ndarray]:
-    """One fit of :func:`fit_anchor` with the modes ``visible`` (merged), the poles of ``pinned`` held at the
-    model's: (poles, residues, misfit, moved (k,) bool: a pole at its bound, :data:`MAX_POLE_MOVE` from the
-    model's, or at no damping)."""
-    idx = np.flatnonzero(visible)
-    lam0, _, _ = _merged(fe, idx)
+    """One fit of :func:`fit_anchor`: poles from the model's ``lam0`` (k,, merged), those of ``pinned`` held
+    there, the model's other modes ``fe_out`` (f, P) fixed: (poles, residues, misfit, moved (k,) bool: a pole at
+    its bound, :data:`MAX_POLE_MOVE` from the model's, or at no damping)."""
     m = lam0.size
     free = ~pinned
-    rest = ~visible
-    target = T - modal_frf(fe.poles[rest], fe.residues[rest], fe.real[rest], w)
+    target = T - fe_out
     scale = np.maximum(np.max(np.abs(target), axis=0), 1e-300)  # each pair to unit size: pairs weigh alike
 
     def poles(x: np.ndarray) -> np.ndarray:
@@ -300,13 +302,10 @@ class ModalSensitivity:
     d_res: np.ndarray
     d_out: np.ndarray
 
-    def __mul__(self, x: float) -> ModalSensitivity:
-        return ModalSensitivity(self.d_lnpole * x, self.d_res * x, self.d_out * x)
-
 
 def sensitivity(anchor: ModalAnchor, changed: FEModes, step: float) -> ModalSensitivity | None:
     """The sensitivity of the anchor's modes to a parameter whose change by ``step`` gives the model's
-    ``changed`` modes (same channel pairs): each changed mode follows the nearest of the model's modes. None
+    ``changed`` modes (same channel pairs): each changed mode follows one of the model's, one to one. None
     when a fitted mode has no follower (the change is too large to track)."""
     base = anchor.fe
     # one to one, the least total move (close modes, 172.72 and 172.78 Hz at 1000 rpm, must not both follow one)
@@ -314,12 +313,7 @@ def sensitivity(anchor: ModalAnchor, changed: FEModes, step: float) -> ModalSens
     rows, cols = optimize.linear_sum_assignment(dist)
     near = np.full(changed.poles.size, -1, dtype=int)
     near[rows] = cols
-    fitted_idx = np.flatnonzero(anchor.fitted)
-    # the fitted (merged) mode each of the model's modes stands for, -1 for the rest
-    group = np.full(base.poles.size, -1, dtype=int)
-    _, _, member = _merged(base, fitted_idx)
-    group[fitted_idx] = member
-    follows = np.where(near >= 0, group[np.maximum(near, 0)], -1)
+    follows = np.where(near >= 0, anchor.group[np.maximum(near, 0)], -1)
     k = anchor.poles.size
     lam1 = np.zeros(k, dtype=complex)
     r1 = np.zeros_like(anchor.fe_residues)
@@ -330,5 +324,5 @@ def sensitivity(anchor: ModalAnchor, changed: FEModes, step: float) -> ModalSens
         wgt = np.max(np.abs(changed.residues[mine]), axis=1) + 1e-300
         lam1[j] = np.sum(changed.poles[mine] * wgt) / np.sum(wgt)
         r1[j] = np.sum(changed.residues[mine], axis=0)
-    d_out = anchor.out_of_band(changed, follows) - anchor.out_of_band(base)
+    d_out = anchor.out_of_band(changed, follows) - anchor.fe_out
     return ModalSensitivity((lam1 / anchor.fe_poles - 1.0) / step, (r1 - anchor.fe_residues) / step, d_out / step)
