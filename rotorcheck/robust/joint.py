@@ -72,7 +72,7 @@ class BenignModel:
     step: np.ndarray | float = 1e-4  # finite-difference step(s) of theta for the Jacobian (theta's units)
     envelope: np.ndarray | None = None  # (n,) largest benign change the ranges allow at each point, m/N
     exact: np.ndarray | None = None  # (p,) bool: parameters whose predicted change is exact (gains): no kappa
-    form: ModelForm | None = None  # the prediction's own bounded error as H0 nuisance (joint_test's model_form)
+    form: ModelForm | None = None  # the prediction's own error, part of H0 (a Gaussian prior, :class:`ModelForm`)
     cheap: bool = False  # ``predict`` is a closed form (no re-solve): the fit may scan the ranges first
 
 
@@ -217,14 +217,12 @@ def _max_one_sided(C: np.ndarray, draws: int, seed: int) -> np.ndarray:
 def joint_test(residual: np.ndarray, var_total: np.ndarray, signatures: np.ndarray,
                elements: Sequence[int], benign: BenignModel | None = None,
                learned: LearnedDirections | None = None, false_alarm: float = 0.01,
-               draws: int = MC_DRAWS, seed: int = MC_SEED, exclude: np.ndarray | None = None,
-               model_form: ModelForm | None = None) -> JointResult:
+               draws: int = MC_DRAWS, seed: int = MC_SEED, exclude: np.ndarray | None = None) -> JointResult:
     """The joint GLR test (module docstring). ``residual`` (n,) complex m/N; ``var_total`` (n,) m^2/N^2;
     ``signatures`` (n_e, n) complex m/N per unit stiffness loss of each candidate element. ``exclude`` (n,)
     bool: points that carry no evidence (weight 0 in every fit and statistic, not counted in ``n_points``,
     the per-point Sidak threshold or the dof; their ``point_statistic`` is 0), e.g. points on a shaft
-    harmonic. ``model_form``: the model's bounded error in predicting benign change as real-coefficient
-    directions (:class:`ModelForm`), part of H0."""
+    harmonic. The benign model's own error (``benign.form``, :class:`ModelForm`) is part of H0."""
     if not 0.0 < false_alarm < 1.0:
         raise ValueError(f"false_alarm must be in (0, 1), got {false_alarm}")
     r = np.asarray(residual, dtype=complex).ravel()
@@ -241,8 +239,7 @@ def joint_test(residual: np.ndarray, var_total: np.ndarray, signatures: np.ndarr
     p = 0 if benign is None else len(benign.lo)
     q = 0 if learned is None else learned.U.shape[0]
     U = learned.U if learned is not None else np.zeros((0, r.size), dtype=complex)
-    if model_form is None and benign is not None:
-        model_form = benign.form
+    model_form = benign.form if benign is not None else None
     if model_form is not None and model_form.what:
         notes.append(f"the benign prediction's own error is part of H0 as a Gaussian prior: {model_form.what}")
     nf = 0 if model_form is None else model_form.V.shape[0]
