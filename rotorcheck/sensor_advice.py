@@ -258,9 +258,7 @@ def candidate_model(config: RigConfig, freq_hz: np.ndarray, speed_rpm: float, po
 def _restricted(bm: BenignModel, idx: np.ndarray) -> BenignModel:
     """``bm`` at the stacked points ``idx`` only, its model-error allowance off (the ranking's weights carry
     the benign error as :data:`rotorcheck.ranking.BENIGN_MODEL_ERROR` of the envelope instead)."""
-    full = bm.predict
-    return dataclasses.replace(bm, predict=lambda theta: full(theta)[idx], kappa=0.0,
-                               envelope=None if bm.envelope is None else bm.envelope[idx])
+    return dataclasses.replace(bm.at(idx), kappa=0.0)
 
 
 def advise_sensors(

@@ -24,7 +24,7 @@ correlation (not Bonferroni). The p-value and threshold follow; ``damage`` iff `
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -74,6 +74,14 @@ class BenignModel:
     exact: np.ndarray | None = None  # (p,) bool: parameters whose predicted change is exact (gains): no kappa
     form: ModelForm | None = None  # the prediction's own error, part of H0 (a Gaussian prior, :class:`ModelForm`)
     cheap: bool = False  # ``predict`` is a closed form (no re-solve): the fit may scan the ranges first
+
+    def at(self, idx: np.ndarray) -> BenignModel:
+        """The same benign change at the stacked points ``idx`` only: its prediction, envelope and model-form
+        directions."""
+        full = self.predict
+        form = None if self.form is None else replace(self.form, V=np.asarray(self.form.V)[:, idx])
+        return replace(self, predict=lambda theta: full(theta)[idx], form=form,
+                       envelope=None if self.envelope is None else self.envelope[idx])
 
 
 @dataclass(frozen=True)

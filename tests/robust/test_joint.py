@@ -154,3 +154,27 @@ def test_points_left_unexplained_hold_their_family_rate_and_find_an_outlier() ->
     r = _noise(rng, var)
     r[17] += 8.0 * np.sqrt(var[17])
     assert joint_test(r, var, S, [1, 2], draws=2_000).remaining[17]
+
+
+def test_a_benign_model_at_some_points_is_the_test_with_the_others_left_out() -> None:
+    """``BenignModel.at(idx)`` (prediction, envelope and model-form prior at those points only) against a second
+    route: the full model with the other points excluded (weight 0 everywhere). Same statistic and fit."""
+    from rotorcheck.robust.joint import BenignModel, ModelForm, joint_test
+
+    rng = np.random.default_rng(7)
+    n = 40
+    shape = np.exp(1j * np.linspace(0, 3, n)) / (1 + np.linspace(0, 2, n))
+    crack = rng.standard_normal(n) + 1j * rng.standard_normal(n)
+    bm = BenignModel(lambda th: th[0] * shape, np.array([-1.0]), np.array([1.0]), ("e",), 0.0,
+                     form=ModelForm(np.array([np.ones(n, dtype=complex), 1j * np.linspace(0, 1, n)]),
+                                    np.array([0.05, 0.02]), "two directions"),
+                     envelope=np.abs(shape))
+    r = 0.3 * shape + 0.04 * crack + 0.01 * (rng.standard_normal(n) + 1j * rng.standard_normal(n))
+    var = np.full(n, 2e-4)
+    idx = np.flatnonzero(np.arange(n) % 3 != 0)
+    out = np.ones(n, dtype=bool)
+    out[idx] = False
+    a = joint_test(r[idx], var[idx], crack[None, idx], [4], bm.at(idx), draws=2000)
+    b = joint_test(r, var, crack[None, :], [4], bm, draws=2000, exclude=out)
+    assert a.statistic == pytest.approx(b.statistic, rel=1e-6)
+    assert a.theta == pytest.approx(b.theta, rel=1e-6)
