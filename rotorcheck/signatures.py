@@ -327,26 +327,25 @@ def _modal_benign(anchor: ModalAnchor, config: RigConfig, speed_rpm: float, th: 
 
     # how far each fitted pole may sit from its predicted place: the model's pole sensitivities are uncertain by
     # POLE_SENSITIVITY_ERROR (absolute) for a relative parameter, by their own size for an offset, times the range
-    reach = 0.0
-    reach_r = 0.0
-    for i in moving:
+    # the change of the modes outside the fit (a quasi-static compliance inside the band) is the model's too: it
+    # may be off by OUT_OF_BAND_ERROR of its largest size over the ranges, as a constant (real and imaginary) and a
+    # 1 / w^2 line per channel pair
+    reach = reach_r = 0.0
+    out_size = np.zeros(d_out.shape[1:])  # (f, P): the other modes' change over the ranges, parameter by parameter
+    for k, i in enumerate(moving):
         p = params[i]
         if not p.changes_model:
             continue
         size = max(abs(p.lo), abs(p.hi))
-        own = float(np.max(np.abs(d_ln[moving.index(i)])))
+        own = float(np.max(np.abs(d_ln[k])))
         reach += size * (POLE_SENSITIVITY_ERROR if p.kind == "factor" else own)
         reach_r += size * (RESIDUE_SENSITIVITY_ERROR if p.kind == "factor" else own)
+        out_size += size * np.abs(d_out[k])
     # learned from the healthy sweep: a modal model that fits it less well (physics the model lacks: damping in
     # the bearings, a support mode) predicts less well; the prior widens in proportion beyond the reference fit
     widen = max(1.0, anchor.misfit / MISFIT_REFERENCE)
     reach, reach_r = reach * widen, reach_r * widen
-    # the change of the modes outside the fit (a quasi-static compliance inside the band) is the model's too: it
-    # may be off by OUT_OF_BAND_ERROR of its largest size over the ranges, as a constant (real and imaginary) and a
-    # 1 / w^2 line per channel pair
-    out_reach = widen * OUT_OF_BAND_ERROR * np.max(sum(max(abs(params[i].lo), abs(params[i].hi)) * np.abs(d_out[k])
-                                              for k, i in enumerate(moving) if params[i].changes_model)
-                                          if moving else np.zeros(1), axis=0)
+    out_reach = widen * OUT_OF_BAND_ERROR * np.max(out_size, axis=0)  # (P,)
     dirs: list[np.ndarray] = []
     bounds: list[float] = []
     if reach > 0:
@@ -359,7 +358,7 @@ def _modal_benign(anchor: ModalAnchor, config: RigConfig, speed_rpm: float, th: 
                     dirs.append(stacked(part[..., q]))
                     bounds.append(reach_r * float(abs(anchor.residues[r, q])))
     w = anchor.omega
-    for k, size in enumerate(np.atleast_1d(out_reach)):
+    for k, size in enumerate(out_reach):
         if size <= 0:
             continue
         for shape in (np.ones_like(w), 1j * np.ones_like(w), (w.min() / w) ** 2):
