@@ -23,6 +23,7 @@ from rotorcheck.fe.system import MechanicalSystem
 from rotorcheck.modal_anchor import (
     POLE_SENSITIVITY_ERROR,
     RESIDUE_SENSITIVITY_ERROR,
+    FEModes,
     ModalAnchor,
     ModalSensitivity,
     fe_modes,
@@ -126,9 +127,24 @@ def modal_anchor(config: RigConfig, freq_hz: np.ndarray, speed_rpm: float, healt
 def _modal_sensitivity(anchor: ModalAnchor, config: RigConfig, speed_rpm: float, step: float,
                        pairs: Sequence[ChannelPair] | None) -> ModalSensitivity | None:
     """The anchor's sensitivity to a change that gives the rig ``config`` at ``speed_rpm`` when made ``step``
-    units large (the change's own size: a loss, a relative change, rpm)."""
-    system = build_system(config)
-    return sensitivity(anchor, fe_modes(system, speed_rpm, _dofs(system, config, pairs)), step)
+    units large (the change's own size: a loss, a relative change, rpm). The changed rig's modes are kept for
+    equal rigs, speeds and pairs, as :func:`io_frf`'s receptances were: detect asks for every element's
+    signature from the joint test and again from the diagnosis."""
+    content = config_key(config)
+    key = None if content is None else (content, float(speed_rpm),
+                                        None if pairs is None else tuple(p.key() for p in pairs))
+    modes = _FE_MODES.get(key) if key is not None else None
+    if modes is None:
+        system = build_system(config)
+        modes = fe_modes(system, speed_rpm, _dofs(system, config, pairs))
+        if key is not None:
+            _FE_MODES[key] = modes
+            _bounded(_FE_MODES, 64)
+    return sensitivity(anchor, modes, step)
+
+
+#: the changed rigs' modes of :func:`_modal_sensitivity`
+_FE_MODES: dict[tuple[Any, ...], FEModes] = {}
 
 
 #: a channel pair whose model receptance is below this fraction of the largest pair's is one the model
