@@ -409,7 +409,7 @@ def locate(config: RigConfig, box: Any, pairs: Sequence[ChannelPair], change: Sw
             report(progress, k + 1, len(els), f"certifying: element {e}")
         order = [fit.element for fit in ranking.fits if results[fit.element].status == "consistent"]
         for e in order[:refine]:
-            results[e] = severity_interval(models[e], pts, lo, hi, p, step, slices, refine_boxes, at_zero)
+            results[e] = severity_interval(models[e], pts, lo, hi, p, step, slices, refine_boxes, at_zero, results[e])
     healthy_excluded = None if healthy is None else healthy.status == "excluded"
     damage_found = bool(healthy_excluded) if damage is None else damage
     order = [fit.element for fit in ranking.fits if not results or results[fit.element].status == "consistent"]

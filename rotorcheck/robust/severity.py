@@ -53,6 +53,7 @@ class SeverityInterval:
     excluding: tuple[int, ...]  # points that excluded sub-boxes, most often first
     boxes: int  # sub-boxes examined
     witnessed: bool  # both ends hold a witness within tol (else the interval may be wider than the set)
+    excluded_slices: tuple[tuple[float, float], ...] = ()  # the slices of the severity proved excluded
 
 
 @dataclass(frozen=True)
@@ -100,6 +101,7 @@ class _Factors:
     V: np.ndarray
     param: np.ndarray  # (r,) int
     kind: np.ndarray  # (r,) str
+    symmetric: bool = False  # Z(w, theta) = Z^T for every w and theta (no gyroscopic term): Z^-T c = Z^-1 c
 
     @classmethod
     def of(cls, model: AffineModel) -> _Factors:
@@ -111,8 +113,10 @@ class _Factors:
                 prm += [i] * u.shape[1]
                 kind += [k] * u.shape[1]
         n = model.K.shape[0]
+        mats = [model.K, model.M, model.D, *(A for q in model.parameters for _, A in q.terms)]
+        symmetric = all(np.allclose(A, A.T, rtol=0.0, atol=1e-13 * max(float(np.abs(A).max()), 1e-300)) for A in mats)
         return cls(np.hstack(us) if us else np.zeros((n, 0)), np.hstack(vs) if vs else np.zeros((n, 0)),
-                   np.array(prm, dtype=int), np.array(kind))
+                   np.array(prm, dtype=int), np.array(kind), symmetric)
 
 
 def _s_of(kind: np.ndarray, w: np.ndarray) -> np.ndarray:
@@ -123,30 +127,43 @@ def _s_of(kind: np.ndarray, w: np.ndarray) -> np.ndarray:
     return out
 
 
+#: points whose small-gain norm is computed together, most promising first (:func:`examine_points`)
+BATCH = 4
+
+
 def examine_points(model: AffineModel, fac: _Factors, pts: Points, centre: np.ndarray, half: np.ndarray
                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Every point at once, for the box ``centre``, ``half`` (p,) (or (m, p) one box per point): ``(explained
     at the centre (m,), margin of the exclusion test (m,) (> 0: excluded; -inf where explained or
     unbounded), each parameter's share of the bound (m, p))`` -- the batched form of
-    :func:`rotorcheck.robust.real_box._examine` (the same bounds). The margin is exact at the largest (the
-    point that decides) and wherever it could be the largest; elsewhere a lower bound (the Frobenius norm
-    for the small-gain condition instead of the spectral norm)."""
+    :func:`rotorcheck.robust.real_box._examine` (the same bounds). When no margin is positive, the margin is
+    exact (Frobenius norm for the small-gain condition, the spectral norm where that is >= 0.5) at the
+    largest (the point that decides) and at every point that could be the largest, and -inf (a lower
+    bound) elsewhere; otherwise one positive margin (a lower bound) is enough: the box is excluded.
+
+    The cost: the centre's receptance and the bound's numerator (``x = c^T Z^-1 U``, ``y = V^T Z^-1 b``)
+    take two right-hand sides per point (one solve of ``[b, c]`` when Z is symmetric); the small-gain
+    norm needs ``Z^-1 U`` (r right-hand sides) and is computed only at the points whose margin with a
+    zero norm (an upper bound: the margin falls as the norm grows) could still beat the best found."""
     w = pts.w
+    m = w.size
     p = len(model.parameters)
-    half = np.broadcast_to(np.asarray(half, dtype=float), (w.size, p))
+    half = np.broadcast_to(np.asarray(half, dtype=float), (m, p))
     Z = model.dynamic_stiffness_stack(w, centre)
     r = fac.U.shape[1]
-    rhs = np.concatenate([np.broadcast_to(fac.U, (w.size, *fac.U.shape)), pts.b[:, :, None]], axis=2)
-    X = np.linalg.solve(Z, rhs.astype(complex))
-    g_c = np.sum(pts.c * X[:, :, r], axis=1)
+    if fac.symmetric:
+        S = np.linalg.solve(Z, np.stack([pts.b, pts.c], axis=2).astype(complex))
+        u, v = S[:, :, 0], S[:, :, 1]  # Z^-1 b, Z^-T c = Z^-1 c
+    else:
+        u = np.linalg.solve(Z, pts.b[:, :, None].astype(complex))[:, :, 0]
+        v = np.linalg.solve(np.swapaxes(Z, 1, 2), pts.c[:, :, None].astype(complex))[:, :, 0]
+    g_c = np.sum(pts.c * u, axis=1)
     scale = _s_of(fac.kind, w) * half[:, fac.param]  # (m, r)
-    Xu = X[:, :, :r] * scale[:, None, :]
-    x = (pts.c[:, None, :] @ Xu)[:, 0, :]
-    y = X[:, :, r] @ fac.V  # (m, r)
-    N = fac.V.T[None] @ Xu
+    x = (v @ fac.U) * scale  # c^T Z^-1 U diag(scale)
+    y = u @ fac.V  # V^T Z^-1 b
     # one positive scale per parameter block (commutes with delta_i I)
-    share = np.zeros((w.size, p))
-    sc = np.ones((w.size, r))
+    share = np.zeros((m, p))
+    sc = np.ones((m, r))
     for i in range(p):
         cols = fac.param == i
         if not np.any(cols):
@@ -157,8 +174,6 @@ def examine_points(model: AffineModel, fac: _Factors, pts: Points, centre: np.nd
         good = (nx > 0) & (ny > 0)
         sc[:, cols] = np.where(good, np.sqrt(np.where(good, nx, 1.0) / np.where(good, ny, 1.0)), 1.0)[:, None]
     xs, ys = x / sc, y * sc
-    Ns = sc[:, :, None] * N / sc[:, None, :]
-    frob = np.sqrt(np.sum(np.abs(Ns) ** 2, axis=(1, 2)))
     with np.errstate(divide="ignore", invalid="ignore"):
         rho = g_c / pts.g0
         pred = pts.t_healthy * rho
@@ -182,25 +197,47 @@ def examine_points(model: AffineModel, fac: _Factors, pts: Points, centre: np.nd
                                  + pts.a2[at]) + extra
             return np.where(ok[at] | ~np.isfinite(rad), -np.inf, low - up)
 
-        # the norm bound: Frobenius, and where that costs much (>= 0.5) the exact spectral norm; the exact one
-        # only at the points that can hold the largest margin (the margin falls as the bound grows: a lower
-        # bound of the norm, the largest column or row, bounds each point's margin from above)
-        margin = margin_of(frob)
-        big = np.flatnonzero(frob >= 0.5)
-        if big.size:
-            low_n = np.maximum(np.linalg.norm(Ns[big], axis=1).max(axis=1), np.linalg.norm(Ns[big], axis=2).max(axis=1))
-            best = float(np.max(margin)) if margin.size else -np.inf
-            hope = big[margin_of(low_n, big) >= best] if np.isfinite(best) else big
-            hope = hope[~ok[hope]]
-            if hope.size:
-                # ||N_s|| with N_s = P Q, P = diag(sc) V^T (r, n), Q = Z^-1 U diag(scale / sc) (n, r): with P = Q_p R,
-                # ||N_s|| = ||R Q||, an n x n Hermitian eigenvalue problem instead of r x r (r > n with E and speed)
-                P = sc[hope][:, :, None] * fac.V.T[None]
-                R = np.linalg.qr(P, mode="r")
-                C = R @ (Xu[hope] / sc[hope][:, None, :])
-                top = np.linalg.eigvalsh(C @ np.conj(np.swapaxes(C, 1, 2)))[:, -1]  # ||N||^2, Hermitian
-                nrm = np.minimum(frob[hope], np.sqrt(np.maximum(top, 0.0)) * (1.0 + 1e-12))
-                margin[hope] = margin_of(nrm, hope)
+        # a zero norm bounds every point's margin from above (the margin falls as the norm grows): the norm only
+        # where that bound beats the best margin found, the most promising points first; a positive margin
+        # (the box excluded) ends the search
+        upper = margin_of(np.zeros(m))
+        upper = np.where(np.isnan(upper), np.inf, upper)
+        order = np.argsort(-upper, kind="stable")
+        order = order[upper[order] > -np.inf]
+        margin = np.full(m, -np.inf)
+        best = -np.inf
+        for start in range(0, order.size, BATCH):
+            at = order[start:start + BATCH]
+            at = at[upper[at] > best]
+            if not at.size:
+                break
+            # N_s = diag(sc) V^T Z^-1 U diag(scale / sc) at these points; V^T on Re and Im side by side
+            Q = np.linalg.solve(Z[at], np.broadcast_to(fac.U, (at.size, *fac.U.shape)).astype(complex))
+            Q *= (scale[at] / sc[at])[:, None, :]  # (k, n, r)
+            Ns = (fac.V.T @ Q.view(float)).view(complex) * sc[at][:, :, None]
+            frob = np.sqrt(np.einsum("kij,kij->k", Ns.view(float), Ns.view(float)))
+            here = margin_of(frob, at)
+            top = float(np.nanmax(here)) if np.any(~np.isnan(here)) else -np.inf
+            # where the Frobenius norm costs much (>= 0.5) and a lower bound of the spectral norm (the largest
+            # column or row) leaves room above the best, the exact spectral norm
+            big = np.flatnonzero(frob >= 0.5)
+            if big.size and top <= 0.0:
+                nb = Ns[big]
+                low_n = np.maximum(np.linalg.norm(nb, axis=1).max(axis=1), np.linalg.norm(nb, axis=2).max(axis=1))
+                big = big[margin_of(low_n, at[big]) > max(best, top)]
+            if big.size and top <= 0.0:
+                # ||N_s|| with N_s = P Q, P = diag(sc) V^T (r, n): with P = Q_p R, ||N_s|| = ||R Q||, an n x n
+                # Hermitian eigenvalue problem instead of r x r (r > n with E and speed)
+                R = np.linalg.qr(sc[at[big]][:, :, None] * fac.V.T[None], mode="r")
+                C = R @ Q[big]
+                lam = np.linalg.eigvalsh(C @ np.conj(np.swapaxes(C, 1, 2)))[:, -1]  # ||N||^2, Hermitian
+                nrm = np.minimum(frob[big], np.sqrt(np.maximum(lam, 0.0)) * (1.0 + 1e-12))
+                here[big] = margin_of(nrm, at[big])
+            margin[at] = here
+            if np.any(~np.isnan(here)):
+                best = max(best, float(np.nanmax(here)))
+            if best > 0.0:
+                break
     return ok, margin, share
 
 
@@ -210,10 +247,9 @@ def point_receptances(model: AffineModel, pts: Points, theta: np.ndarray) -> np.
     return np.sum(pts.c * np.linalg.solve(Z, pts.b[:, :, None].astype(complex))[:, :, 0], axis=1)
 
 
-def point_ratios(model: AffineModel, pts: Points, theta: np.ndarray) -> np.ndarray:
-    """(m,) each point's residual over its allowance at ``theta`` (exact; best gain per point clipped to
-    its range): every ratio <= 1 makes ``theta`` a witness."""
-    g = point_receptances(model, pts, theta)
+def _ratios_of(pts: Points, g: np.ndarray) -> np.ndarray:
+    """(m,) each point's residual over its allowance when the model's receptance there is ``g`` (m,) m/N
+    (best gain per point clipped to its range)."""
     with np.errstate(divide="ignore", invalid="ignore"):
         rho = g / pts.g0
         pred = pts.t_healthy * rho
@@ -225,9 +261,39 @@ def point_ratios(model: AffineModel, pts: Points, theta: np.ndarray) -> np.ndarr
         return np.abs(pts.t_new - gm * pred) / allow
 
 
-def _witness(model: AffineModel, pts: Points, lo: np.ndarray, hi: np.ndarray) -> np.ndarray | None:
+def point_ratios(model: AffineModel, pts: Points, theta: np.ndarray) -> np.ndarray:
+    """(m,) each point's residual over its allowance at ``theta`` (exact; best gain per point clipped to
+    its range): every ratio <= 1 makes ``theta`` a witness."""
+    return _ratios_of(pts, point_receptances(model, pts, theta))
+
+
+def ratio_jacobian(model: AffineModel, fac: _Factors, pts: Points, theta: np.ndarray
+                   ) -> tuple[np.ndarray, np.ndarray]:
+    """``(ratios (m,), their derivatives by theta (m, p))`` at ``theta``: the receptance's derivative exact,
+    ``dG/dtheta_i = -sum s(w) (Z^-T c)^T U_i V_i^T Z^-1 b`` from one solve, the ratio's by G (an elementwise
+    function) by forward differences in G's real and imaginary parts (relative step 1e-7)."""
+    Z = model.dynamic_stiffness_stack(pts.w, theta)
+    if fac.symmetric:
+        S = np.linalg.solve(Z, np.stack([pts.b, pts.c], axis=2).astype(complex))
+        u, v = S[:, :, 0], S[:, :, 1]
+    else:
+        u = np.linalg.solve(Z, pts.b[:, :, None].astype(complex))[:, :, 0]
+        v = np.linalg.solve(np.swapaxes(Z, 1, 2), pts.c[:, :, None].astype(complex))[:, :, 0]
+    g = np.sum(pts.c * u, axis=1)
+    cols = -(v @ fac.U) * (u @ fac.V) * _s_of(fac.kind, pts.w)  # (m, r)
+    dg = np.zeros((pts.size, len(model.parameters)), dtype=complex)
+    np.add.at(dg.T, fac.param, cols.T)
+    r0 = _ratios_of(pts, g)
+    step = 1e-7 * np.maximum(np.abs(g), 1e-300)
+    d_re = (_ratios_of(pts, g + step) - r0) / step
+    d_im = (_ratios_of(pts, g + 1j * step) - r0) / step
+    return r0, d_re[:, None] * dg.real + d_im[:, None] * dg.imag
+
+
+def _witness(model: AffineModel, fac: _Factors, pts: Points, lo: np.ndarray, hi: np.ndarray) -> np.ndarray | None:
     """Parameter values in ``[lo, hi]`` explaining every point (every ratio <= 1): the box's centre, else a
-    bounded least squares of the ratios from it, then one that weighs the largest ratios; None if none."""
+    bounded least squares of the ratios from it (Jacobian: :func:`ratio_jacobian`), then one that weighs
+    the largest ratios; None if none."""
     from scipy.optimize import least_squares
 
     free = hi > lo
@@ -242,12 +308,28 @@ def _witness(model: AffineModel, pts: Points, lo: np.ndarray, hi: np.ndarray) ->
         x[free] = xf
         return x
 
+    last: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
+
+    def at(xf: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        key = np.asarray(xf, dtype=float).tobytes()
+        if key not in last:
+            last.clear()
+            r, J = ratio_jacobian(model, fac, pts, full(xf))
+            last[key] = (r, J[:, free])
+        return last[key]
+
     for power in (1.0, 4.0):
         def res(xf: np.ndarray, q: float = power) -> np.ndarray:
-            r = point_ratios(model, pts, full(xf))
+            r = at(xf)[0]
             return np.where(np.isfinite(r), r, 1e6) ** q
+
+        def jac(xf: np.ndarray, q: float = power) -> np.ndarray:
+            r, J = at(xf)
+            ok = np.isfinite(r) & np.all(np.isfinite(J), axis=1)
+            return np.where(ok[:, None], q * np.where(ok, r, 1.0)[:, None] ** (q - 1.0) * J, 0.0)
         try:
-            sol = least_squares(res, x0[free], bounds=(lo[free], hi[free]), x_scale=hi[free] - lo[free], max_nfev=40)
+            sol = least_squares(res, x0[free], jac=jac, bounds=(lo[free], hi[free]), x_scale=hi[free] - lo[free],
+                                max_nfev=40)
         except (ValueError, np.linalg.LinAlgError):
             return None
         x0 = full(sol.x)
@@ -263,21 +345,43 @@ def _box(model: AffineModel, fac: _Factors, pts: Points, lo: np.ndarray, hi: np.
     every point; the sub-box closest to exclusion is split first (along the parameter with the largest
     share of that point's bound); "open": the budget ran out first."""
 
+    split: dict[tuple[int, ...], tuple[np.ndarray, Points, np.ndarray, Points]] = {}
+
+    def parts(first: tuple[int, ...]) -> tuple[np.ndarray, Points, np.ndarray, Points]:
+        """The points ``first`` and the rest, each as an index array and as points (made once per set)."""
+        if first not in split:
+            a = np.array(first, dtype=int)
+            b = np.setdiff1d(np.arange(pts.size), a)
+            split[first] = (a, pts.take(a), b, pts.take(b))
+        return split[first]
+
     def examine(c: np.ndarray, h: np.ndarray) -> tuple[float, np.ndarray | None]:
         # the points that excluded boxes most often first (most boxes fall to one of them), then the rest
-        first = np.array([k for k, _ in used.most_common(EARLY)], dtype=int)
-        if first.size:
-            _, margin, share = examine_points(model, fac, pts.take(first), c, h)
+        first = tuple(k for k, _ in used.most_common(EARLY))
+        if not first:
+            ok, margin, share = examine_points(model, fac, pts, c, h)
             k = int(np.argmax(margin))
             if margin[k] > 0:
-                used[int(first[k])] += 1
+                used[k] += 1
                 return float(margin[k]), share[k]
-        ok, margin, share = examine_points(model, fac, pts, c, h)
-        k = int(np.argmax(margin))
-        if margin[k] > 0:
-            used[k] += 1
-            return float(margin[k]), share[k]
-        return (-np.inf, None) if np.all(ok) else (float(margin[k]), share[k])
+            return (-np.inf, None) if np.all(ok) else (float(margin[k]), share[k])
+        a, pa, b, pb = parts(first)
+        ok_a, m_a, s_a = examine_points(model, fac, pa, c, h)
+        k = int(np.argmax(m_a))
+        if m_a[k] > 0:
+            used[int(a[k])] += 1
+            return float(m_a[k]), s_a[k]
+        ok_b, m_b, s_b = (examine_points(model, fac, pb, c, h) if b.size
+                          else (np.ones(0, bool), np.zeros(0), np.zeros((0, len(model.parameters)))))
+        j = int(np.argmax(m_b)) if b.size else -1
+        if b.size and m_b[j] > 0:
+            used[int(b[j])] += 1
+            return float(m_b[j]), s_b[j]
+        if np.all(ok_a) and np.all(ok_b):
+            return -np.inf, None
+        if b.size and (m_b[j] > m_a[k] or np.all(ok_a)):
+            return float(m_b[j]), s_b[j]
+        return float(m_a[k]), s_a[k]
 
     c0, h0 = (lo + hi) / 2.0, (hi - lo) / 2.0
     margin, share = examine(c0, h0)
@@ -341,31 +445,38 @@ def _end(model: AffineModel, fac: _Factors, pts: Points, lo: np.ndarray, hi: np.
             stack.extend(halves if upward else halves[::-1])
             continue
         if wit is None:
-            wit = _witness(model, pts, l1, h1)
+            wit = _witness(model, fac, pts, l1, h1)
         return (b if upward else a), (float(wit[index]) if wit is not None else float("nan")), boxes, wit is not None
     return float("nan"), float("nan"), boxes, True
 
 
 def severity_interval(model: AffineModel, pts: Points, lo: np.ndarray, hi: np.ndarray, index: int,
-                      tol: float = 0.01, slices: int = 16, max_boxes: int = 16, witnessed_at_lo: bool = False
-                      ) -> SeverityInterval:
+                      tol: float = 0.01, slices: int = 16, max_boxes: int = 16, witnessed_at_lo: bool = False,
+                      earlier: SeverityInterval | None = None) -> SeverityInterval:
     """Certify the interval of parameter ``index`` over which the box ``[lo, hi]`` (p,) explains every
     point jointly (module docstring; each point's ``b``, ``c`` in ``pts``); ``tol`` the width to which
     the end slices are halved; ``slices`` the first division of the range; ``max_boxes`` the budget of
     sub-boxes per slice. ``witnessed_at_lo``: the caller holds a witness with the parameter at ``lo[index]``
-    (e.g. the healthy hypothesis's): the lower end is ``lo[index]``, attained, without a search."""
+    (e.g. the healthy hypothesis's): the lower end is ``lo[index]``, attained, without a search.
+    ``earlier``: this hypothesis's result with a smaller budget on the same box, points and slices (its
+    excluded slices stay excluded: they are not examined again; its excluding points are tried first)."""
     lo, hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
     used: Counter[int] = Counter()
     cache: dict[tuple[float, float], str] = {}
+    if earlier is not None:
+        cache.update(dict.fromkeys(earlier.excluded_slices, "excluded"))
+        used.update({k: len(earlier.excluding) - i for i, k in enumerate(earlier.excluding)})
     fac = _Factors.of(model)
     n_sl = slices if hi[index] > lo[index] else 1
     if witnessed_at_lo:
         lower, w_lo, n1, done1 = float(lo[index]), float(lo[index]), 0, True
     else:
         lower, w_lo, n1, done1 = _end(model, fac, pts, lo, hi, index, False, tol, n_sl, max_boxes, used, cache)
+    excluded = tuple(sorted(k for k, v in cache.items() if v == "excluded"))
     if not np.isfinite(lower):
         return SeverityInterval("excluded", float("nan"), float("nan"), (float("nan"), float("nan")),
-                                tuple(k for k, _ in used.most_common()), n1, False)
+                                tuple(k for k, _ in used.most_common()), n1, False, excluded)
     upper, w_hi, n2, done2 = _end(model, fac, pts, lo, hi, index, True, tol, n_sl, max_boxes, used, cache)
+    excluded = tuple(sorted(k for k, v in cache.items() if v == "excluded"))
     return SeverityInterval("consistent", float(lower), float(upper), (w_lo, w_hi),
-                            tuple(k for k, _ in used.most_common()), n1 + n2, done1 and done2)
+                            tuple(k for k, _ in used.most_common()), n1 + n2, done1 and done2, excluded)

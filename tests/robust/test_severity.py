@@ -121,3 +121,61 @@ def test_nearly_noise_free_interval_shrinks_to_the_step() -> None:
     assert res.status == "consistent"
     assert res.lower <= 0.30 <= res.upper and res.upper - res.lower <= 0.011
     assert np.any(np.isfinite(res.witness_interval))
+
+
+def _gyro_model() -> AffineModel:
+    """The chain with a skew-symmetric velocity coupling of masses 1 and 2 (a gyroscopic-like term, so Z is not
+    symmetric), its size a parameter beside the benign factor and the loss of spring 3."""
+    M, D, K0 = _chain(0.0, {})
+    G = np.zeros((4, 4))
+    G[0, 1], G[1, 0] = 40.0, -40.0  # N s/m per unit parameter
+    params = (AffineParameter("E", (("K", K0),), -0.02, 0.02), AffineParameter("speed", (("D", G),), -1.0, 1.0),
+              AffineParameter("loss", (("K", -K[2] * _spring(2)),), 0.0, 0.8))
+    return AffineModel(M, D, K0, np.eye(4)[3], np.eye(4)[1], params)
+
+
+@pytest.mark.parametrize("symmetric", [True, False])
+def test_a_point_that_excludes_a_box_is_explained_by_no_member_of_it(symmetric: bool) -> None:
+    """examine_points against brute force: wherever a box's margin is positive at a point, 400 members of the
+    box drawn at random (corners included) all leave that point unexplained; and the receptance of each member
+    stays inside the small-gain disc the margin assumed."""
+    from rotorcheck.robust.severity import _Factors, examine_points
+
+    model = _model(2) if symmetric else _gyro_model()
+    fac = _Factors.of(model)
+    assert fac.symmetric is symmetric
+    pts, _ = _points(0.005)
+    rng = np.random.default_rng(3)
+    lo = np.array([q.lo for q in model.parameters])
+    hi = np.array([q.hi for q in model.parameters])
+    positives = 0
+    for _ in range(40):
+        c = lo + (hi - lo) * rng.uniform(size=lo.size)
+        h = (hi - lo) / 2.0 ** rng.integers(2, 7, size=lo.size)
+        ok, margin, _share = examine_points(model, fac, pts, c, h)
+        members = c + h * rng.uniform(-1.0, 1.0, size=(400, lo.size))
+        members[:2 ** lo.size] = c + h * np.array(np.meshgrid(*[[-1.0, 1.0]] * lo.size)).reshape(lo.size, -1).T
+        bad = np.flatnonzero(margin > 0)
+        positives += bad.size
+        for theta in members:
+            assert np.all(point_ratios(model, pts, theta)[bad] > 1.0)
+        # the centre's verdict is the exact one
+        assert np.array_equal(ok, point_ratios(model, pts, c) <= 1.0)
+    assert positives > 20  # the check bit: boxes were excluded
+
+
+@pytest.mark.parametrize("symmetric", [True, False])
+def test_ratio_jacobian_matches_central_differences(symmetric: bool) -> None:
+    from rotorcheck.robust.severity import _Factors, ratio_jacobian
+
+    model = _model(2) if symmetric else _gyro_model()
+    pts, _ = _points(0.005)
+    theta = np.array([0.01, 0.2]) if symmetric else np.array([0.01, 0.3, 0.2])
+    r, J = ratio_jacobian(model, _Factors.of(model), pts, theta)
+    assert np.array_equal(r, point_ratios(model, pts, theta))
+    fd = np.zeros_like(J)
+    for i in range(theta.size):
+        e = np.zeros(theta.size)
+        e[i] = 1e-6
+        fd[:, i] = (point_ratios(model, pts, theta + e) - point_ratios(model, pts, theta - e)) / 2e-6
+    assert np.max(np.abs(J - fd)) <= 1e-4 * np.max(np.abs(fd))
