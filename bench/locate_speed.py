@@ -8,7 +8,8 @@ of
 - ``rotorcheck locate --no-plots`` of the bundled open crack (one probe, ``crack_rig/open_crack_0rpm.h5``)
   and of the x/y sample (``crack_rig_xy/open_crack_0rpm.h5``, 8 channel pairs) with each tree,
 
-one BLAS thread, ``MPLBACKEND=Agg``; the baselines are made beforehand by each tree's own ``fit-noise`` and
+one BLAS thread, ``MPLBACKEND=Agg``, bytecode cached as an installed package has it (``PYTHONDONTWRITEBYTECODE``
+removed from the children's environment); the baselines are made beforehand by each tree's own ``fit-noise`` and
 ``validate --no-plots``. Prints the children's CPU seconds (user + system: steadier than wall time on a
 shared machine), their ratio to the numpy start and the seconds beyond it, and after/before. Target:
 at most 5 CPU-s per sweep (issue 30).
@@ -42,6 +43,7 @@ def _run(argv: list[str], tree: Path, cwd: Path, ok: tuple[int, ...] = (0, 1, 3)
     """(wall s, CPU s) of one command with ``tree`` first on the path."""
     env = dict(os.environ, MPLBACKEND="Agg", OPENBLAS_NUM_THREADS="1", OMP_NUM_THREADS="1", MKL_NUM_THREADS="1",
                PYTHONPATH=str(tree))
+    env.pop("PYTHONDONTWRITEBYTECODE", None)  # as installed: bytecode cached (the first run writes it)
     c, t = _cpu(), time.perf_counter()
     rc = subprocess.run(argv, cwd=cwd, env=env, check=False, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
                         text=True)

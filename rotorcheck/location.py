@@ -349,7 +349,8 @@ def _select_points(change2: np.ndarray, n_top: int, n_spread: int) -> np.ndarray
 
 
 def locate(config: RigConfig, box: Any, pairs: Sequence[ChannelPair], change: SweepChange, false_alarm: float = 0.01,
-           elements: Sequence[int] | None = None, step: float = 0.01, slices: int = 12, max_boxes: int = 8,
+           elements: Sequence[int] | None = None, step: float = 0.01, coarse_step: float = 0.02, slices: int = 12,
+           max_boxes: int = 8,
            refine: int = 1, refine_boxes: int = 48, crack_section_length: float | None = None,
            ranking: Ranking | None = None, certify: bool = True, damage: bool | None = None,
            progress: Progress | None = None) -> LocationResult:
@@ -359,7 +360,8 @@ def locate(config: RigConfig, box: Any, pairs: Sequence[ChannelPair], change: Sw
     ``elements`` default: every shaft element; ``ranking`` the candidates' ranking when the caller has it
     (else :func:`rotorcheck.ranking.rank_elements` here); ``certify``: the certificates too (else the
     ranking alone); ``damage`` the detector's verdict where known. Certificates: ``step`` the width to
-    which the severity's end slices are halved (loss, fraction); ``slices`` its first division;
+    which the severity's end slices are halved (loss, fraction) for the ``refine`` best ranked,
+    ``coarse_step`` for every candidate's first pass; ``slices`` its first division;
     ``max_boxes`` the branch and bound's budget per slice for every candidate, ``refine_boxes`` for a
     second pass on the ``refine`` best ranked (a larger budget only narrows a certified interval or
     excludes); ``crack_section_length`` (m) the breathing crack's section length for the depth relation
@@ -400,12 +402,14 @@ def locate(config: RigConfig, box: Any, pairs: Sequence[ChannelPair], change: Sw
                      f"the prediction's error bound there: {BENIGN_MODEL_ERROR:.0%} of the largest benign change the "
                      f"ranges allow, plus {CRACK_MODEL_ERROR:.0%} and the model's error on the healthy FRF times "
                      "the predicted change")
+        notes.append(f"certified loss intervals to {coarse_step:.0%} (their ends halved to that width) for every "
+                     f"candidate, to {step:.0%} with a {refine_boxes}-box budget per slice for the {refine} best ranked")
         # the healthy hypothesis: no loss (the same model whatever the element), benign parameters in their box
         healthy = severity_interval(models[els[0]], pts, lo, np.r_[hi_b, 0.0], p, step, 1, 4 * refine_boxes)
         # a witness of the healthy hypothesis (no loss) is one of every element's at loss 0: no lower-end search
         at_zero = healthy.status == "consistent" and bool(np.isfinite(healthy.witness_interval[0]))
         for k, e in enumerate(els):
-            results[e] = severity_interval(models[e], pts, lo, hi, p, step, slices, max_boxes, at_zero)
+            results[e] = severity_interval(models[e], pts, lo, hi, p, coarse_step, slices, max_boxes, at_zero)
             report(progress, k + 1, len(els), f"certifying: element {e}")
         order = [fit.element for fit in ranking.fits if results[fit.element].status == "consistent"]
         for e in order[:refine]:
