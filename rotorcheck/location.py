@@ -403,7 +403,8 @@ def locate(config: RigConfig, box: Any, pairs: Sequence[ChannelPair], change: Sw
                      f"ranges allow, plus {CRACK_MODEL_ERROR:.0%} and the model's error on the healthy FRF times "
                      "the predicted change")
         notes.append(f"certified loss intervals to {coarse_step:.0%} (their ends halved to that width) for every "
-                     f"candidate, to {step:.0%} with a {refine_boxes}-box budget per slice for the {refine} best ranked")
+                     f"candidate, to {step:.0%} with a {refine_boxes}-box budget per slice for the {refine} best "
+                     "ranked")
         # the healthy hypothesis: no loss (the same model whatever the element), benign parameters in their box
         healthy = severity_interval(models[els[0]], pts, lo, np.r_[hi_b, 0.0], p, step, 1, 4 * refine_boxes)
         # a witness of the healthy hypothesis (no loss) is one of every element's at loss 0: no lower-end search

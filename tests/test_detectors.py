@@ -119,3 +119,14 @@ def test_detection_and_diagnosis_plot_what_they_hold(open_crack) -> None:
     hit = [y for y in drawn if np.allclose(y[significant], np.abs(out.diagnosis.anchored)[significant], rtol=1e-9)]
     assert hit, "no line carries |D_u| at the points where its bound excludes 0"
     assert not np.any(np.isfinite(hit[0][~significant]))  # and nothing elsewhere
+
+
+def test_verdict_only_gives_the_full_runs_verdict_without_the_certificates(open_crack) -> None:
+    """``DetectorSettings.verdict_only`` (what locate asks before it locates): the same verdict, statistic and
+    threshold as the full joint detection, without the per-point certificate beyond benign change."""
+    rig, base, new = open_crack
+    full = make_detector(rig, base, None, DetectorSettings()).detect(new)
+    quick = make_detector(rig, base, None, DetectorSettings(verdict_only=True)).detect(new)
+    assert full.beyond_benign is not None and quick.beyond_benign is None
+    assert quick.verdict.verdict == full.verdict.verdict == "damage"
+    assert (quick.statistic, quick.threshold, quick.p_value) == (full.statistic, full.threshold, full.p_value)

@@ -19,6 +19,7 @@ the data).
 
 from __future__ import annotations
 
+import functools
 import heapq
 import itertools
 from collections import Counter
@@ -103,6 +104,11 @@ class _Factors:
     kind: np.ndarray  # (r,) str
     symmetric: bool = False  # Z(w, theta) = Z^T for every w and theta (no gyroscopic term): Z^-T c = Z^-1 c
 
+    @functools.cached_property
+    def starts(self) -> np.ndarray:
+        """The first column of each parameter's block (its columns are adjacent)."""
+        return np.flatnonzero(np.r_[True, self.param[1:] != self.param[:-1]]) if self.param.size else self.param
+
     @classmethod
     def of(cls, model: AffineModel) -> _Factors:
         us, vs, prm, kind = [], [], [], []
@@ -161,18 +167,17 @@ def examine_points(model: AffineModel, fac: _Factors, pts: Points, centre: np.nd
     scale = _s_of(fac.kind, w) * half[:, fac.param]  # (m, r)
     x = (v @ fac.U) * scale  # c^T Z^-1 U diag(scale)
     y = u @ fac.V  # V^T Z^-1 b
-    # one positive scale per parameter block (commutes with delta_i I)
+    # one positive scale per parameter block (commutes with delta_i I): the blocks' norms summed over their
+    # columns (a parameter's columns are adjacent, fac.starts)
     share = np.zeros((m, p))
     sc = np.ones((m, r))
-    for i in range(p):
-        cols = fac.param == i
-        if not np.any(cols):
-            continue
-        nx = np.linalg.norm(x[:, cols], axis=1)
-        ny = np.linalg.norm(y[:, cols], axis=1)
-        share[:, i] = nx * ny
+    if r:
+        nx = np.sqrt(np.add.reduceat(x.real**2 + x.imag**2, fac.starts, axis=1))  # (m, blocks)
+        ny = np.sqrt(np.add.reduceat(y.real**2 + y.imag**2, fac.starts, axis=1))
+        share[:, fac.param[fac.starts]] = nx * ny
         good = (nx > 0) & (ny > 0)
-        sc[:, cols] = np.where(good, np.sqrt(np.where(good, nx, 1.0) / np.where(good, ny, 1.0)), 1.0)[:, None]
+        sc = np.repeat(np.where(good, np.sqrt(np.where(good, nx, 1.0) / np.where(good, ny, 1.0)), 1.0),
+                       np.diff(np.r_[fac.starts, r]), axis=1)
     xs, ys = x / sc, y * sc
     with np.errstate(divide="ignore", invalid="ignore"):
         rho = g_c / pts.g0

@@ -118,7 +118,8 @@ def sensor_advice(inp: LocationInputs, run: MeasuredRun, result: LocationResult,
 
 def detector_says_damage(rig: RigConfig, baseline: Baseline, run: MeasuredRun, false_alarm: float = 0.01) -> bool:
     """The default detector's verdict on ``run`` (as ``detect`` with its defaults and ``false_alarm``) is damage."""
-    found = make_detector(rig, baseline, None, DetectorSettings(false_alarm=false_alarm)).detect(run)
+    settings = DetectorSettings(false_alarm=false_alarm, verdict_only=True)
+    found = make_detector(rig, baseline, None, settings).detect(run)
     return found.verdict.verdict == "damage"
 
 

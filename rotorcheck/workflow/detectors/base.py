@@ -28,12 +28,15 @@ if TYPE_CHECKING:  # matplotlib only for .plot()
 @dataclass(frozen=True)
 class DetectorSettings:
     """What the user sets for a detection: the per-point test's family-wise ``confidence`` (over every point
-    and channel pair), the joint test's per-sweep ``false_alarm`` rate, and ``fail_at`` (a testing hook: these
-    point indices are reported as a solver failure)."""
+    and channel pair), the joint test's per-sweep ``false_alarm`` rate, ``fail_at`` (a testing hook: these
+    point indices are reported as a solver failure) and ``verdict_only`` (the verdict and its evidence without
+    the certificates that follow it, e.g. the joint detector's points beyond every benign change: what a
+    caller that needs the verdict alone asks for)."""
 
     confidence: float = 0.99
     false_alarm: float = 0.01
     fail_at: tuple[int, ...] = ()
+    verdict_only: bool = False
 
 
 @dataclass

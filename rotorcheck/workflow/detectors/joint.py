@@ -85,6 +85,8 @@ class JointDetector:
         found.verdict = joint_verdict(joint, found.verdict)
         found.statistic, found.threshold, found.p_value = joint.statistic, joint.threshold, joint.p_value
         found.notes.extend(joint.notes)
+        if self.settings.verdict_only:
+            return found
         certified = certify_beyond_benign(rig, th, var, run, joint, b.speed_rpm, exclude=out)
         if certified is not None:
             found.beyond_benign = certified[0]
