@@ -86,20 +86,22 @@ def breathing_loss(depth: float, radius: float, section_length: float, poisson: 
 
 
 def depth_of_loss(loss: float, relation: Any) -> float | None:
-    """The depth (fraction of the diameter) whose loss under ``relation(depth)`` is ``loss`` (bisection;
-    the relation rises with depth); 0 for no loss, None beyond :data:`MAX_DEPTH`."""
+    """The depth (fraction of the diameter) whose loss under ``relation(depth)`` is ``loss`` (Brent's root
+    bracketed in [1e-9, MAX_DEPTH] to 1e-10; the relation rises with depth); 0 for no loss, None beyond
+    :data:`MAX_DEPTH`."""
+    from scipy.optimize import brentq
+
     if not np.isfinite(loss) or loss <= 0.0:
         return 0.0
-    if loss > relation(MAX_DEPTH):
+    top = relation(MAX_DEPTH)
+    if loss > top:
         return None
-    a, b = 0.0, MAX_DEPTH
-    for _ in range(60):
-        m = 0.5 * (a + b)
-        if relation(m) < loss:
-            a = m
-        else:
-            b = m
-    return 0.5 * (a + b)
+    if loss == top:
+        return float(MAX_DEPTH)
+    shallow = 1e-9  # the relations need a positive depth
+    if relation(shallow) >= loss:
+        return shallow
+    return float(brentq(lambda d: relation(d) - loss, shallow, MAX_DEPTH, xtol=1e-10, rtol=1e-12))
 
 
 @dataclass(frozen=True)

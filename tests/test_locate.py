@@ -80,3 +80,16 @@ def test_detect_report_carries_the_location(base0: Path) -> None:
     outcome.location = workflow.locate_damage(cfg, base, runs[0], elements=(4,))
     loc = outcome.report()["location"]
     assert loc["best_element"] == 4 and loc["candidates"][0]["loss_interval"][0] <= 0.54
+
+
+def test_depth_of_loss_inverts_the_depth_relations() -> None:
+    """depth_of_loss against its definition: the relation at the depth found gives the loss back (open and
+    breathing crack relations of the crack rig's element 4, depths 2-50 %), beyond MAX_DEPTH None, no loss 0."""
+    from rotorcheck.location import MAX_DEPTH, breathing_loss, depth_of_loss, open_loss
+
+    for rel in (lambda d: open_loss(d, 0.0125, 0.04, 0.3), lambda d: breathing_loss(d, 0.0125, 0.02, 0.3)):
+        for d in (0.02, 0.1, 0.27, 0.45, 0.5):
+            found = depth_of_loss(rel(d), rel)
+            assert found is not None and abs(found - d) < 1e-8, (d, found)
+        assert depth_of_loss(rel(MAX_DEPTH) * 1.01, rel) is None
+        assert depth_of_loss(0.0, rel) == 0.0
