@@ -44,6 +44,7 @@ from rotorcheck.progress import Progress, report
 from rotorcheck.ranking import (
     BENIGN_MODEL_ERROR,
     CRACK_MODEL_ERROR,
+    INTERVAL_LEVEL,
     MAX_LOSS,
     MAX_MODEL_ERROR,
     Ranking,
@@ -121,6 +122,8 @@ class CandidateResult:
     loss_estimate: float | None = None  # the best fit's loss (:mod:`rotorcheck.ranking`)
     chi2: float | None = None  # the best fit's whitened residual sum at the fit points
     likelihood: float | None = None  # relative likelihood among the ranked candidates (None: excluded)
+    estimate_interval: tuple[float, float] | None = None  # the best fit's profile interval (ranking.INTERVAL_RULE)
+    estimate_depth_interval: tuple[float | None, float | None] | None = None  # its depths (fraction of diameter)
 
     @property
     def modulus_factor_interval(self) -> tuple[float, float]:
@@ -138,7 +141,11 @@ class CandidateResult:
                 "excluding_frequencies_hz": [float(x) for x in self.excluding_frequencies_hz],
                 "loss_witness_interval": [num(x) for x in self.witness_interval], "witnessed": self.witnessed,
                 "loss_estimate": num(self.loss_estimate), "chi2": num(self.chi2),
-                "relative_likelihood": num(self.likelihood)}
+                "relative_likelihood": num(self.likelihood),
+                **({} if self.estimate_interval is None else
+                   {"loss_estimate_interval": [num(x) for x in self.estimate_interval],
+                    "depth_estimate_interval": [num(x) for x in self.estimate_depth_interval or (None, None)],
+                    "estimate_interval_level": INTERVAL_LEVEL})}
 
 
 @dataclass
@@ -228,10 +235,18 @@ class LocationResult:
             size = (f", stiffness loss {100 * b.loss_interval[0]:.1f}-{100 * b.loss_interval[1]:.1f} % certified "
                     f"(modulus factor {mf[0]:.3f}-{mf[1]:.3f}")
             size += f"; best fit {100 * b.loss_estimate:.1f} %)" if b.loss_estimate is not None else ")"
+        elif b.estimate_interval is not None:
+            lo_e, hi_e = b.estimate_interval
+            size = (f", stiffness loss about {100 * (b.loss_estimate or 0.0):.1f} % ({INTERVAL_LEVEL:.0%} interval "
+                    f"{100 * lo_e:.1f}-{100 * hi_e:.1f} % under the model's crack signature; certified intervals: "
+                    "rotorcheck locate)")
         else:
             size = (f", stiffness loss about {100 * (b.loss_estimate or 0.0):.1f} % (best fit; certified intervals: "
                     "rotorcheck locate)")
-        text = depth_text(*b.depth_interval)
+        shown = b.depth_interval
+        if not self.certified and b.estimate_depth_interval is not None:
+            shown = b.estimate_depth_interval
+        text = depth_text(*shown)
         depth = f", depth {text} of diameter" if text else ""
         caveat = ("; benign change alone is not certified excluded at the points the certificate uses"
                   if self.certified and self.healthy_excluded is False else "")
@@ -438,13 +453,16 @@ def locate(config: RigConfig, box: Any, pairs: Sequence[ChannelPair], change: Sw
         else:
             depth = (None, None)
         ranked = e in order and damage_found
+        est_depth = (None if fit.loss_interval is None or rel is None else
+                     (depth_of_loss(fit.loss_interval[0], rel), depth_of_loss(fit.loss_interval[1], rel)))
         cands.append(CandidateResult(
             e, float(config.stations[e - 1]), float(config.stations[e]),
             "not certified" if r is None else r.status, order.index(e) + 1 if ranked else None,
             (float("nan"), float("nan")) if r is None else (r.lower, r.upper), depth,
             tuple(dict.fromkeys(float(f[ks[k]]) for k in r.excluding)) if r is not None and not consistent else (),
             (float("nan"), float("nan")) if r is None else r.witness_interval, False if r is None else r.witnessed,
-            fit.loss, fit.chi2, fit.likelihood / total if ranked and total > 0 else None))
+            fit.loss, fit.chi2, fit.likelihood / total if ranked and total > 0 else None, fit.loss_interval,
+            est_depth))
     if hypothesis == "breathing" and order and damage_found and certify:
         notes.append(f"depths of the {min(refine, len(order))} best ranked: the loss that best reproduces the model's "
                      "harmonic-balance response to a breathing crack of each depth (its sidebands included: at 50 % "

@@ -22,6 +22,7 @@ has more than one valley).
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -57,6 +58,9 @@ N_FIT_TOP, N_FIT_SPREAD = 32, 32
 LOSS_SCAN = (0.0, 0.03, 0.07, 0.12, 0.2, 0.3, 0.42, 0.55, 0.68, 0.8)
 #: least-squares evaluations per start
 MAX_NFEV = 25
+#: the estimate's interval: confidence of the profile-likelihood interval of the best ranked elements' loss,
+#: and the width (fraction) to which its ends are found
+INTERVAL_LEVEL, INTERVAL_TOL = 0.95, 0.002
 
 
 
@@ -269,21 +273,29 @@ class _Fit:
         return G, dG
 
     def evaluate(self, x: np.ndarray, jac: bool = True) -> tuple[np.ndarray, np.ndarray | None]:
-        """``(r, J)``: the used residuals [Re; Im] at ``x = (theta, gain)`` and their Jacobian (2u, p + 1)."""
+        """``(r, J)``: the used residuals [Re; Im] at ``x = (theta, gain)`` and their Jacobian (2u, p + 1);
+        with ``x = (theta, gain, scale)`` the model's predicted change ``rho - 1`` is multiplied by ``scale``
+        (a model-form error common to every point: :func:`profile_interval`), J then (2u, p + 2)."""
         G, dG = self.receptances(x[: self.p], jac)
         g = x[self.p]
+        scaled = x.size > self.p + 1
+        s = float(x[self.p + 1]) if scaled else 1.0
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             rho = np.where(np.abs(self.g0) > 0, G / self.g0, 1.0)
-            u = g * rho - 1.0
+            shape = 1.0 + s * (rho - 1.0)  # the predicted T / (gain T_h)
+            u = g * shape - 1.0
             sd = np.sqrt(self.var + self.rel2 * np.abs(u) ** 2)
-            r = (self.t_new - g * self.t_h * rho) / sd
+            r = (self.t_new - g * self.t_h * shape) / sd
         m = self.used
         res = np.r_[r[m].real, r[m].imag]
         if dG is None:
             return res, None
         g0, sd, u, r = self.g0[m][:, None], sd[m][:, None], u[m][:, None], r[m][:, None]
-        # d(g rho - 1)/dx: g dG/G(0) for theta, rho for the gain
-        du = np.concatenate([g * dG[m] / g0, rho[m][:, None]], axis=1)
+        # du/dx: g s dG/G(0) for theta, the shape for the gain, g (rho - 1) for the scale
+        cols = [g * s * dG[m] / g0, shape[m][:, None]]
+        if scaled:
+            cols.append(g * (rho[m][:, None] - 1.0))
+        du = np.concatenate(cols, axis=1)
         dsd = self.rel2[m][:, None] * (np.conj(u) * du).real / sd
         dr = -(self.t_h[m][:, None] * du) / sd - r * dsd / sd
         J = np.concatenate([dr.real, dr.imag], axis=0)
@@ -314,6 +326,8 @@ class ElementFit:
     likelihood: float
     theta: tuple[float, ...]
     gain: float
+    loss_interval: tuple[float, float] | None = None  # profile likelihood at INTERVAL_LEVEL (None: not computed)
+    inflation: float = 1.0  # the interval's widening: sqrt(chi2 / dof) of the best fit when above 1
 
 
 @dataclass
@@ -343,8 +357,12 @@ class Ranking:
     def to_dict(self) -> dict[str, Any]:
         return {"rule": self.rule, "chi2_benign_only": self.chi2_benign, "n_residuals": self.n_residuals,
                 "n_frequencies": self.n_frequencies, "notes": list(self.notes),
+                "interval_rule": INTERVAL_RULE,
                 "elements": [{"element": f.element, "loss_estimate": f.loss, "chi2": f.chi2,
-                              "relative_likelihood": f.likelihood} for f in self.fits]}
+                              "relative_likelihood": f.likelihood,
+                              **({} if f.loss_interval is None else
+                                 {"loss_estimate_interval": list(f.loss_interval), "interval_level": INTERVAL_LEVEL,
+                                  "interval_inflation": f.inflation})} for f in self.fits]}
 
 
 #: how the ranking is made (report.json)
@@ -352,6 +370,15 @@ RANKING_RULE = ("every candidate element fitted: one loss of its bending stiffne
                 "their ranges and a gain in its range, bounded least squares of the whitened misfit (noise of both "
                 "sweeps and the model's error bounds as standard deviations) at the fit frequencies; relative "
                 "likelihood exp(-chi2/2) normalised over the candidates (equal prior per element)")
+
+
+#: how the estimate's interval is made (report.json)
+INTERVAL_RULE = ("the best ranked element's loss: every loss whose fit (benign parameters, gain and a scale of the "
+                 "predicted change within 1 +- the crack model's error bound refitted, loss held) exceeds the best "
+                 "fit's chi2 by at most the chi2(1 dof) quantile at the level, times the best fit's chi2 per degree "
+                 "of freedom when that exceeds 1 (a model error larger than its stated bounds widens the interval); "
+                 "assumes the residuals independent Gaussian with the noise and the model's error bounds as "
+                 "standard deviations, and the model's crack signature right up to that common scale")
 
 
 def _solve(fit: _Fit, lo: np.ndarray, hi: np.ndarray, starts: Sequence[np.ndarray]) -> tuple[np.ndarray, float]:
@@ -391,11 +418,73 @@ def _starts(fit: _Fit, centre: np.ndarray, g: float) -> list[np.ndarray]:
     return [np.r_[centre, LOSS_SCAN[k], g] for k in picks]
 
 
+def profile_interval(fit: _Fit, lo: np.ndarray, hi: np.ndarray, x: np.ndarray, dof: int,
+                     level: float = INTERVAL_LEVEL, tol: float = INTERVAL_TOL, form: float = CRACK_MODEL_ERROR
+                     ) -> tuple[tuple[float, float], float]:
+    """``((lower, upper), inflation)``: the profile-likelihood interval of the loss (``x[-2]`` of the best
+    fit ``x = (theta, loss, gain)`` in ``[lo, hi]``; ``dof`` degrees of freedom) at ``level``
+    (:data:`INTERVAL_RULE`). The predicted change is scaled by a free factor in ``[1 - form, 1 + form]`` (the
+    model's error common to every point: a loss is kept when some scale explains the data with it); the
+    interval holds the losses whose refitted misfit (benign parameters, gain and scale free, the loss held)
+    exceeds the best by at most ``chi2_1(level) * inflation^2``, ``inflation = max(1, sqrt(chi2 / dof))``.
+    Each end is bracketed by steps that double from the linearised standard error, then bisected to ``tol``."""
+    from scipy.special import chdtri
+
+    k = lo.size - 2  # the loss's index
+    lo_s, hi_s = np.r_[lo, 1.0 - form], np.r_[hi, 1.0 + form]
+    best, chi2 = _solve(fit, lo_s, hi_s, [np.r_[x, 1.0]])
+    inflation = float(max(1.0, np.sqrt(chi2 / max(dof, 1))))
+    allowed = float(chdtri(1.0, 1.0 - level)) * inflation**2
+    _, J = fit.evaluate(best)
+    assert J is not None
+    span = hi_s - lo_s
+    free = (best > lo_s + 1e-6 * span) & (best < hi_s - 1e-6 * span)
+    free[k] = True
+    cov = np.linalg.pinv(J[:, free].T @ J[:, free])
+    at = int(np.sum(free[:k]))
+    se = float(np.sqrt(max(cov[at, at], 0.0)))
+    first = min(max(np.sqrt(allowed) * se, 4.0 * tol), 0.5 * (hi[k] - lo[k]))
+
+    def excess(loss: float, start: np.ndarray) -> tuple[float, np.ndarray]:
+        """The refitted misfit's excess over the best with the loss held at ``loss``."""
+        l1, h1 = lo_s.copy(), hi_s.copy()
+        l1[k] = h1[k] = loss
+        x0 = start.copy()
+        x0[k] = loss
+        xs, c = _solve(fit, l1, h1, [x0])
+        return c - chi2, xs
+
+    ends = []
+    for sign in (-1.0, 1.0):
+        bound = lo[k] if sign < 0 else hi[k]
+        inside, start, step, end = float(best[k]), best, first, None
+        while end is None:
+            out = float(np.clip(inside + sign * step, lo[k], hi[k]))
+            ex, xs = excess(out, start)
+            if ex > allowed:
+                while abs(out - inside) > tol:  # bisect between the last loss inside and the first outside
+                    mid = 0.5 * (inside + out)
+                    ex, xm = excess(mid, start)
+                    if ex > allowed:
+                        out = mid
+                    else:
+                        inside, start = mid, xm
+                end = out
+            elif out == bound:
+                end = bound
+            else:
+                inside, start, step = out, xs, 2.0 * step
+        ends.append(end)
+    return (float(ends[0]), float(ends[1])), inflation
+
+
 def rank_elements(config: RigConfig, box: Any, change: SweepChange, elements: Sequence[int],
-                  models: dict[int, AffineModel] | None = None, progress: Progress | None = None) -> Ranking:
+                  models: dict[int, AffineModel] | None = None, progress: Progress | None = None,
+                  intervals: int = 1) -> Ranking:
     """Every element of ``elements`` fitted and ranked (module docstring); ``models`` the loss models
     already built (:func:`loss_model`), filled in here; ``progress`` (:data:`rotorcheck.progress.Progress`)
-    hears each element done."""
+    hears each element done; ``intervals``: the best ranked elements that get the loss's profile-likelihood
+    interval (:func:`profile_interval`)."""
     models = {} if models is None else models
     idx = fit_frequencies(change)
     lo_b = np.array([q.lo for q in box.model.parameters], dtype=float)
@@ -404,6 +493,7 @@ def rank_elements(config: RigConfig, box: Any, change: SweepChange, elements: Se
     g_lo, g_hi = change.gain
     g = float(np.clip(1.0, g_lo, g_hi))
     raw: list[tuple[int, float, float, np.ndarray]] = []
+    fitted: dict[int, tuple[_Fit, np.ndarray, np.ndarray]] = {}
     chi2_benign = float("nan")
     n_res = 0
     for k, e in enumerate(elements):
@@ -416,6 +506,7 @@ def rank_elements(config: RigConfig, box: Any, change: SweepChange, elements: Se
         x, chi2 = _solve(fit, lo, hi, _starts(fit, centre, g))
         n_res = 2 * int(fit.used.sum())
         raw.append((e, float(x[-2]), chi2, x))
+        fitted[e] = (fit, lo, hi)
         report(progress, k + 1, len(elements), f"ranking: element {e}")
     chis = np.array([c for _, _, c, _ in raw])
     lik = np.exp(-0.5 * (chis - chis.min())) if chis.size else chis
@@ -423,4 +514,10 @@ def rank_elements(config: RigConfig, box: Any, change: SweepChange, elements: Se
     fits = [ElementFit(e, a, c, float(w), tuple(float(v) for v in x[:-2]), float(x[-1]))
             for (e, a, c, x), w in zip(raw, lik)]
     fits.sort(key=lambda f: (-f.likelihood, f.chi2, f.element))
+    dof = n_res - (lo_b.size + 2)
+    for j, f in enumerate(fits[:intervals]):
+        fit, lo, hi = fitted[f.element]
+        x = np.r_[f.theta, f.loss, f.gain]
+        interval, inflation = profile_interval(fit, lo, hi, x, dof)
+        fits[j] = dataclasses.replace(f, loss_interval=interval, inflation=inflation)
     return Ranking(change.hypothesis, fits, chi2_benign, n_res, int(idx.size), RANKING_RULE)
