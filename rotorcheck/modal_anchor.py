@@ -59,6 +59,13 @@ MAX_MISFIT = 0.05
 SILENT = 1e-9
 #: a fitted pole that moved more than this (relative) from the model's is no fit: that mode stays the model's
 MAX_POLE_MOVE = 0.05
+#: a fit leaving more than this of the data is tried again with close pairs of poles split (:func:`_fit_split`):
+#: the bundled samples' fits leave 4e-5 to 0.004
+SPLIT_MISFIT = 0.002
+#: poles this close (relative) are a pair (forward and backward whirl of one bending mode) ...
+CLOSE_PAIR = 0.01
+#: ... and are started split by these relative spreads
+SPLIT_STARTS = (0.005, 0.01, 0.02)
 
 
 @dataclass(frozen=True)
@@ -232,7 +239,7 @@ def fit_anchor(system: MechanicalSystem, speed_rpm: float, dofs: Sequence[tuple[
     fe_out = modal_frf(fe.poles[rest], fe.residues[rest], fe.real[rest], w)
     pinned = np.zeros(lam0.size, dtype=bool)
     for _ in range(lam0.size):
-        lam, R, misfit, moved = _fit(lam0, fe_out, w, T, pinned)
+        lam, R, misfit, moved = _fit_split(lam0, fe_out, w, T, pinned)
         if not np.any(moved & ~pinned):
             if misfit > MAX_MISFIT:
                 return None
@@ -243,11 +250,39 @@ def fit_anchor(system: MechanicalSystem, speed_rpm: float, dofs: Sequence[tuple[
     return None
 
 
-def _fit(lam0: np.ndarray, fe_out: np.ndarray, w: np.ndarray, T: np.ndarray, pinned: np.ndarray
-         ) -> tuple[np.ndarray, np.ndarray, float, np.ndarray]:
-    """One fit of :func:`fit_anchor`: poles from the model's ``lam0`` (k,, merged), those of ``pinned`` held
-    there, the model's other modes ``fe_out`` (f, P) fixed: (poles, residues, misfit, moved (k,) bool: a pole at
-    its bound, :data:`MAX_POLE_MOVE` from the model's, or at no damping)."""
+def _fit_split(lam0: np.ndarray, fe_out: np.ndarray, w: np.ndarray, T: np.ndarray, pinned: np.ndarray
+               ) -> tuple[np.ndarray, np.ndarray, float, np.ndarray]:
+    """:func:`_fit` from the model's poles, and when that leaves more than :data:`SPLIT_MISFIT` of the data,
+    from starts that split each close pair of free poles (forward and backward whirl, within
+    :data:`CLOSE_PAIR` of each other) symmetrically by each of :data:`SPLIT_STARTS`: started together, a pair
+    stays together (the misfit is symmetric in the two), while the machine's may be split further (anisotropic
+    supports; on the bearing-damper truth at 1000 rpm 54.39 / 54.96 Hz, the model's 3.5e-4 apart); the best."""
+    best = _fit(lam0, fe_out, w, T, pinned)
+    if best[2] <= SPLIT_MISFIT:
+        return best
+    free = np.flatnonzero(~pinned)
+    pairs = [(int(i), int(j)) for a, i in enumerate(free) for j in free[a + 1:]
+             if abs(lam0[i] - lam0[j]) <= CLOSE_PAIR * abs(lam0[i])]
+    if not pairs:
+        return best
+    for spread in SPLIT_STARTS:
+        start = lam0.copy()
+        for i, j in pairs:
+            lo_i = lam0[i].imag <= lam0[j].imag
+            start[i] = lam0[i].real + 1j * lam0[i].imag * (1.0 - (0.5 if lo_i else -0.5) * spread)
+            start[j] = lam0[j].real + 1j * lam0[j].imag * (1.0 + (0.5 if lo_i else -0.5) * spread)
+        trial = _fit(lam0, fe_out, w, T, pinned, start)
+        if trial[2] < best[2]:
+            best = trial
+    return best
+
+
+def _fit(lam0: np.ndarray, fe_out: np.ndarray, w: np.ndarray, T: np.ndarray, pinned: np.ndarray,
+         start: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, float, np.ndarray]:
+    """One fit of :func:`fit_anchor`: poles from ``start`` (default the model's ``lam0`` (k,, merged), around
+    which they are bounded), those of ``pinned`` held at the model's, the model's other modes ``fe_out`` (f, P)
+    fixed: (poles, residues, misfit, moved (k,) bool: a pole at its bound, :data:`MAX_POLE_MOVE` from the
+    model's, or at no damping)."""
     m = lam0.size
     free = ~pinned
     target = T - fe_out
@@ -275,7 +310,8 @@ def _fit(lam0: np.ndarray, fe_out: np.ndarray, w: np.ndarray, T: np.ndarray, pin
     # each pole kept near its own (frequency within MAX_POLE_MOVE, damping ratio below 0.3): modes cannot swap
     lo = np.concatenate([-0.3 * size, lf.imag * (1.0 - MAX_POLE_MOVE)])
     hi = np.concatenate([-1e-6 * size, lf.imag * (1.0 + MAX_POLE_MOVE)])
-    x0 = np.clip(np.concatenate([lf.real, lf.imag]), lo, hi)
+    sf = (lam0 if start is None else start)[free]
+    x0 = np.clip(np.concatenate([sf.real, sf.imag]), lo, hi)
     moved = np.zeros(m, dtype=bool)
     if x0.size:
         fit = optimize.least_squares(lambda x: solve(x)[2], x0, x_scale=np.abs(x0) + 1.0, bounds=(lo, hi),
