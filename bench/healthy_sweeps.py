@@ -7,7 +7,7 @@ cracks in element 4 (stiffness loss) at 0 rpm. Also the coverage of the fitted Y
 the healthy sweeps. Seeded; prints a Markdown table, one row per variant and K.
 
 ``python -m bench.healthy_sweeps [--counts 1,3,10] [--healthy 20 --cracks 10] [--variants truth,dampers]
-[--losses 0.02,0.05]``
+[--losses 0.02,0.05] [--no-learn-drift]`` (``--no-learn-drift``: every K through the default ``validate``)
 """
 
 from __future__ import annotations
@@ -24,8 +24,10 @@ from bench.truth_variants import VARIANTS, nominal, truth_variant
 from rotorcheck import workflow
 
 
-def run(name: str, count: int, n_healthy: int, n_cracks: int, losses: tuple[float, ...]) -> dict[str, str]:
-    """``{column: value}`` for one variant and training-set size (0 rpm)."""
+def run(name: str, count: int, n_healthy: int, n_cracks: int, losses: tuple[float, ...],
+        learn: bool = True) -> dict[str, str]:
+    """``{column: value}`` for one variant and training-set size (0 rpm); ``learn``: ``--learn-drift`` from 3
+    sweeps on (else the default ``validate`` of every sweep)."""
     nom = nominal()
     truth = truth_variant(name, nom)
     rng = np.random.default_rng([count, 2901])
@@ -33,7 +35,7 @@ def run(name: str, count: int, n_healthy: int, n_cracks: int, losses: tuple[floa
     train = [sweep_run(truth, nom, 0.0, 1.0, 35_000_000 + 100 * count + k, benign=v)
              for k, v in enumerate(train_values)]
     base = workflow.validate(nom, train, workflow.fit_noise(train[0]), enclose="measured",
-                             learn_drift=count >= 3).baseline
+                             learn_drift=learn and count >= 3).baseline
     # the healthy mean of drifted sweeps sits at their mean drift: the truth's E relative to it
     e_mean = float(np.mean([v.get("youngs_modulus", 0.0) for v in train_values]))
     test_rng = np.random.default_rng([29, 0])
@@ -64,13 +66,14 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--cracks", type=int, default=10)
     ap.add_argument("--variants", default=",".join(VARIANTS))
     ap.add_argument("--losses", default="0.02,0.05")
+    ap.add_argument("--no-learn-drift", action="store_true", help="every K through the default validate")
     a = ap.parse_args(argv)
     losses = tuple(float(x) for x in a.losses.split(","))
     rows = []
     for name in a.variants.split(","):
         for count in (int(c) for c in a.counts.split(",")):
             t = time.perf_counter()
-            r = run(name, count, a.healthy, a.cracks, losses)
+            r = run(name, count, a.healthy, a.cracks, losses, not a.no_learn_drift)
             print(f"{name} K={count}: {r} ({time.perf_counter() - t:.0f} s)", file=sys.stderr, flush=True)
             rows.append((name, count, r))
     cols = list(rows[0][2])

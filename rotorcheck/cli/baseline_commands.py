@@ -144,7 +144,7 @@ def validate(
         if reused_from and nb is noise:
             outcome.baseline.provenance.noise_fitted_on_sweep = reused_from
         outcomes.append(outcome)
-        for line in (workflow.update_summary(outcome), workflow.learning_summary(outcome)):
+        for line in (outcome.healthy_note, workflow.update_summary(outcome), workflow.learning_summary(outcome)):
             if line:
                 err.print(line)
         with progress("writing plots"):

@@ -16,7 +16,7 @@ from rotorcheck.errors import InputError
 from rotorcheck.fe.assembly import build_system
 from rotorcheck.nominal import ChannelPair, channel_port, pair_receptance, port_label
 from rotorcheck.robust.lft import additive_me
-from rotorcheck.robust.measured import FrfEstimate, combine_sweeps
+from rotorcheck.robust.measured import FrfEstimate, combine_sweeps, welch_dof
 from rotorcheck.robust.measured import frf_estimate as _est
 from rotorcheck.robust.noise import point_miss
 from rotorcheck.signal.harmonics import ShaftHarmonics, lockin_resolution_hz, shaft_harmonic_points
@@ -335,6 +335,72 @@ def healthy_estimate(runs: list[MeasuredRun]) -> FrfEstimate:
     """The measured healthy FRF: the mean of the healthy runs with its variance and Welch dof."""
 
     return combine_sweeps([frf_estimate(r) for r in runs])
+
+
+#: healthy sweeps are averaged when none differs from the others' mean beyond this chance (Sidak over the sweeps)
+REPEAT_LEVEL = 0.01
+
+
+@dataclass(frozen=True)
+class HealthyReference:
+    """The healthy FRF a baseline detects against (:func:`healthy_reference`): ``estimate``; ``reference`` the
+    run it is (None: the mean of every run); ``chi2`` (K,) each run's whitened distance from the mean of the
+    others and ``threshold`` what a repeat stays below; ``note`` in words."""
+
+    estimate: FrfEstimate
+    reference: int | None
+    chi2: np.ndarray
+    threshold: float
+    note: str
+
+
+def healthy_reference(runs: list[MeasuredRun], exclude: np.ndarray | None = None) -> HealthyReference:
+    """The healthy FRF of several healthy sweeps: their mean when they are repeats of one state (no sweep
+    differs from the mean of the others beyond both noises: ``2 sum |T_i - mean_-i|^2 / (var_i + var_mean_-i)``
+    below its quantile, each point's term 2 F(2, Welch dof) and the sum a scaled chi-square of their mean and
+    variance, Sidak at :data:`REPEAT_LEVEL` over the sweeps); else the most central sweep alone (the least
+    median whitened distance to the others). A mean of sweeps at different states (drift between them) is no
+    state of the machine: its resonances are smeared beyond its own variance, and the change to a new sweep is
+    then neither benign change nor noise as predicted. Points ``exclude`` (f,) (shaft harmonics) and points
+    without a finite variance are left out."""
+    from scipy.special import chdtri
+
+    ests = [frf_estimate(r) for r in runs]
+    k = len(ests)
+    if k == 1:
+        return HealthyReference(ests[0], None, np.zeros(1), float("inf"), "")
+    use = np.ones(ests[0].frf.shape[0], dtype=bool) if exclude is None else ~np.asarray(exclude, dtype=bool)
+
+    def chi2(a: FrfEstimate, b: FrfEstimate) -> tuple[float, float, float]:
+        """``(2 sum |a - b|^2 / (var_a + var_b), its mean and variance under a repeat)``: each point's term is
+        2 F(2, d) with d the Welch dof of the two variances (chi-square with 2 dof where d is infinite)."""
+        v = a.var + b.var
+        ok = use[:, None] & np.isfinite(v) & (v > 0) & np.isfinite(a.frf) & np.isfinite(b.frf)
+        d = welch_dof([a.var[ok], b.var[ok]], [a.dof[ok], b.dof[ok]])
+        with np.errstate(divide="ignore", invalid="ignore"):
+            mean = np.where(np.isfinite(d) & (d > 4), 2.0 * d / (d - 2.0), 2.0)
+            var = np.where(np.isfinite(d) & (d > 4), 4.0 * d**3 / ((d - 2.0) ** 2 * (d - 4.0)), 4.0)
+        return float(np.sum(2.0 * np.abs(a.frf - b.frf)[ok] ** 2 / v[ok])), float(mean.sum()), float(var.sum())
+
+    loo = [chi2(e, combine_sweeps([o for j, o in enumerate(ests) if j != i])) for i, e in enumerate(ests)]
+    dist = np.array([c for c, _, _ in loo])
+    # the sum of the terms as a scaled chi-square with their mean and variance (Satterthwaite), Sidak over sweeps
+    mean, var = max(m for _, m, _ in loo), max(v for _, _, v in loo)
+    scale, nu = var / (2.0 * mean) if mean > 0 else 1.0, 2.0 * mean**2 / var if var > 0 else 0.0
+    thr = float(scale * chdtri(nu, 1.0 - (1.0 - REPEAT_LEVEL) ** (1.0 / k))) if nu > 0 else float("inf")
+    if np.all(dist <= thr):
+        return HealthyReference(combine_sweeps(ests), None, dist, thr,
+                                f"the {k} healthy sweeps are repeats of one state (each within {thr:.4g} of the "
+                                f"others' mean in chi-square, the largest {dist.max():.4g}): their mean is the "
+                                "healthy FRF")
+    pair = np.array([[chi2(a, b)[0] if i != j else 0.0 for j, b in enumerate(ests)] for i, a in enumerate(ests)])
+    central = int(np.argmin([np.median(np.delete(row, i)) for i, row in enumerate(pair)]))
+    note = (f"the {k} healthy sweeps differ beyond their noise ({int(np.sum(dist > thr))} of them from the others' "
+            f"mean: chi-square up to {dist.max():.4g} against {thr:.4g} at {REPEAT_LEVEL:g}; drift between them): a "
+            "mean of them is no state of the machine, so the healthy FRF is the most central sweep alone, "
+            f"{runs[central].path.name} ({runs[central].run_id}); the others "
+            "still bound the noise and the model error")
+    return HealthyReference(ests[central], central, dist, thr, note)
 
 
 def aligned_pairs(run: MeasuredRun, keys: list[list[str]] | None) -> MeasuredRun:

@@ -24,6 +24,7 @@ from rotorcheck.workflow.measured import (
     aligned_pairs,
     grid_mismatch,
     healthy_estimate,
+    healthy_reference,
     pair_experiments,
     pair_keys,
     run_harmonics,
@@ -44,6 +45,7 @@ class ValidationOutcome:
     update: Update | None = None  # validate --update
     learning: BenignLearning | None = None  # validate --learn-drift
     harmonics: ShaftHarmonics | None = None  # points on a shaft harmonic: status 'excluded', in no claim
+    healthy_note: str = ""  # how several healthy sweeps made the healthy FRF (workflow.measured.healthy_reference)
 
     @property
     def not_enclosed(self) -> np.ndarray:
@@ -140,7 +142,11 @@ def validate(
     harmonics = run_harmonics(runs)
     res.exclude(harmonics.flagged)
     keep = ~harmonics.flagged
-    healthy = healthy_estimate(runs)
+    # several healthy sweeps: their mean when they are repeats of one state, else the most central one alone
+    # (learning drift fits every sweep's own state and keeps the mean)
+    ref = None if learn_drift else healthy_reference(runs, harmonics.flagged)
+    healthy = healthy_estimate(runs) if ref is None else ref.estimate
+    one = runs[0] if ref is None or ref.reference is None else runs[ref.reference]
     upd = None
     if update:
 
@@ -165,14 +171,16 @@ def validate(
         noise_fit(noise_bound, structure, parameter, None if isinstance(V, float) else np.asarray(V, dtype=float)),
         ModelBound(enclose, structure, parameter, first.frequency_hz, res.gamma, model.frf[:, None, None],
                    res.gamma_lower, np.asarray(res.status, dtype=str)),
-        HealthyData(healthy.frf, healthy.var, healthy.dof, first.W[:, None], first.Zt[:, None],
-                    first.harmonics_removed, len(runs), pair_keys(first)),
+        HealthyData(healthy.frf, healthy.var, healthy.dof, one.W[:, None], one.Zt[:, None],
+                    first.harmonics_removed, len(runs) if ref is None or ref.reference is None else 1,
+                    pair_keys(first)),
         DriftModel(learning.kappa if learning is not None else None, None if learned is None else learned.U,
                    None if learned is None else learned.c_max,
                    learning.correction if learning is not None else None, None if upd is None else upd.as_dict(),
                    {k: list(v) for k, v in learning.model_share.items()}
                    if learning is not None and learning.model_share else None))
-    return ValidationOutcome(base, res, model, runs, rig, upd, learning, harmonics)
+    return ValidationOutcome(base, res, model, runs, rig, upd, learning, harmonics,
+                             "" if ref is None else ref.note)
 
 
 def learning_summary(outcome: ValidationOutcome) -> str:
