@@ -79,6 +79,17 @@ def run_cell(variant: str, xy: bool, kind: str, seed0: int, quick: bool, log: An
                                "verdict": out.verdict.verdict, "sim_s": t1 - t0, "detect_s": t2 - t1}
         d_loc = out.location
         row["detect_rank1"] = None if d_loc is None or d_loc.best is None else d_loc.best.element
+        true_loss = s if kind == "open" else breathing_loss(s, 0.008, SECTION, 0.3)
+        if d_loc is not None and d_loc.best is not None and d_loc.best.estimate_interval is not None:
+            b = d_loc.best
+            row["est"] = b.estimate_interval
+            row["est_depth"] = b.estimate_depth_interval
+            if b.element == e:  # detect's interval about the true element: does it hold the truth?
+                row["est_in"] = bool(b.estimate_interval[0] <= true_loss <= b.estimate_interval[1])
+                if kind == "breathing" and b.estimate_depth_interval is not None:
+                    d0, d1 = b.estimate_depth_interval
+                    row["est_depth_in"] = d0 is not None and d0 <= s and (d1 is None or s <= d1)
+                    row["est_depth_width"] = None if d0 is None or d1 is None else d1 - d0
         if out.verdict.verdict == "damage":
             loc = workflow.locate_damage(nom, base, run, damage=True, section_length=SECTION)
             row["locate_s"] = time.process_time() - t2
@@ -86,7 +97,6 @@ def run_cell(variant: str, xy: bool, kind: str, seed0: int, quick: bool, log: An
             row["kind_said"] = loc.kind
             row["summary"] = loc.summary()
             c = next(x for x in loc.candidates if x.element == e)
-            true_loss = s if kind == "open" else breathing_loss(s, 0.008, SECTION, 0.3)
             row.update(status=c.status, rank=c.rank, likelihood=c.likelihood, loss=c.loss_interval, true_loss=true_loss,
                        estimate=c.loss_estimate,
                        loss_in=bool(c.status == "consistent" and c.loss_interval[0] <= true_loss <= c.loss_interval[1]),
@@ -94,6 +104,7 @@ def run_cell(variant: str, xy: bool, kind: str, seed0: int, quick: bool, log: An
             if kind == "breathing":
                 d0, d1 = c.depth_interval
                 row["depth_in"] = d0 is not None and d0 <= s and (d1 is None or s <= d1)
+                row["depth_width"] = None if d0 is None or d1 is None else d1 - d0
         rows.append(row)
         log(f"{variant} {'x/y' if xy else 'one'} {kind} e{e} {s}: {row['verdict']}, detect {row['detect_rank1']}, "
             f"locate {row.get('locate_rank1')} ({row.get('kind_said')}), true {row.get('status')} "
@@ -106,11 +117,24 @@ def _frac(xs: list[bool]) -> str:
     return f"{sum(xs)}/{len(xs)}" if xs else "-"
 
 
+def _median(xs: list[float | None]) -> str:
+    """The median of the known values in percent of the diameter ('-' when none)."""
+    known = sorted(100 * x for x in xs if x is not None)
+    return f"{known[len(known) // 2]:.0f} %" if known else "-"
+
+
+def _interval(x: tuple[float | None, float | None] | None) -> str:
+    if x is None or x[0] is None:
+        return ""
+    return f"{100 * x[0]:.0f}-" + ("over 50" if x[1] is None else f"{100 * x[1]:.0f}") + " %"
+
+
 def table(rows: list[dict[str, Any]], variants: list[str]) -> str:
     lines = ["| truth | channels | kind | cases | damage verdicts | rank 1 = true (detect) | rank 1 = true (locate) | "
              "detect = locate rank 1 | says where (located / ranked / not locatable) | true element excluded | "
-             "loss interval holds truth | depth interval holds truth | healthy repeat: verdict, where shown |",
-             "|---|---|---|---:|---:|---:|---:|---:|---|---:|---:|---:|---|"]
+             "loss interval holds truth | depth interval holds truth | detect's 95 % interval holds truth (loss; "
+             "depth) | depth interval width, median (certified; detect's) | healthy repeat: verdict, where shown |",
+             "|---|---|---|---:|---:|---:|---:|---:|---|---:|---:|---:|---|---|---|"]
     for v in variants:
         for xy in (False, True):
             for kind in ("open", "breathing"):
@@ -128,6 +152,11 @@ def table(rows: list[dict[str, Any]], variants: list[str]) -> str:
                     f"{_frac([r.get('status') == 'excluded' for r in dmg])} | "
                     f"{_frac([bool(r.get('loss_in')) for r in dmg])} | "
                     f"{_frac([bool(r.get('depth_in')) for r in dmg]) if kind == 'breathing' else ''} | "
+                    f"{_frac([r['est_in'] for r in sub if 'est_in' in r])}"
+                    + (f"; {_frac([r['est_depth_in'] for r in sub if 'est_depth_in' in r])}" if kind == "breathing"
+                       else "") + " | "
+                    + (f"{_median([r.get('depth_width') for r in dmg])}; "
+                       f"{_median([r.get('est_depth_width') for r in sub])}" if kind == "breathing" else "") + " | "
                     + ", ".join(f"{r['verdict']}{' WHERE SHOWN' if r['headline_where'] else ''}" for r in hr) + " |")
     return "\n".join(lines)
 
@@ -151,7 +180,8 @@ def main(argv: list[str] | None = None) -> int:
                                  + (1000 if kind == "breathing" else 0), a.quick, log)
     print(table(rows, variants))
     print("\n| case | verdict | detect rank 1 | locate rank 1 | true: status, rank, likelihood | loss interval (truth) "
-          "| best fit | depth interval |\n|---|---|---:|---:|---|---|---:|---|")
+          "| best fit | depth interval | detect's 95 % loss interval; depth |\n"
+          "|---|---|---:|---:|---|---|---:|---|---|")
     for r in rows:
         if r["kind"] == "healthy":
             continue
@@ -166,7 +196,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"| {r['variant']} {'x/y' if r['xy'] else 'one'} {r['kind']} e{r['element']} {sev} | {r['verdict']} | "
               f"{r['detect_rank1']} | {r.get('locate_rank1')} | {r.get('status')}, {r.get('rank')}, "
               f"{'' if lik is None else f'{lik:.2f}'} | {loss} | {'' if est is None else f'{100 * est:.1f} %'} | "
-              f"{depth} |")
+              f"{depth} | {_interval(r.get('est'))}; {_interval(r.get('est_depth'))} |")
     located = [r.get("locate_s", 0.0) for r in rows if "locate_s" in r]
     print(f"\nCPU {time.process_time() - t0:.0f} s in all; locate per damaged sweep: median "
           f"{sorted(located)[len(located) // 2] if located else 0:.1f} s, max {max(located, default=0):.1f} s")

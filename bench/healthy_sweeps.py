@@ -34,10 +34,13 @@ def run(name: str, count: int, n_healthy: int, n_cracks: int, losses: tuple[floa
     train_values = [_inside(rng) if count > 1 else {} for _ in range(count)]
     train = [sweep_run(truth, nom, 0.0, 1.0, 35_000_000 + 100 * count + k, benign=v)
              for k, v in enumerate(train_values)]
-    base = workflow.validate(nom, train, workflow.fit_noise(train[0]), enclose="measured",
-                             learn_drift=learn and count >= 3).baseline
-    # the healthy mean of drifted sweeps sits at their mean drift: the truth's E relative to it
-    e_mean = float(np.mean([v.get("youngs_modulus", 0.0) for v in train_values]))
+    outcome = workflow.validate(nom, train, workflow.fit_noise(train[0]), enclose="measured",
+                                learn_drift=learn and count >= 3)
+    base = outcome.baseline
+    # the healthy FRF is one sweep's (drift between them) or their mean: the truth's E relative to its state
+    ref = outcome.healthy_run
+    e_mean = (float(train_values[ref].get("youngs_modulus", 0.0)) if ref is not None
+              else float(np.mean([v.get("youngs_modulus", 0.0) for v in train_values])))
     test_rng = np.random.default_rng([29, 0])
     alarms = covered = 0
     for i in range(n_healthy):

@@ -46,6 +46,7 @@ class ValidationOutcome:
     learning: BenignLearning | None = None  # validate --learn-drift
     harmonics: ShaftHarmonics | None = None  # points on a shaft harmonic: status 'excluded', in no claim
     healthy_note: str = ""  # how several healthy sweeps made the healthy FRF (workflow.measured.healthy_reference)
+    healthy_run: int | None = None  # the run whose FRF is the healthy FRF alone (None: the mean of the runs)
 
     @property
     def not_enclosed(self) -> np.ndarray:
@@ -180,7 +181,7 @@ def validate(
                    {k: list(v) for k, v in learning.model_share.items()}
                    if learning is not None and learning.model_share else None))
     return ValidationOutcome(base, res, model, runs, rig, upd, learning, harmonics,
-                             "" if ref is None else ref.note)
+                             "" if ref is None else ref.note, None if ref is None else ref.reference)
 
 
 def learning_summary(outcome: ValidationOutcome) -> str:
