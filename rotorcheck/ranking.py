@@ -32,7 +32,7 @@ import numpy as np
 from rotorcheck.config import Crack, RigConfig
 from rotorcheck.nominal import ChannelPair
 from rotorcheck.progress import Progress, report
-from rotorcheck.robust.real_box import AffineModel, AffineParameter
+from rotorcheck.robust.real_box import AffineModel, AffineParameter, solve_both
 
 #: assumed bound on the model's error in the predicted change at a point, relative to that change: the
 #: nominal model's crack shapes agree with the truth rig's to a cosine of 0.987-0.990 (limits.md 1), an
@@ -243,25 +243,18 @@ class _Fit:
         self.Bu, self.in_idx = np.unique(ch.B, axis=1, return_inverse=True)
         self.Cu, self.out_idx = np.unique(ch.Cm, axis=1, return_inverse=True)
         self.in_idx, self.out_idx = self.in_idx.reshape(-1), self.out_idx.reshape(-1)
-        mats = [model.K, model.M, model.D, *(A for prm in model.parameters for _, A in prm.terms)]
-        self.symmetric = all(np.allclose(A, A.T, rtol=0.0, atol=1e-12 * max(np.abs(A).max(), 1e-300)) for A in mats)
+        self.symmetric = model.symmetric
         self.p = len(model.parameters)
         self._cache: tuple[bytes, np.ndarray, np.ndarray] | None = None
 
     def receptances(self, theta: np.ndarray, jac: bool) -> tuple[np.ndarray, np.ndarray | None]:
         """``(G (k, P), dG/dtheta (k, P, p) or None)`` at ``theta`` (p,)."""
         Z = self.model.dynamic_stiffness_stack(self.w, theta)
-        k, nb = self.w.size, self.Bu.shape[1]
+        k = self.w.size
         if not jac:
             X = np.linalg.solve(Z, np.broadcast_to(self.Bu, (k, *self.Bu.shape)).astype(complex))
             return np.einsum("nj,knj->kj", self.Cu[:, self.out_idx], X[:, :, self.in_idx]), None
-        if self.symmetric:
-            rhs = np.concatenate([self.Bu, self.Cu], axis=1)
-            XY = np.linalg.solve(Z, np.broadcast_to(rhs, (k, *rhs.shape)).astype(complex))
-            X, Y = XY[:, :, :nb], XY[:, :, nb:]
-        else:
-            X = np.linalg.solve(Z, np.broadcast_to(self.Bu, (k, *self.Bu.shape)).astype(complex))
-            Y = np.linalg.solve(np.swapaxes(Z, 1, 2), np.broadcast_to(self.Cu, (k, *self.Cu.shape)).astype(complex))
+        X, Y = solve_both(Z, self.Bu, self.Cu, self.symmetric)
         G = np.einsum("nj,knj->kj", self.Cu[:, self.out_idx], X[:, :, self.in_idx])
         Yp = Y[:, :, self.out_idx]
         dG = np.zeros((k, G.shape[1], self.p), dtype=complex)

@@ -32,6 +32,7 @@ is what that relaxation certifies, for comparison.
 
 from __future__ import annotations
 
+import functools
 import heapq
 from dataclasses import dataclass, field
 
@@ -56,6 +57,18 @@ class AffineParameter:
     terms: tuple[tuple[str, np.ndarray], ...]
     lo: float
     hi: float
+
+
+def solve_both(Z: np.ndarray, B: np.ndarray, C: np.ndarray, symmetric: bool) -> tuple[np.ndarray, np.ndarray]:
+    """``(Z^-1 B, Z^-T C)`` for a stack ``Z`` (m, n, n) and right-hand sides ``B`` (m, n, nb), ``C`` (m, n, nc) (or
+    broadcastable): one batched solve of ``[B, C]`` when ``Z`` is symmetric, two otherwise."""
+    m, n = Z.shape[0], Z.shape[1]
+    B = np.broadcast_to(B, (m, n, B.shape[-1])).astype(complex)
+    C = np.broadcast_to(C, (m, n, C.shape[-1])).astype(complex)
+    if symmetric:
+        X = np.linalg.solve(Z, np.concatenate([B, C], axis=2))
+        return X[:, :, :B.shape[2]], X[:, :, B.shape[2]:]
+    return np.linalg.solve(Z, B), np.linalg.solve(np.swapaxes(Z, 1, 2), C)
 
 
 def _norm2_bound(N: np.ndarray) -> float:
@@ -103,6 +116,13 @@ class AffineModel:
         mats = [self.K, self.M, self.D, *(A for prm in self.parameters for _, A in prm.terms)]
         object.__setattr__(self, "_stack", np.stack([np.asarray(A, dtype=float).reshape(-1) for A in mats]))
         object.__setattr__(self, "_terms", tuple((i, k) for i, prm in enumerate(self.parameters) for k, _ in prm.terms))
+
+    @functools.cached_property
+    def symmetric(self) -> bool:
+        """``Z(w, theta) = Z^T`` for every ``w`` and ``theta`` (every matrix symmetric, 1e-12 of its largest entry:
+        no gyroscopic term), so that ``Z^-T c = Z^-1 c``."""
+        mats = [self.K, self.M, self.D, *(A for prm in self.parameters for _, A in prm.terms)]
+        return all(np.allclose(A, A.T, rtol=0.0, atol=1e-12 * max(float(np.abs(A).max()), 1e-300)) for A in mats)
 
     @staticmethod
     def _s(kind: str, w: float) -> complex:

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rotorcheck.robust.real_box import AffineModel
+from rotorcheck.robust.real_box import AffineModel, solve_both
 
 #: how the severity interval is made (report.json)
 SEVERITY_RULE = ("one severity and one set of benign parameter values (real, in their ranges) and gain for every point "
@@ -119,10 +119,8 @@ class _Factors:
                 prm += [i] * u.shape[1]
                 kind += [k] * u.shape[1]
         n = model.K.shape[0]
-        mats = [model.K, model.M, model.D, *(A for q in model.parameters for _, A in q.terms)]
-        symmetric = all(np.allclose(A, A.T, rtol=0.0, atol=1e-13 * max(float(np.abs(A).max()), 1e-300)) for A in mats)
         return cls(np.hstack(us) if us else np.zeros((n, 0)), np.hstack(vs) if vs else np.zeros((n, 0)),
-                   np.array(prm, dtype=int), np.array(kind), symmetric)
+                   np.array(prm, dtype=int), np.array(kind), model.symmetric)
 
 
 def _s_of(kind: np.ndarray, w: np.ndarray) -> np.ndarray:
@@ -157,12 +155,7 @@ def examine_points(model: AffineModel, fac: _Factors, pts: Points, centre: np.nd
     half = np.broadcast_to(np.asarray(half, dtype=float), (m, p))
     Z = model.dynamic_stiffness_stack(w, centre)
     r = fac.U.shape[1]
-    if fac.symmetric:
-        S = np.linalg.solve(Z, np.stack([pts.b, pts.c], axis=2).astype(complex))
-        u, v = S[:, :, 0], S[:, :, 1]  # Z^-1 b, Z^-T c = Z^-1 c
-    else:
-        u = np.linalg.solve(Z, pts.b[:, :, None].astype(complex))[:, :, 0]
-        v = np.linalg.solve(np.swapaxes(Z, 1, 2), pts.c[:, :, None].astype(complex))[:, :, 0]
+    u, v = (x[:, :, 0] for x in solve_both(Z, pts.b[:, :, None], pts.c[:, :, None], fac.symmetric))
     g_c = np.sum(pts.c * u, axis=1)
     scale = _s_of(fac.kind, w) * half[:, fac.param]  # (m, r)
     x = (v @ fac.U) * scale  # c^T Z^-1 U diag(scale)
@@ -278,12 +271,7 @@ def ratio_jacobian(model: AffineModel, fac: _Factors, pts: Points, theta: np.nda
     ``dG/dtheta_i = -sum s(w) (Z^-T c)^T U_i V_i^T Z^-1 b`` from one solve, the ratio's by G (an elementwise
     function) by forward differences in G's real and imaginary parts (relative step 1e-7)."""
     Z = model.dynamic_stiffness_stack(pts.w, theta)
-    if fac.symmetric:
-        S = np.linalg.solve(Z, np.stack([pts.b, pts.c], axis=2).astype(complex))
-        u, v = S[:, :, 0], S[:, :, 1]
-    else:
-        u = np.linalg.solve(Z, pts.b[:, :, None].astype(complex))[:, :, 0]
-        v = np.linalg.solve(np.swapaxes(Z, 1, 2), pts.c[:, :, None].astype(complex))[:, :, 0]
+    u, v = (x[:, :, 0] for x in solve_both(Z, pts.b[:, :, None], pts.c[:, :, None], fac.symmetric))
     g = np.sum(pts.c * u, axis=1)
     cols = -(v @ fac.U) * (u @ fac.V) * _s_of(fac.kind, pts.w)  # (m, r)
     dg = np.zeros((pts.size, len(model.parameters)), dtype=complex)
