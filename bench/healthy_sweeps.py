@@ -7,7 +7,9 @@ cracks in element 4 (stiffness loss) at 0 rpm. Also the coverage of the fitted Y
 the healthy sweeps. Seeded; prints a Markdown table, one row per variant and K.
 
 ``python -m bench.healthy_sweeps [--counts 1,3,10] [--healthy 20 --cracks 10] [--variants truth,dampers]
-[--losses 0.02,0.05] [--no-learn-drift]`` (``--no-learn-drift``: every K through the default ``validate``)
+[--losses 0.02,0.05] [--no-learn-drift] [--around-baseline]`` (``--no-learn-drift``: every K through the default
+``validate``; ``--around-baseline``: new sweeps drift around the baseline's state, the ranges read as the change
+between two sweeps)
 """
 
 from __future__ import annotations
@@ -25,9 +27,11 @@ from rotorcheck import workflow
 
 
 def run(name: str, count: int, n_healthy: int, n_cracks: int, losses: tuple[float, ...],
-        learn: bool = True) -> dict[str, str]:
+        learn: bool = True, around_baseline: bool = False) -> dict[str, str]:
     """``{column: value}`` for one variant and training-set size (0 rpm); ``learn``: ``--learn-drift`` from 3
-    sweeps on (else the default ``validate`` of every sweep)."""
+    sweeps on (else the default ``validate`` of every sweep); ``around_baseline``: the new sweeps drift inside
+    the ranges around the baseline's own state (the ranges read as the change between two sweeps), else around
+    the nominal state."""
     nom = nominal()
     truth = truth_variant(name, nom)
     rng = np.random.default_rng([count, 2901])
@@ -39,12 +43,18 @@ def run(name: str, count: int, n_healthy: int, n_cracks: int, losses: tuple[floa
     base = outcome.baseline
     # the healthy FRF is one sweep's (drift between them) or their mean: the truth's E relative to its state
     ref = outcome.healthy_run
-    e_mean = (float(train_values[ref].get("youngs_modulus", 0.0)) if ref is not None
-              else float(np.mean([v.get("youngs_modulus", 0.0) for v in train_values])))
+    state = (train_values[ref] if ref is not None else
+             {n: float(np.mean([v.get(n, 0.0) for v in train_values])) for n in train_values[0]})
+    e_mean = float(state.get("youngs_modulus", 0.0))
     test_rng = np.random.default_rng([29, 0])
+
+    def draw() -> dict[str, float]:
+        d = _inside(test_rng)
+        return {n: v + float(state.get(n, 0.0)) for n, v in d.items()} if around_baseline else d
+
     alarms = covered = 0
     for i in range(n_healthy):
-        values = _inside(test_rng)
+        values = draw()
         out = workflow.detect(nom, base, sweep_run(truth, nom, 0.0, 1.0, 36_000_000 + i, benign=values))
         alarms += out.verdict.verdict == "damage"
         j = out.joint
@@ -56,7 +66,7 @@ def run(name: str, count: int, n_healthy: int, n_cracks: int, losses: tuple[floa
     for loss in losses:
         cfg = _open_crack(truth, 1.0 - loss)
         found = sum(workflow.detect(nom, base, sweep_run(cfg, nom, 0.0, 1.0, 37_000_000 + int(loss * 1e4) * 100 + i,
-                                                        "open_crack", benign=_inside(test_rng))).verdict.verdict
+                                                        "open_crack", benign=draw())).verdict.verdict
                     == "damage" for i in range(n_cracks))
         row[f"{100 * loss:g} % loss found"] = f"{found}/{n_cracks}"
     return row
@@ -70,13 +80,14 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--variants", default=",".join(VARIANTS))
     ap.add_argument("--losses", default="0.02,0.05")
     ap.add_argument("--no-learn-drift", action="store_true", help="every K through the default validate")
+    ap.add_argument("--around-baseline", action="store_true", help="new sweeps drift around the baseline's state")
     a = ap.parse_args(argv)
     losses = tuple(float(x) for x in a.losses.split(","))
     rows = []
     for name in a.variants.split(","):
         for count in (int(c) for c in a.counts.split(",")):
             t = time.perf_counter()
-            r = run(name, count, a.healthy, a.cracks, losses, not a.no_learn_drift)
+            r = run(name, count, a.healthy, a.cracks, losses, not a.no_learn_drift, a.around_baseline)
             print(f"{name} K={count}: {r} ({time.perf_counter() - t:.0f} s)", file=sys.stderr, flush=True)
             rows.append((name, count, r))
     cols = list(rows[0][2])
