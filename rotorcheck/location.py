@@ -64,6 +64,8 @@ MIN_EVIDENCE = 4.0
 
 #: certificate points: the largest whitened changes and as many spread over the band (all channel pairs)
 N_TOP, N_SPREAD = 24, 24
+#: detect's diagnosis certifies the best ranked candidates in order until one is consistent, at most this many
+BEST_CERTIFIED = 3
 #: depth range of the strip relation (fraction of the diameter)
 MAX_DEPTH = 0.5
 
@@ -230,24 +232,27 @@ class LocationResult:
         sure = "" if b.likelihood is None else f"; relative likelihood {b.likelihood:.2f}"
         head = (f"{lead} {b.element} ({b.z_start_m:.3f}-{b.z_end_m:.3f} m{sure}"
                 + (f"; next: {others}" if others else "") + ")")
-        if self.certified and b.status == "consistent":
+        certified = (f"{100 * b.loss_interval[0]:.1f}-{100 * b.loss_interval[1]:.1f} % certified"
+                     if b.status == "consistent" else "")
+        if self.certified and certified:
             mf = b.modulus_factor_interval
-            size = (f", stiffness loss {100 * b.loss_interval[0]:.1f}-{100 * b.loss_interval[1]:.1f} % certified "
-                    f"(modulus factor {mf[0]:.3f}-{mf[1]:.3f}")
+            size = f", stiffness loss {certified} (modulus factor {mf[0]:.3f}-{mf[1]:.3f}"
             size += f"; best fit {100 * b.loss_estimate:.1f} %)" if b.loss_estimate is not None else ")"
-        elif b.estimate_interval is not None:
+        elif b.estimate_interval is not None:  # detect: the estimate first, then what is certified
             lo_e, hi_e = b.estimate_interval
             size = (f", stiffness loss about {100 * (b.loss_estimate or 0.0):.1f} % ({INTERVAL_LEVEL:.0%} interval "
-                    f"{100 * lo_e:.1f}-{100 * hi_e:.1f} % under the model's crack signature; certified intervals: "
-                    "rotorcheck locate)")
+                    f"{100 * lo_e:.1f}-{100 * hi_e:.1f} % under the model's crack signature"
+                    + (f"; {certified}, rotorcheck locate narrows it)" if certified else
+                       "; certified intervals: rotorcheck locate)"))
         else:
-            size = (f", stiffness loss about {100 * (b.loss_estimate or 0.0):.1f} % (best fit; certified intervals: "
-                    "rotorcheck locate)")
-        shown = b.depth_interval
+            size = (f", stiffness loss about {100 * (b.loss_estimate or 0.0):.1f} % (best fit; "
+                    + (f"{certified}; rotorcheck locate narrows it)" if certified else
+                       "certified intervals: rotorcheck locate)"))
+        shown, whose = b.depth_interval, ""
         if not self.certified and b.estimate_depth_interval is not None:
-            shown = b.estimate_depth_interval
+            shown, whose = b.estimate_depth_interval, " (by the estimate's interval)"
         text = depth_text(*shown)
-        depth = f", depth {text} of diameter" if text else ""
+        depth = f", depth {text} of diameter{whose}" if text else ""
         caveat = ("; benign change alone is not certified excluded at the points the certificate uses"
                   if self.certified and self.healthy_excluded is False else "")
         return head + size + depth + caveat + ex
@@ -269,8 +274,8 @@ class LocationResult:
 def depth_text(lo: float | None, hi: float | None) -> str:
     """A crack-depth interval (fractions of the diameter) as text: "34-45 %", "at least 50 %" (beyond the
     strip relation's range), "" when unknown."""
-    if lo is None:
-        return ""
+    if lo is None or (hi is None and lo <= 0.0):
+        return ""  # nothing known (no relation, or not bounded either way)
     if hi is None:
         return f"at least {100 * lo:.0f} %"
     a, b = f"{100 * lo:.0f}", f"{100 * hi:.0f}"
@@ -370,14 +375,16 @@ def locate(config: RigConfig, box: Any, pairs: Sequence[ChannelPair], change: Sw
            max_boxes: int = 8,
            refine: int = 1, refine_boxes: int = 48, crack_section_length: float | None = None,
            ranking: Ranking | None = None, certify: bool = True, damage: bool | None = None,
-           progress: Progress | None = None) -> LocationResult:
+           progress: Progress | None = None, certify_best: bool = False) -> LocationResult:
     """Candidates per element (module docstring). ``box`` the benign parameters as a
     :class:`rotorcheck.signatures.BenignBox` (its model at the change's speed); ``change`` the new sweep
     against the healthy one (:func:`rotorcheck.ranking.sweep_change`, one column per pair of ``pairs``);
     ``elements`` default: every shaft element; ``ranking`` the candidates' ranking when the caller has it
     (else :func:`rotorcheck.ranking.rank_elements` here); ``certify``: the certificates too (else the
-    ranking alone); ``damage`` the detector's verdict where known. Certificates: ``step`` the width to
-    which the severity's end slices are halved (loss, fraction) for the ``refine`` best ranked,
+    ranking alone; with ``certify_best`` the best ranked candidate's certificate as in the first pass, the
+    next ones only while it is excluded: ``detect``'s diagnosis); ``damage`` the detector's verdict where
+    known. Certificates: ``step`` the width to which the severity's end slices are halved (loss, fraction)
+    for the ``refine`` best ranked,
     ``coarse_step`` for every candidate's first pass; ``slices`` its first division;
     ``max_boxes`` the branch and bound's budget per slice for every candidate, ``refine_boxes`` for a
     second pass on the ``refine`` best ranked (a larger budget only narrows a certified interval or
@@ -432,9 +439,21 @@ def locate(config: RigConfig, box: Any, pairs: Sequence[ChannelPair], change: Sw
         order = [fit.element for fit in ranking.fits if results[fit.element].status == "consistent"]
         for e in order[:refine]:
             results[e] = severity_interval(models[e], pts, lo, hi, p, step, slices, refine_boxes, at_zero, results[e])
+    elif certify_best and damage is not False:
+        # detect: the best ranked candidate's interval as locate's first pass has it (the next while one is excluded)
+        healthy = severity_interval(models[els[0]], pts, lo, np.r_[hi_b, 0.0], p, step, 1, 4 * refine_boxes)
+        at_zero = healthy.status == "consistent" and bool(np.isfinite(healthy.witness_interval[0]))
+        for e in [f.element for f in ranking.fits[:BEST_CERTIFIED]]:
+            results[e] = severity_interval(models[e], pts, lo, hi, p, coarse_step, slices, max_boxes, at_zero)
+            if results[e].status == "consistent":
+                break
+        notes.append(f"the best ranked candidate's loss interval certified as locate's first pass has it (ends to "
+                     f"{coarse_step:.0%}, {max_boxes} boxes per slice; the next candidate while one is excluded): "
+                     "rotorcheck locate certifies every candidate and narrows the best one's")
     healthy_excluded = None if healthy is None else healthy.status == "excluded"
     damage_found = bool(healthy_excluded) if damage is None else damage
-    order = [fit.element for fit in ranking.fits if not results or results[fit.element].status == "consistent"]
+    order = [fit.element for fit in ranking.fits if fit.element not in results
+             or results[fit.element].status == "consistent"]
     total = float(sum(f.likelihood for f in ranking.fits if f.element in order))
     cands = []
     for e in els:

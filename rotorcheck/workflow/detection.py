@@ -452,7 +452,7 @@ def diagnose(rig: RigConfig, baseline: Baseline, run: MeasuredRun, found: Detect
     location = None
     if found.verdict.verdict == "damage" and locatable_with(rig, baseline):
         # where: the one ranking of candidate elements that locate reports too (locate adds the certificates)
-        location = locate_damage(rig, baseline, run, certify=False, damage=True, progress=progress)
+        location = locate_damage(rig, baseline, run, certify=False, damage=True, progress=progress, certify_best=True)
     diagnosis = Diagnosis(run.frequency_hz, damage, dset, anchored, anchored_set, noise_only, damage_xy,
                           location=location, detectability=sweep_det, notes=notes)
     return DetectionOutcome(rig, baseline, run, model, found, diagnosis)
