@@ -404,12 +404,14 @@ def joint_test(residual: np.ndarray, var_total: np.ndarray, signatures: np.ndarr
     detectable = np.where(ok, (np.sqrt(thr) + POWER_Z) / np.where(ok, nrm, 1.0), np.inf)
     best = int(np.argmax(t_el)) if np.any(t_el > 0) else int(np.argmin(detectable))
     theta_se = np.full(p, np.inf)
-    if p:
-        F = J[:, :p]
-        free = ~at_bound[:p]
-        if np.any(free):
-            cov = np.linalg.pinv(F[:, free].T @ F[:, free])
-            theta_se[free] = np.sqrt(np.maximum(np.diag(cov), 0.0))
+    if p and np.any(~at_bound[:p]):
+        # every free nuisance column (benign parameters, learned and model-form coefficients, the prior's rows in
+        # J): a parameter confounded with the model-form directions is as uncertain as they leave it
+        size = np.maximum(np.linalg.norm(Jf, axis=0), 1e-300)  # columns to unit size: a conditioned inverse
+        cov = np.linalg.pinv((Jf / size).T @ (Jf / size), rcond=1e-12) / np.outer(size, size)
+        at = np.cumsum(~at_bound) - 1  # each free unknown's column in Jf
+        free = np.flatnonzero(~at_bound[:p])
+        theta_se[free] = np.sqrt(np.maximum(np.diag(cov)[at[free]], 0.0))
     if np.any(at_bound[:p]) and benign is not None:
         names = ", ".join(n for n, b in zip(benign.names, at_bound[:p]) if b)
         notes.append(f"benign parameters at the edge of their range: {names} (the change may exceed the range)")
