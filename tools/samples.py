@@ -118,8 +118,9 @@ def write_samples(out_dir: str | Path, force: bool = True) -> list[Path]:
     return written
 
 
-def check_samples(sample_dir: str | Path) -> dict[str, list[str]]:
-    """Differences between the bundled files and freshly made ones ({} when all equal)."""
+def check_samples(sample_dir: str | Path, fresh_dir: str | Path | None = None) -> dict[str, list[str]]:
+    """Differences between the bundled files and freshly made ones ({} when all equal); ``fresh_dir``: a
+    folder :func:`write_samples` already filled in this session, compared with instead of making them again."""
     problems: dict[str, list[str]] = {}
     with tempfile.TemporaryDirectory() as tmp:
         for s in SAMPLES:
@@ -127,8 +128,11 @@ def check_samples(sample_dir: str | Path) -> dict[str, list[str]]:
             if not bundled.exists():
                 problems[s.path] = ["missing"]
                 continue
-            fresh = Path(tmp) / Path(s.path).name
-            write_sweep(s.make(), fresh, force=True)
+            if fresh_dir is not None:
+                fresh = Path(fresh_dir) / s.path
+            else:
+                fresh = Path(tmp) / Path(s.path).name
+                write_sweep(s.make(), fresh, force=True)
             diff = compare_sweeps(read_sweep(bundled), read_sweep(fresh))
             if diff:
                 problems[s.path] = diff
@@ -139,9 +143,11 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("dir", nargs="?", default="data_samples")
     parser.add_argument("--check", action="store_true", help="compare instead of writing")
+    parser.add_argument("--against", default=None,
+                        help="with --check: compare with the samples already written to this folder")
     args = parser.parse_args(argv)
     if args.check:
-        problems = check_samples(args.dir)
+        problems = check_samples(args.dir, args.against)
         for name, diff in problems.items():
             print(f"{name}: {'; '.join(diff[:5])}", file=sys.stderr)
         return 1 if problems else 0

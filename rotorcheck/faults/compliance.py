@@ -101,17 +101,31 @@ def _root_tan(lam: np.ndarray) -> np.ndarray:
     return np.where(lam > 1e-8, np.sqrt(np.tan(safe) / safe), 1.0)
 
 
+def _tada_parts(s: np.ndarray | float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """What both of Tada's F share at ``s`` (depth / height): ``(s, sqrt(tan(lam)/lam), 1 - sin(lam),
+    cos(lam))`` with ``lam = pi s / 2`` (the strip integral needs both F on one grid: computed once)."""
+    lam = _lam(s)
+    return np.asarray(s, dtype=float), _root_tan(lam), 1.0 - np.sin(lam), np.cos(lam)
+
+
+def _tada_bending(parts: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]) -> np.ndarray:
+    _, root, one_minus_sin, cos = parts
+    return root * (0.923 + 0.199 * one_minus_sin ** 4) / cos
+
+
+def _tada_tension(parts: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]) -> np.ndarray:
+    s, root, one_minus_sin, cos = parts
+    return root * (0.752 + 2.02 * s + 0.37 * one_minus_sin ** 3) / cos
+
+
 def tada_bending(s: np.ndarray | float) -> np.ndarray:
     """Tada's F for an edge-cracked strip in pure bending; ``s`` = depth / height in [0, 1)."""
-    lam = _lam(s)
-    return _root_tan(lam) * (0.923 + 0.199 * (1.0 - np.sin(lam)) ** 4) / np.cos(lam)
+    return _tada_bending(_tada_parts(s))
 
 
 def tada_tension(s: np.ndarray | float) -> np.ndarray:
     """Tada's F for an edge-cracked strip in tension; ``s`` = depth / height in [0, 1)."""
-    lam = _lam(s)
-    s = np.asarray(s, dtype=float)
-    return _root_tan(lam) * (0.752 + 2.02 * s + 0.37 * (1.0 - np.sin(lam)) ** 3) / np.cos(lam)
+    return _tada_tension(_tada_parts(s))
 
 
 @lru_cache(maxsize=16)
@@ -143,9 +157,9 @@ def _strip(depth_ratio: float, n: int) -> tuple[float, float]:
     u, wu = 0.5 * (t + 1.0), 0.5 * w
     s = s_max[:, None] * u[None, :]
     ws = s_max[:, None] * wu[None, :]
-    ratio = s / h[:, None]
-    inner_b = np.sum(ws * s * tada_bending(ratio) ** 2, axis=1)
-    inner_t = np.sum(ws * s * tada_tension(ratio) ** 2, axis=1)
+    parts = _tada_parts(s / h[:, None])
+    inner_b = np.sum(ws * s * _tada_bending(parts) ** 2, axis=1)
+    inner_t = np.sum(ws * s * _tada_tension(parts) ** 2, axis=1)
     c_xi = 32.0 / np.pi * float(np.sum(wx * (1.0 - x**2) * inner_b))
     c_eta = 32.0 / np.pi * float(np.sum(wx * x**2 * inner_t))
     return c_xi, c_eta

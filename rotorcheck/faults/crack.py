@@ -143,8 +143,15 @@ def _q_r(x: np.ndarray) -> dict[int, np.ndarray]:
 
 
 def _t2(phi: np.ndarray) -> np.ndarray:
+    """Rotations ``[[c, -s], [s, c]]`` (..., 2, 2) by ``phi`` (rad), filled in place (no nested stacks:
+    the time-domain references call this once per right-hand side)."""
     c, s = np.cos(phi), np.sin(phi)
-    return np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)
+    out = np.empty((*np.shape(phi), 2, 2))
+    out[..., 0, 0] = c
+    out[..., 0, 1] = -s
+    out[..., 1, 0] = s
+    out[..., 1, 1] = c
+    return out
 
 
 # --------------------------------------------------------------------------------------------
@@ -241,7 +248,9 @@ def _fft_coefficients(fun: Callable[[np.ndarray], np.ndarray], n_terms: int) -> 
 
 
 def _steer(fun: Callable[[np.ndarray], np.ndarray], th: np.ndarray) -> np.ndarray:
-    return np.broadcast_to(np.asarray(fun(th), dtype=float), th.shape)
+    """``fun(th)`` as floats of ``th``'s shape (broadcast only when a law returns a constant)."""
+    val = np.asarray(fun(th), dtype=float)
+    return val if val.shape == th.shape else np.broadcast_to(val, th.shape)
 
 
 def _steered(fun: Callable[[np.ndarray], np.ndarray], mat: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:

@@ -358,11 +358,17 @@ class _Point:
         bz = self.Tz.T @ c
         return np.concatenate([bz.real, -bz.imag])
 
-    def _rounding(self, mu_abs: np.ndarray, F: float, W1: np.ndarray) -> float:
-        """Rounding allowance of a certificate: the residual h and the product G Delta, per pair."""
+    def _pads(self, F: float, W1: np.ndarray) -> np.ndarray:
+        """Per pair, the magnitudes a certificate about ``W1`` rounds (the residual h and the product G Delta,
+        ``|Delta|_F <= F``): its rounding allowance is ``16 eps mu_abs . pads`` (:meth:`_rounding`)."""
         mag = (np.abs(self.Q0) + np.abs(self.E21) @ np.abs(W1) @ np.abs(self.E12)) / self.R
         gnorm = np.linalg.norm(self.G, axis=1)
-        return 16 * _EPS * float(mu_abs @ (mag.reshape(-1) + gnorm * F))
+        return np.asarray(mag.reshape(-1) + gnorm * F)
+
+    @staticmethod
+    def _rounding(mu_abs: np.ndarray, pads: np.ndarray) -> float:
+        """Rounding allowance of a certificate with dual moduli ``mu_abs`` (``pads``: :meth:`_pads`)."""
+        return 16 * _EPS * float(mu_abs @ pads)
 
     # ---- step 2: emptiness and the centre W0 -----------------------------------------------------
     def centre(self) -> tuple[str, np.ndarray, float]:
@@ -384,7 +390,7 @@ class _Point:
         F = (float(np.linalg.norm(h)) + math.sqrt(m)) / self.smin
         a1 = float(np.real(np.vdot(mu, h)))
         e = float(np.linalg.norm(G.T @ mu.conj())) * F
-        lower = a1 - e - self._rounding(np.abs(mu), F, self.w_hat) - 16 * _EPS * (abs(a1) + e)
+        lower = a1 - e - self._rounding(np.abs(mu), self._pads(F, self.w_hat)) - 16 * _EPS * (abs(a1) + e)
         if mu1 > 0 and lower > mu1:
             return "empty", self.w_hat, math.nan
         W0 = self.w_hat + (self.Tz @ (x[:r] + 1j * x[r:2 * r])).reshape(2, 2)
@@ -419,6 +425,10 @@ class _Point:
         solver = clarabel.DefaultSolver(sp.csc_matrix((2 * r, 2 * r)), np.zeros(2 * r), sp.csc_matrix(A), b, cones,
                                         self.settings)
         witnesses: list[np.ndarray] = []
+        # fixed over the region's support functions (computed once here, not per solve)
+        pads = self._pads(F1, W1)
+        GT = G.T
+        cut_norms = [np.linalg.norm(cut.d) for cut in cuts]
 
         def support(c: np.ndarray) -> float:
             """Certified upper bound of ``max Re(c . vec(W - W1))`` over the region."""
@@ -437,14 +447,14 @@ class _Point:
             # any mu, nu >= 0: Re(c . Delta) <= Re(mu^H h1) + |mu|_1 - nu . lev + |c - G' conj mu + sum nu d| F1
             mu = nc * (zs[1:3 * m:3] + 1j * zs[2:3 * m:3])
             nu = nc * np.maximum(zs[3 * m:], 0.0)
-            e = c - G.T @ mu.conj()
+            e = c - GT @ mu.conj()
             for cut, v in zip(cuts, nu):
                 e = e + v * cut.d
             mabs = np.abs(mu)
             a1, s1, s3 = float(np.real(np.vdot(mu, h1))), float(np.sum(mabs)), float(np.linalg.norm(e)) * F1
             s2 = float(nu @ levs) if cuts else 0.0
-            s4 = sum(float(v * np.linalg.norm(cut.d)) for cut, v in zip(cuts, nu)) * F1
-            val = a1 + s1 - s2 + s3 + self._rounding(mabs, F1, W1) + 16 * _EPS * (abs(a1) + s1 + abs(s2) + s3 + s4)
+            s4 = sum(float(v * dn) for dn, v in zip(cut_norms, nu)) * F1
+            val = a1 + s1 - s2 + s3 + self._rounding(mabs, pads) + 16 * _EPS * (abs(a1) + s1 + abs(s2) + s3 + s4)
             if not math.isfinite(val):
                 raise _Undecided("non-finite certificate")
             return val

@@ -39,7 +39,7 @@ degrees of freedom over the sweeps.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -165,10 +165,10 @@ class MeasuredDetection:
 SHARE_INTERVAL = 0.90
 
 
-def _log_chi2_mgf(x: np.ndarray, nu: np.ndarray) -> np.ndarray:
-    """``ln E[exp(-x chi2_nu / nu)] = -(nu/2) ln(1 + 2x/nu)`` (``nu = inf``: ``-x``)."""
-    with np.errstate(divide="ignore", invalid="ignore"):
-        return np.where(np.isinf(nu), -x, -0.5 * nu * np.log1p(2.0 * x / nu))
+def _log_chi2_mgf(x: np.ndarray, nu: np.ndarray, infinite: np.ndarray, half: np.ndarray) -> np.ndarray:
+    """``ln E[exp(-x chi2_nu / nu)] = -(nu/2) ln(1 + 2x/nu)`` (``nu = inf``: ``-x``); ``infinite = isinf(nu)`` and
+    ``half = -0.5 nu`` given (computed once per bisection). Call inside ``np.errstate(divide, invalid ignored)``."""
+    return np.where(infinite, -x, half * np.log1p(2.0 * x / nu))
 
 
 def share_interval(a_hat: np.ndarray, b_hat: np.ndarray, nu_a: np.ndarray, nu_b: np.ndarray,
@@ -197,10 +197,24 @@ def difference_log_sf(t: np.ndarray, w_lo: np.ndarray, w_hi: np.ndarray, nu_a: n
     ``P = E[exp(-t (w chi2_a/nu_a + (1-w) chi2_b/nu_b))] = (1 + 2tw/nu_a)^(-nu_a/2) (1 + 2t(1-w)/nu_b)^(-nu_b/2)``
     exactly; its logarithm is convex in ``w``, so the largest over an interval sits at an end.
     """
-    def at(w: np.ndarray) -> np.ndarray:
-        return _log_chi2_mgf(t * w, nu_a) + _log_chi2_mgf(t * (1.0 - w), nu_b)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return _difference_log_sf_of(w_lo, w_hi, nu_a, nu_b)(t)
 
-    return np.maximum(at(w_lo), at(w_hi))
+
+def _difference_log_sf_of(w_lo: np.ndarray, w_hi: np.ndarray, nu_a: np.ndarray, nu_b: np.ndarray
+                          ) -> Callable[[np.ndarray], np.ndarray]:
+    """:func:`difference_log_sf` as a function of ``t``, what does not depend on ``t`` computed once (the
+    quantile's bisection calls it 56 times). Call it inside ``np.errstate(divide, invalid ignored)``."""
+    inf_a, inf_b = np.isinf(nu_a), np.isinf(nu_b)
+    half_a, half_b = -0.5 * nu_a, -0.5 * nu_b
+    ends = ((w_lo, 1.0 - w_lo), (w_hi, 1.0 - w_hi))
+
+    def log_sf(t: np.ndarray) -> np.ndarray:
+        lo, hi = (_log_chi2_mgf(t * w, nu_a, inf_a, half_a) + _log_chi2_mgf(t * v, nu_b, inf_b, half_b)
+                  for w, v in ends)
+        return np.maximum(lo, hi)
+
+    return log_sf
 
 
 def difference_quantile(miss: float, w_lo: np.ndarray, w_hi: np.ndarray, nu_a: np.ndarray,
@@ -211,11 +225,13 @@ def difference_quantile(miss: float, w_lo: np.ndarray, w_hi: np.ndarray, nu_a: n
     shape = np.broadcast(w_lo, nu_a, nu_b).shape
     lo = np.full(shape, -np.log(miss))
     hi = np.maximum(_f_isf(miss, np.minimum(nu_a, nu_b)), lo) * 1.0000001
-    for _ in range(56):  # the bracket spans < 2^30 in ratio: 56 halvings of ln t reach rounding
-        mid = np.sqrt(lo * hi)
-        above = difference_log_sf(mid, w_lo, w_hi, nu_a, nu_b) > target
-        lo = np.where(above, mid, lo)
-        hi = np.where(above, hi, mid)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        log_sf = _difference_log_sf_of(w_lo, w_hi, nu_a, nu_b)
+        for _ in range(56):  # the bracket spans < 2^30 in ratio: 56 halvings of ln t reach rounding
+            mid = np.sqrt(lo * hi)
+            above = log_sf(mid) > target
+            lo = np.where(above, mid, lo)
+            hi = np.where(above, hi, mid)
     return np.sqrt(lo * hi)
 
 

@@ -55,6 +55,12 @@ def weighted_map(E12: np.ndarray, E21: np.ndarray, Q0: np.ndarray, R: np.ndarray
     return G, (Q0 / R).reshape(-1)
 
 
+def set_jacobian(x: np.ndarray, G: np.ndarray, g: np.ndarray) -> np.ndarray:
+    """Jacobian of ``1 - |g - G w|^2`` (per pair) in ``x = (Re w, Im w)``."""
+    J = np.conj(g - G @ (x[:4] + 1j * x[4:]))[:, None] * G
+    return np.concatenate([2 * J.real, -2 * J.imag], axis=1)
+
+
 def hit_and_run(G: np.ndarray, g: np.ndarray, W_start: np.ndarray, n: int,
                 rng: np.random.Generator) -> np.ndarray:
     """Points of {W : |g - G vec W| <= 1 entrywise}: chord end points and uniform chord points."""
@@ -149,7 +155,10 @@ def test_outer_contains_every_sampled_and_optimised_point(shape: tuple[int, int]
         assert outer_violations(b, i, d_of_w(Ws, E11)) == 0
         n_checked += len(Ws)
         # a local optimiser pushing Re/Im D_kk to its extremes over the set stays inside the outer interval
-        cons = {"type": "ineq", "fun": lambda x, G=G, g=g: 1 - np.abs(g - G @ (x[:4] + 1j * x[4:])) ** 2}
+        # (exact gradients: with SLSQP's finite differences 12 of the 144 optima ended outside the set, and the
+        # extremes reached were up to 5e-4 less far; they also took four times as long)
+        cons = {"type": "ineq", "fun": lambda x, G=G, g=g: 1 - np.abs(g - G @ (x[:4] + 1j * x[4:])) ** 2,
+                "jac": lambda x, G=G, g=g: set_jacobian(x, G, g)}
         x0 = np.concatenate([c["W"][i].reshape(4).real, c["W"][i].reshape(4).imag])
         for k in range(2):
             for a in range(4):
@@ -157,7 +166,14 @@ def test_outer_contains_every_sampled_and_optimised_point(shape: tuple[int, int]
                     W = (x[:4] + 1j * x[4:]).reshape(2, 2)
                     return -float(np.real(d_of_w(W, E11)[k, k] * (-1j) ** a))
 
-                res = minimize(neg, x0, constraints=[cons], method="SLSQP", options={"maxiter": 300, "ftol": 1e-12})
+                def neg_grad(x: np.ndarray, k: int = k, a: int = a, E11: np.ndarray = E11) -> np.ndarray:
+                    W = (x[:4] + 1j * x[4:]).reshape(2, 2)  # dD = (I + W E11)^-1 dW (I + E11 W)^-1
+                    Binv, Cinv = np.linalg.inv(np.eye(2) + W @ E11), np.linalg.inv(np.eye(2) + E11 @ W)
+                    coef = np.outer(Binv[k], Cinv[:, k]).reshape(4) * (-1j) ** a  # of vec dW in the functional
+                    return np.concatenate([-coef.real, coef.imag])
+
+                res = minimize(neg, x0, jac=neg_grad, constraints=[cons], method="SLSQP",
+                               options={"maxiter": 300, "ftol": 1e-12})
                 Wx = (res.x[:4] + 1j * res.x[4:]).reshape(2, 2)
                 if np.max(np.abs(g - G @ Wx.reshape(4))) > 1 + 1e-9:
                     continue

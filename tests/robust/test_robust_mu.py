@@ -267,13 +267,14 @@ def test_two_scalar_blocks_sharing_gamma_against_brute_force() -> None:
     st = mu.Structure((mu.Block("scalar"), mu.Block("scalar")))
     r = mu.required_gamma(me, W, Zt, 0.0, st)
     assert np.all(r.status == "ok")
+    bs = np.array([0, 1, 1j])
     for i in range(f):
-        def out(a: complex, b: complex, i: int = i) -> complex:
-            return complex(lft.lft_upper(me[i], np.diag([a, b]))[0, 0, 0] * W[i])
+        deltas = np.zeros((3, 2, 2), complex)
+        deltas[:, 1, 1] = bs
 
-        def second(a: complex, i: int = i) -> complex:
-            bs = np.array([0, 1, 1j])
-            zs = np.array([out(a, x) for x in bs])
+        def second(a: complex, i: int = i, deltas: np.ndarray = deltas) -> complex:
+            deltas[:, 0, 0] = a  # the output at (a, b) for the three b in one call (a Moebius map of b)
+            zs = lft.lft_upper(me[i], deltas)[:, 0, 0] * W[i]
             A = np.stack([bs, np.ones(3), -zs * bs, -zs], 1)
             p, q, rr, s = np.linalg.svd(A)[2][-1].conj()
             return -(q - Zt[i] * s) / (p - Zt[i] * rr)
