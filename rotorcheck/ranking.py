@@ -60,7 +60,7 @@ LOSS_SCAN = (0.0, 0.03, 0.07, 0.12, 0.2, 0.3, 0.42, 0.55, 0.68, 0.8)
 MAX_NFEV = 25
 #: the estimate's interval: confidence of the profile-likelihood interval of the best ranked elements' loss,
 #: and the width (fraction) to which its ends are found
-INTERVAL_LEVEL, INTERVAL_TOL = 0.95, 0.002
+INTERVAL_LEVEL, INTERVAL_TOL = 0.95, 0.005
 
 
 
