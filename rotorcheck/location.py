@@ -203,7 +203,23 @@ class LocationResult:
         if not self.locatable:
             return "not locatable"
         b = self.ranked[0]
+        if self.contradicted is not None:
+            return "ranked"  # the best fit is certified excluded: the model errs beyond its bounds somewhere
         return "located" if b.likelihood is None or b.likelihood >= LOCATED_LIKELIHOOD else "ranked"
+
+    @property
+    def contradicted(self) -> CandidateResult | None:
+        """The best fit of the ranking (relative likelihood over every candidate at least
+        :data:`LOCATED_LIKELIHOOD`) when its certificate excludes it: the fit and the certificate disagree, so the
+        model errs beyond its stated bounds at the excluding points (a support, a mode the model lacks); None
+        when they agree."""
+        if self.ranking is None or not self.ranking.fits or not self.damage_found:
+            return None
+        top = self.ranking.fits[0]
+        c = next((x for x in self.candidates if x.element == top.element), None)
+        if c is None or c.status != "excluded" or top.likelihood < LOCATED_LIKELIHOOD:
+            return None
+        return c
 
     def summary(self) -> str:
         """One line: where and how deep, how sure, and what is excluded."""
@@ -229,6 +245,13 @@ class LocationResult:
                     ", ".join(f"{c.element}" for c in ranked[1:4]) + " about as likely)" + advice + ex)
         b = ranked[0]
         lead = "crack most likely in element" if kind == "located" else "crack location uncertain: ranked, element"
+        bad = self.contradicted
+        if bad is not None and self.ranking is not None:
+            at = ", ".join(f"{x:.1f}" for x in bad.excluding_frequencies_hz[:4])
+            lead = (f"crack location uncertain: the best fit is element {bad.element} (relative likelihood "
+                    f"{self.ranking.fits[0].likelihood:.2f} over every element) but its certificate excludes it at "
+                    f"{at} Hz, so the model errs beyond its stated bounds there and the exclusions may not hold; "
+                    "of the elements the certificate keeps, element")
         sure = "" if b.likelihood is None else f"; relative likelihood {b.likelihood:.2f}"
         head = (f"{lead} {b.element} ({b.z_start_m:.3f}-{b.z_end_m:.3f} m{sure}"
                 + (f"; next: {others}" if others else "") + ")")
@@ -266,6 +289,10 @@ class LocationResult:
                 "model_relative_error": CRACK_MODEL_ERROR, "rule": self.rule, "notes": list(self.notes),
                 "candidates": [c.to_dict() for c in self.candidates],
                 **({} if self.ranking is None else {"ranking": self.ranking.to_dict()}),
+                **({} if self.contradicted is None else
+                   {"contradicted_best_fit": {"element": self.contradicted.element,
+                                              "excluding_frequencies_hz":
+                                                  list(self.contradicted.excluding_frequencies_hz)}}),
                 **({"sensor_advice": self.sensor_advice} if self.sensor_advice else {}),
                 **({"sensor_advice_detail": self.sensor_advice_detail} if self.sensor_advice_detail else {}),
                 **({} if self.single_channel is None else {"single_channel": self.single_channel.to_dict()})}

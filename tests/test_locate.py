@@ -93,3 +93,36 @@ def test_depth_of_loss_inverts_the_depth_relations() -> None:
             assert found is not None and abs(found - d) < 1e-8, (d, found)
         assert depth_of_loss(rel(MAX_DEPTH) * 1.01, rel) is None
         assert depth_of_loss(0.0, rel) == 0.0
+
+
+def test_a_best_fit_its_certificate_excludes_is_said_not_hidden() -> None:
+    """The ranking's best fit (relative likelihood 1.00) excluded by its certificate (the pedestal truth with x/y
+    probes: element 5, 40 % loss, excluded at 268 Hz, the pedestal's own mode): the result is 'ranked', not
+    'located', its summary names the best fit, the frequencies and the consequence, location.json carries it; with
+    the best fit consistent nothing is said."""
+    from rotorcheck.location import CandidateResult, LocationResult
+    from rotorcheck.ranking import ElementFit, Ranking
+
+    nan = float("nan")
+    fits = [ElementFit(5, 0.39, 126.0, 1.0, (0.0,), 1.0), ElementFit(6, 0.73, 252.0, 0.0, (0.0,), 1.0)]
+
+    def result(status5: str) -> LocationResult:
+        excluded = status5 == "excluded"
+        cands = [CandidateResult(5, 0.4, 0.45, status5, None if excluded else 1,
+                                 (nan, nan) if excluded else (0.3, 0.5), (None, None),
+                                 (268.0, 49.7) if excluded else (), loss_estimate=0.39, likelihood=None if excluded
+                                 else 1.0),
+                 CandidateResult(6, 0.45, 0.47, "consistent", 1 if excluded else 2, (0.63, 0.8), (None, None), (),
+                                 loss_estimate=0.73, likelihood=1.0 if excluded else 0.0)]
+        return LocationResult("open", True, cands, ["s6.x<-s8.x"], 48, 3.0,
+                              ranking=Ranking("open", fits, 400.0, 128, 64), damage=True)
+
+    bad = result("excluded")
+    assert bad.contradicted is not None and bad.contradicted.element == 5
+    assert bad.kind == "ranked"
+    text = bad.summary()
+    assert "the best fit is element 5" in text and "268.0, 49.7 Hz" in text and "element 6" in text
+    assert bad.to_dict()["contradicted_best_fit"] == {"element": 5, "excluding_frequencies_hz": [268.0, 49.7]}
+    good = result("consistent")
+    assert good.contradicted is None and good.kind == "located" and "best fit is" not in good.summary()
+    assert "contradicted_best_fit" not in good.to_dict()
