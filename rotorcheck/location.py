@@ -463,9 +463,15 @@ def locate(config: RigConfig, box: Any, pairs: Sequence[ChannelPair], change: Sw
         for k, e in enumerate(els):
             results[e] = severity_interval(models[e], pts, lo, hi, p, coarse_step, slices, max_boxes, at_zero)
             report(progress, k + 1, len(els), f"certifying: element {e}")
-        order = [fit.element for fit in ranking.fits if results[fit.element].status == "consistent"]
-        for e in order[:refine]:
+        # the refine best ranked consistent ones: one the larger budget excludes makes way for the next (at most
+        # BEST_CERTIFIED more tries: each costs the refined budget)
+        refined = 0
+        kept = [fit.element for fit in ranking.fits if results[fit.element].status == "consistent"]
+        for e in kept[:refine + BEST_CERTIFIED - 1]:
+            if refined >= refine:
+                break
             results[e] = severity_interval(models[e], pts, lo, hi, p, step, slices, refine_boxes, at_zero, results[e])
+            refined += results[e].status == "consistent"
     elif certify_best and damage is not False:
         # detect: the best ranked candidate's interval as locate's first pass has it (the next while one is excluded)
         healthy = severity_interval(models[els[0]], pts, lo, np.r_[hi_b, 0.0], p, step, 1, 4 * refine_boxes)
