@@ -126,3 +126,35 @@ def test_a_best_fit_its_certificate_excludes_is_said_not_hidden() -> None:
     good = result("consistent")
     assert good.contradicted is None and good.kind == "located" and "best fit is" not in good.summary()
     assert "contradicted_best_fit" not in good.to_dict()
+
+
+def test_a_refinement_that_excludes_the_best_ranked_makes_way_for_the_next(base0: Path, monkeypatch) -> None:
+    """locate's refinement on the bundled open crack with the certificates scripted (consistent everywhere, but
+    the refined budget excludes the best ranked, element 4): the next ranked consistent element is refined and
+    named, and the headline says that the best fit, element 4, is excluded by its certificate."""
+    import numpy as np
+
+    import rotorcheck.robust.severity as severity
+    from rotorcheck import workflow
+    from rotorcheck.baseline import read_baseline
+
+    calls: list[tuple[str, int]] = []
+
+    def scripted(model, pts, lo, hi, index, tol=0.01, slices=16, max_boxes=16, witnessed_at_lo=False, earlier=None):
+        name = model.parameters[-1].name  # loss_<element>
+        calls.append((name, max_boxes))
+        if max_boxes == 48 and name == "loss_4":
+            return severity.SeverityInterval("excluded", np.nan, np.nan, (np.nan, np.nan), (0,), 1, False)
+        return severity.SeverityInterval("consistent", 0.1, 0.6, (0.2, 0.5), (), 1, True)
+
+    monkeypatch.setattr(severity, "severity_interval", scripted)
+    base = read_baseline(base0 / "baseline.h5")
+    cfg, _, runs = workflow.load_rig_and_runs(S / "open_crack_0rpm.h5", None, base0 / "baseline.h5")
+    loc = workflow.locate_damage(cfg, base, runs[0], elements=(3, 4, 5), damage=True)
+    refined = [name for name, boxes in calls if boxes == 48]
+    assert loc.ranking is not None and loc.ranking.fits[0].element == 4
+    second = loc.ranking.fits[1].element
+    assert refined == ["loss_4", f"loss_{second}"]
+    assert loc.best is not None and loc.best.element == second
+    assert loc.contradicted is not None and loc.contradicted.element == 4
+    assert "the best fit is element 4" in loc.summary()
