@@ -243,7 +243,6 @@ class _Fit:
         self.Bu, self.in_idx = np.unique(ch.B, axis=1, return_inverse=True)
         self.Cu, self.out_idx = np.unique(ch.Cm, axis=1, return_inverse=True)
         self.in_idx, self.out_idx = self.in_idx.reshape(-1), self.out_idx.reshape(-1)
-        self.symmetric = model.symmetric
         self.p = len(model.parameters)
         self._cache: tuple[bytes, np.ndarray, np.ndarray] | None = None
 
@@ -254,7 +253,7 @@ class _Fit:
         if not jac:
             X = np.linalg.solve(Z, np.broadcast_to(self.Bu, (k, *self.Bu.shape)).astype(complex))
             return np.einsum("nj,knj->kj", self.Cu[:, self.out_idx], X[:, :, self.in_idx]), None
-        X, Y = solve_both(Z, self.Bu, self.Cu, self.symmetric)
+        X, Y = solve_both(Z, self.Bu, self.Cu, self.model.symmetric)
         G = np.einsum("nj,knj->kj", self.Cu[:, self.out_idx], X[:, :, self.in_idx])
         Yp = Y[:, :, self.out_idx]
         dG = np.zeros((k, G.shape[1], self.p), dtype=complex)

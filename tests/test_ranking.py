@@ -51,7 +51,7 @@ def _change(noise: float = 0.005, seed: int = 3, skew: float = 0.0) -> SweepChan
 @pytest.mark.parametrize("skew", [0.0, 40.0])
 def test_analytic_jacobian_matches_finite_differences(skew: float) -> None:
     fit = _Fit(_model(2, skew), _change(skew=skew), np.arange(40))
-    assert fit.symmetric == (skew == 0.0)
+    assert fit.model.symmetric == (skew == 0.0)
     x = np.array([0.004, 0.27, 1.003])
     r, J = fit.evaluate(x)
     assert J is not None and J.shape == (r.size, 3)

@@ -102,7 +102,6 @@ class _Factors:
     V: np.ndarray
     param: np.ndarray  # (r,) int
     kind: np.ndarray  # (r,) str
-    symmetric: bool = False  # Z(w, theta) = Z^T for every w and theta (no gyroscopic term): Z^-T c = Z^-1 c
 
     @functools.cached_property
     def starts(self) -> np.ndarray:
@@ -120,7 +119,7 @@ class _Factors:
                 kind += [k] * u.shape[1]
         n = model.K.shape[0]
         return cls(np.hstack(us) if us else np.zeros((n, 0)), np.hstack(vs) if vs else np.zeros((n, 0)),
-                   np.array(prm, dtype=int), np.array(kind), model.symmetric)
+                   np.array(prm, dtype=int), np.array(kind))
 
 
 def _s_of(kind: np.ndarray, w: np.ndarray) -> np.ndarray:
@@ -155,7 +154,7 @@ def examine_points(model: AffineModel, fac: _Factors, pts: Points, centre: np.nd
     half = np.broadcast_to(np.asarray(half, dtype=float), (m, p))
     Z = model.dynamic_stiffness_stack(w, centre)
     r = fac.U.shape[1]
-    u, v = (x[:, :, 0] for x in solve_both(Z, pts.b[:, :, None], pts.c[:, :, None], fac.symmetric))
+    u, v = (x[:, :, 0] for x in solve_both(Z, pts.b[:, :, None], pts.c[:, :, None], model.symmetric))
     g_c = np.sum(pts.c * u, axis=1)
     scale = _s_of(fac.kind, w) * half[:, fac.param]  # (m, r)
     x = (v @ fac.U) * scale  # c^T Z^-1 U diag(scale)
@@ -271,7 +270,7 @@ def ratio_jacobian(model: AffineModel, fac: _Factors, pts: Points, theta: np.nda
     ``dG/dtheta_i = -sum s(w) (Z^-T c)^T U_i V_i^T Z^-1 b`` from one solve, the ratio's by G (an elementwise
     function) by forward differences in G's real and imaginary parts (relative step 1e-7)."""
     Z = model.dynamic_stiffness_stack(pts.w, theta)
-    u, v = (x[:, :, 0] for x in solve_both(Z, pts.b[:, :, None], pts.c[:, :, None], fac.symmetric))
+    u, v = (x[:, :, 0] for x in solve_both(Z, pts.b[:, :, None], pts.c[:, :, None], model.symmetric))
     g = np.sum(pts.c * u, axis=1)
     cols = -(v @ fac.U) * (u @ fac.V) * _s_of(fac.kind, pts.w)  # (m, r)
     dg = np.zeros((pts.size, len(model.parameters)), dtype=complex)
@@ -338,43 +337,32 @@ def _box(model: AffineModel, fac: _Factors, pts: Points, lo: np.ndarray, hi: np.
     every point; the sub-box closest to exclusion is split first (along the parameter with the largest
     share of that point's bound); "open": the budget ran out first."""
 
-    split: dict[tuple[int, ...], tuple[np.ndarray, Points, np.ndarray, Points]] = {}
+    split: dict[tuple[int, ...], tuple[tuple[np.ndarray, Points], tuple[np.ndarray, Points]]] = {}
 
-    def parts(first: tuple[int, ...]) -> tuple[np.ndarray, Points, np.ndarray, Points]:
+    def parts(first: tuple[int, ...]) -> tuple[tuple[np.ndarray, Points], tuple[np.ndarray, Points]]:
         """The points ``first`` and the rest, each as an index array and as points (made once per set)."""
         if first not in split:
             a = np.array(first, dtype=int)
             b = np.setdiff1d(np.arange(pts.size), a)
-            split[first] = (a, pts.take(a), b, pts.take(b))
+            split[first] = ((a, pts.take(a)), (b, pts.take(b)))
         return split[first]
 
     def examine(c: np.ndarray, h: np.ndarray) -> tuple[float, np.ndarray | None]:
         # the points that excluded boxes most often first (most boxes fall to one of them), then the rest
-        first = tuple(k for k, _ in used.most_common(EARLY))
-        if not first:
-            ok, margin, share = examine_points(model, fac, pts, c, h)
-            k = int(np.argmax(margin))
-            if margin[k] > 0:
-                used[k] += 1
-                return float(margin[k]), share[k]
-            return (-np.inf, None) if np.all(ok) else (float(margin[k]), share[k])
-        a, pa, b, pb = parts(first)
-        ok_a, m_a, s_a = examine_points(model, fac, pa, c, h)
-        k = int(np.argmax(m_a))
-        if m_a[k] > 0:
-            used[int(a[k])] += 1
-            return float(m_a[k]), s_a[k]
-        ok_b, m_b, s_b = (examine_points(model, fac, pb, c, h) if b.size
-                          else (np.ones(0, bool), np.zeros(0), np.zeros((0, len(model.parameters)))))
-        j = int(np.argmax(m_b)) if b.size else -1
-        if b.size and m_b[j] > 0:
-            used[int(b[j])] += 1
-            return float(m_b[j]), s_b[j]
-        if np.all(ok_a) and np.all(ok_b):
+        found: list[tuple[float, bool, np.ndarray]] = []  # per part: largest margin, not all explained, its share
+        for idx, sub in parts(tuple(k for k, _ in used.most_common(EARLY))):
+            if not idx.size:
+                continue
+            ok, margins, shares = examine_points(model, fac, sub, c, h)
+            k = int(np.argmax(margins))
+            if margins[k] > 0:
+                used[int(idx[k])] += 1
+                return float(margins[k]), shares[k]
+            found.append((float(margins[k]), not bool(np.all(ok)), shares[k]))
+        if not any(open_ for _, open_, _ in found):
             return -np.inf, None
-        if b.size and (m_b[j] > m_a[k] or np.all(ok_a)):
-            return float(m_b[j]), s_b[j]
-        return float(m_a[k]), s_a[k]
+        top = max(found, key=lambda t: (t[0], t[1]))  # ties: the part not all explained, then the first
+        return top[0], top[2]
 
     c0, h0 = (lo + hi) / 2.0, (hi - lo) / 2.0
     margin, share = examine(c0, h0)

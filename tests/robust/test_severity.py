@@ -143,7 +143,7 @@ def test_a_point_that_excludes_a_box_is_explained_by_no_member_of_it(symmetric: 
 
     model = _model(2) if symmetric else _gyro_model()
     fac = _Factors.of(model)
-    assert fac.symmetric is symmetric
+    assert model.symmetric is symmetric
     pts, _ = _points(0.005)
     rng = np.random.default_rng(3)
     lo = np.array([q.lo for q in model.parameters])
