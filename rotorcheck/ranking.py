@@ -32,6 +32,7 @@ import numpy as np
 from rotorcheck.config import Crack, RigConfig
 from rotorcheck.nominal import ChannelPair
 from rotorcheck.progress import Progress, report
+from rotorcheck.robust.joint import linearized_se
 from rotorcheck.robust.real_box import AffineModel, AffineParameter, solve_both
 
 #: assumed bound on the model's error in the predicted change at a point, relative to that change: the
@@ -432,9 +433,7 @@ def profile_interval(fit: _Fit, lo: np.ndarray, hi: np.ndarray, x: np.ndarray, d
     span = hi_s - lo_s
     free = (best > lo_s + 1e-6 * span) & (best < hi_s - 1e-6 * span)
     free[k] = True
-    cov = np.linalg.pinv(J[:, free].T @ J[:, free])
-    at = int(np.sum(free[:k]))
-    se = float(np.sqrt(max(cov[at, at], 0.0)))
+    se = float(linearized_se(J, free)[k])
     first = min(max(np.sqrt(allowed) * se, 4.0 * tol), 0.5 * (hi[k] - lo[k]))
 
     def excess(loss: float, start: np.ndarray) -> tuple[float, np.ndarray]:

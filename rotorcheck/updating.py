@@ -22,6 +22,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from rotorcheck.config import RigConfig
+from rotorcheck.robust.joint import linearized_se
 from rotorcheck.signatures import io_frf
 from rotorcheck.variability import benign_parameters, with_benign
 
@@ -66,9 +67,5 @@ def update_parameters(config: RigConfig, freq_hz: np.ndarray, speed_rpm: float, 
     at_bound = (sol.x - lo <= 1e-6 * span_) | (hi - sol.x <= 1e-6 * span_)
     dof = max(sol.fun.size - len(params), 1)
     s2 = float(sol.fun @ sol.fun) / dof
-    se = np.full(len(params), np.inf)
-    free = ~at_bound
-    if np.any(free):
-        J = sol.jac[:, free]
-        se[free] = np.sqrt(np.maximum(np.diag(np.linalg.pinv(J.T @ J)) * s2, 0.0))
+    se = linearized_se(sol.jac, ~at_bound) * np.sqrt(s2)
     return Update(names, sol.x, se, at_bound, float(np.sqrt(np.mean(r0**2))), float(np.sqrt(np.mean(sol.fun**2))))

@@ -95,6 +95,20 @@ class LearnedDirections:
     n_sweeps: int
 
 
+def linearized_se(J: np.ndarray, free: np.ndarray) -> np.ndarray:
+    """(q,) standard errors of the unknowns of a least-squares fit from the Jacobian ``J`` (n, q) of its whitened
+    residuals: the ``free`` ones (q,) bool from ``pinv(J_f^T J_f)`` with the columns scaled to unit size first (a
+    conditioned inverse), inf where held (at a bound). Multiply by ``sqrt(chi2 / dof)`` for residuals whitened
+    by an unknown scale."""
+    se = np.full(J.shape[1], np.inf)
+    if np.any(free):
+        Jf = J[:, free]
+        size = np.maximum(np.linalg.norm(Jf, axis=0), 1e-300)
+        cov = np.linalg.pinv((Jf / size).T @ (Jf / size), rcond=1e-12) / np.outer(size, size)
+        se[free] = np.sqrt(np.maximum(np.diag(cov), 0.0))
+    return se
+
+
 @dataclass
 class JointResult:
     """The joint test of one sweep (see the module docstring)."""
@@ -403,15 +417,9 @@ def joint_test(residual: np.ndarray, var_total: np.ndarray, signatures: np.ndarr
     thr = float(np.quantile(null, 1.0 - false_alarm))
     detectable = np.where(ok, (np.sqrt(thr) + POWER_Z) / np.where(ok, nrm, 1.0), np.inf)
     best = int(np.argmax(t_el)) if np.any(t_el > 0) else int(np.argmin(detectable))
-    theta_se = np.full(p, np.inf)
-    if p and np.any(~at_bound[:p]):
-        # every free nuisance column (benign parameters, learned and model-form coefficients, the prior's rows in
-        # J): a parameter confounded with the model-form directions is as uncertain as they leave it
-        size = np.maximum(np.linalg.norm(Jf, axis=0), 1e-300)  # columns to unit size: a conditioned inverse
-        cov = np.linalg.pinv((Jf / size).T @ (Jf / size), rcond=1e-12) / np.outer(size, size)
-        at = np.cumsum(~at_bound) - 1  # each free unknown's column in Jf
-        free = np.flatnonzero(~at_bound[:p])
-        theta_se[free] = np.sqrt(np.maximum(np.diag(cov)[at[free]], 0.0))
+    # every free nuisance column (benign parameters, learned and model-form coefficients, the prior's rows in J):
+    # a parameter confounded with the model-form directions is as uncertain as they leave it
+    theta_se = linearized_se(J, ~at_bound)[:p]
     if np.any(at_bound[:p]) and benign is not None:
         names = ", ".join(n for n, b in zip(benign.names, at_bound[:p]) if b)
         notes.append(f"benign parameters at the edge of their range: {names} (the change may exceed the range)")
