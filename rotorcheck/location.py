@@ -445,6 +445,12 @@ def locate(config: RigConfig, box: Any, pairs: Sequence[ChannelPair], change: Sw
     lo, hi = np.r_[lo_b, 0.0], np.r_[hi_b, MAX_LOSS]
     results: dict[int, Any] = {}
     healthy = None
+    at_zero = False
+    if certify or (certify_best and damage is not False):
+        # the healthy hypothesis: no loss (the same model whatever the element), benign parameters in their box
+        healthy = severity_interval(models[els[0]], pts, lo, np.r_[hi_b, 0.0], p, step, 1, 4 * refine_boxes)
+        # a witness of the healthy hypothesis (no loss) is one of every element's at loss 0: no lower-end search
+        at_zero = healthy.status == "consistent" and bool(np.isfinite(healthy.witness_interval[0]))
     if certify:
         notes.append(f"{m} points of {nf * n_pairs} certified (the {N_TOP} largest whitened changes and the rest "
                      f"spread over the band, among the {int(change.trusted.sum())} where the model errs on the "
@@ -456,10 +462,6 @@ def locate(config: RigConfig, box: Any, pairs: Sequence[ChannelPair], change: Sw
         notes.append(f"certified loss intervals to {coarse_step:.0%} (their ends halved to that width) for every "
                      f"candidate, to {step:.0%} with a {refine_boxes}-box budget per slice for the {refine} best "
                      "ranked")
-        # the healthy hypothesis: no loss (the same model whatever the element), benign parameters in their box
-        healthy = severity_interval(models[els[0]], pts, lo, np.r_[hi_b, 0.0], p, step, 1, 4 * refine_boxes)
-        # a witness of the healthy hypothesis (no loss) is one of every element's at loss 0: no lower-end search
-        at_zero = healthy.status == "consistent" and bool(np.isfinite(healthy.witness_interval[0]))
         for k, e in enumerate(els):
             results[e] = severity_interval(models[e], pts, lo, hi, p, coarse_step, slices, max_boxes, at_zero)
             report(progress, k + 1, len(els), f"certifying: element {e}")
@@ -474,8 +476,6 @@ def locate(config: RigConfig, box: Any, pairs: Sequence[ChannelPair], change: Sw
             refined += results[e].status == "consistent"
     elif certify_best and damage is not False:
         # detect: the best ranked candidate's interval as locate's first pass has it (the next while one is excluded)
-        healthy = severity_interval(models[els[0]], pts, lo, np.r_[hi_b, 0.0], p, step, 1, 4 * refine_boxes)
-        at_zero = healthy.status == "consistent" and bool(np.isfinite(healthy.witness_interval[0]))
         for e in [f.element for f in ranking.fits[:BEST_CERTIFIED]]:
             results[e] = severity_interval(models[e], pts, lo, hi, p, coarse_step, slices, max_boxes, at_zero)
             if results[e].status == "consistent":
