@@ -33,7 +33,7 @@ from rotorcheck.config import Crack, RigConfig
 from rotorcheck.nominal import ChannelPair
 from rotorcheck.progress import Progress, report
 from rotorcheck.robust.joint import linearized_se
-from rotorcheck.robust.real_box import AffineModel, AffineParameter, solve_both
+from rotorcheck.robust.real_box import AffineModel, AffineParameter
 
 #: assumed bound on the model's error in the predicted change at a point, relative to that change: the
 #: nominal model's crack shapes agree with the truth rig's to a cosine of 0.987-0.990 (limits.md 1), an
@@ -126,8 +126,8 @@ def _near_sideband(model: AffineModel, freq_hz: np.ndarray, speed_rpm: float) ->
 def receptances(model: AffineModel, omega: np.ndarray, theta: np.ndarray, B: np.ndarray, Cm: np.ndarray
                 ) -> np.ndarray:
     """(f, P) receptances ``c_j^T Z(w, theta)^-1 b_j`` of each pair j (columns of B, Cm), batched over w."""
-    Z = model.dynamic_stiffness_stack(omega, theta)
-    X = np.linalg.solve(Z, np.broadcast_to(B, (omega.size, *B.shape)).astype(complex))
+    Z = model.stiffness_stack(omega, theta)
+    X = Z.solve(B)
     return np.einsum("nj,fnj->fj", Cm, X)
 
 
@@ -249,12 +249,12 @@ class _Fit:
 
     def receptances(self, theta: np.ndarray, jac: bool) -> tuple[np.ndarray, np.ndarray | None]:
         """``(G (k, P), dG/dtheta (k, P, p) or None)`` at ``theta`` (p,)."""
-        Z = self.model.dynamic_stiffness_stack(self.w, theta)
+        Z = self.model.stiffness_stack(self.w, theta)
         k = self.w.size
         if not jac:
-            X = np.linalg.solve(Z, np.broadcast_to(self.Bu, (k, *self.Bu.shape)).astype(complex))
+            X = Z.solve(self.Bu)
             return np.einsum("nj,knj->kj", self.Cu[:, self.out_idx], X[:, :, self.in_idx]), None
-        X, Y = solve_both(Z, self.Bu, self.Cu, self.model.symmetric)
+        X, Y = self.model.solve_both(Z, self.Bu, self.Cu)
         G = np.einsum("nj,knj->kj", self.Cu[:, self.out_idx], X[:, :, self.in_idx])
         Yp = Y[:, :, self.out_idx]
         dG = np.zeros((k, G.shape[1], self.p), dtype=complex)

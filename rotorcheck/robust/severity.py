@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rotorcheck.robust.real_box import AffineModel, solve_both
+from rotorcheck.robust.real_box import AffineModel
 
 #: how the severity interval is made (report.json)
 SEVERITY_RULE = ("one severity and one set of benign parameter values (real, in their ranges) and gain for every point "
@@ -102,6 +102,7 @@ class _Factors:
     V: np.ndarray
     param: np.ndarray  # (r,) int
     kind: np.ndarray  # (r,) str
+    groups: tuple[np.ndarray, ...] = ()  # the columns on each of the model's blocks (AffineModel.blocks)
 
     @functools.cached_property
     def starts(self) -> np.ndarray:
@@ -118,8 +119,15 @@ class _Factors:
                 prm += [i] * u.shape[1]
                 kind += [k] * u.shape[1]
         n = model.K.shape[0]
-        return cls(np.hstack(us) if us else np.zeros((n, 0)), np.hstack(vs) if vs else np.zeros((n, 0)),
-                   np.array(prm, dtype=int), np.array(kind))
+        U = np.hstack(us) if us else np.zeros((n, 0))
+        # each column lies on one block (AffineModel factors block by block): the block of its support
+        where = np.full(n, -1)
+        for i, d in enumerate(model.blocks):
+            where[d] = i
+        first = np.argmax(U != 0, axis=0)
+        groups = tuple(np.flatnonzero(where[first] == i) for i in range(len(model.blocks)))
+        return cls(U, np.hstack(vs) if vs else np.zeros((n, 0)), np.array(prm, dtype=int), np.array(kind),
+                   tuple(g for g in groups if g.size))
 
 
 def _s_of(kind: np.ndarray, w: np.ndarray) -> np.ndarray:
@@ -152,9 +160,9 @@ def examine_points(model: AffineModel, fac: _Factors, pts: Points, centre: np.nd
     m = w.size
     p = len(model.parameters)
     half = np.broadcast_to(np.asarray(half, dtype=float), (m, p))
-    Z = model.dynamic_stiffness_stack(w, centre)
+    Z = model.stiffness_stack(w, centre)
     r = fac.U.shape[1]
-    u, v = (x[:, :, 0] for x in solve_both(Z, pts.b[:, :, None], pts.c[:, :, None], model.symmetric))
+    u, v = (x[:, :, 0] for x in model.solve_both(Z, pts.b[:, :, None], pts.c[:, :, None]))
     g_c = np.sum(pts.c * u, axis=1)
     scale = _s_of(fac.kind, w) * half[:, fac.param]  # (m, r)
     x = (v @ fac.U) * scale  # c^T Z^-1 U diag(scale)
@@ -209,7 +217,7 @@ def examine_points(model: AffineModel, fac: _Factors, pts: Points, centre: np.nd
             if not at.size:
                 break
             # N_s = diag(sc) V^T Z^-1 U diag(scale / sc) at these points; V^T on Re and Im side by side
-            Q = np.linalg.solve(Z[at], np.broadcast_to(fac.U, (at.size, *fac.U.shape)).astype(complex))
+            Q = Z.take(at).solve(fac.U)
             Q *= (scale[at] / sc[at])[:, None, :]  # (k, n, r)
             Ns = (fac.V.T @ Q.view(float)).view(complex) * sc[at][:, :, None]
             frob = np.sqrt(np.einsum("kij,kij->k", Ns.view(float), Ns.view(float)))
@@ -223,11 +231,18 @@ def examine_points(model: AffineModel, fac: _Factors, pts: Points, centre: np.nd
                 low_n = np.maximum(np.linalg.norm(nb, axis=1).max(axis=1), np.linalg.norm(nb, axis=2).max(axis=1))
                 big = big[margin_of(low_n, at[big]) > max(best, top)]
             if big.size and top <= 0.0:
-                # ||N_s|| with N_s = P Q, P = diag(sc) V^T (r, n): with P = Q_p R, ||N_s|| = ||R Q||, an n x n
-                # Hermitian eigenvalue problem instead of r x r (r > n with E and speed)
-                R = np.linalg.qr(sc[at[big]][:, :, None] * fac.V.T[None], mode="r")
-                C = R @ Q[big]
-                lam = np.linalg.eigvalsh(C @ np.conj(np.swapaxes(C, 1, 2)))[:, -1]  # ||N||^2, Hermitian
+                if len(fac.groups) > 1:
+                    # N_s is block diagonal in the column groups (each lies on one block of Z, whose inverse is
+                    # block diagonal too): its norm is the largest of the groups' norms
+                    nb = Ns[big]
+                    lam = np.max([np.linalg.eigvalsh(B @ np.conj(np.swapaxes(B, 1, 2)))[:, -1]
+                                  for g in fac.groups for B in [nb[:, g[:, None], g[None, :]]]], axis=0)
+                else:
+                    # ||N_s|| with N_s = P Q, P = diag(sc) V^T (r, n): with P = Q_p R, ||N_s|| = ||R Q||, an n x n
+                    # Hermitian eigenvalue problem instead of r x r (r > n with E and speed)
+                    R = np.linalg.qr(sc[at[big]][:, :, None] * fac.V.T[None], mode="r")
+                    C = R @ Q[big]
+                    lam = np.linalg.eigvalsh(C @ np.conj(np.swapaxes(C, 1, 2)))[:, -1]  # ||N||^2, Hermitian
                 nrm = np.minimum(frob[big], np.sqrt(np.maximum(lam, 0.0)) * (1.0 + 1e-12))
                 here[big] = margin_of(nrm, at[big])
             margin[at] = here
@@ -240,8 +255,8 @@ def examine_points(model: AffineModel, fac: _Factors, pts: Points, centre: np.nd
 
 def point_receptances(model: AffineModel, pts: Points, theta: np.ndarray) -> np.ndarray:
     """(m,) each point's receptance ``c^T Z(w, theta)^-1 b`` (m/N), one batched solve."""
-    Z = model.dynamic_stiffness_stack(pts.w, theta)
-    return np.sum(pts.c * np.linalg.solve(Z, pts.b[:, :, None].astype(complex))[:, :, 0], axis=1)
+    Z = model.stiffness_stack(pts.w, theta)
+    return np.sum(pts.c * Z.solve(pts.b[:, :, None])[:, :, 0], axis=1)
 
 
 def _ratios_of(pts: Points, g: np.ndarray) -> np.ndarray:
@@ -269,8 +284,8 @@ def ratio_jacobian(model: AffineModel, fac: _Factors, pts: Points, theta: np.nda
     """``(ratios (m,), their derivatives by theta (m, p))`` at ``theta``: the receptance's derivative exact,
     ``dG/dtheta_i = -sum s(w) (Z^-T c)^T U_i V_i^T Z^-1 b`` from one solve, the ratio's by G (an elementwise
     function) by forward differences in G's real and imaginary parts (relative step 1e-7)."""
-    Z = model.dynamic_stiffness_stack(pts.w, theta)
-    u, v = (x[:, :, 0] for x in solve_both(Z, pts.b[:, :, None], pts.c[:, :, None], model.symmetric))
+    Z = model.stiffness_stack(pts.w, theta)
+    u, v = (x[:, :, 0] for x in model.solve_both(Z, pts.b[:, :, None], pts.c[:, :, None]))
     g = np.sum(pts.c * u, axis=1)
     cols = -(v @ fac.U) * (u @ fac.V) * _s_of(fac.kind, pts.w)  # (m, r)
     dg = np.zeros((pts.size, len(model.parameters)), dtype=complex)
