@@ -95,14 +95,28 @@ class Points:
 
 
 @dataclass(frozen=True)
+class _Group:
+    """The factor columns ``cols`` (r_g,) that lie on block ``block`` of the model (its DOFs ``dofs``): ``U`` there
+    (n_g, r_g) complex and ``Vt`` = ``V^T`` there (r_g, n_g)."""
+
+    block: int
+    dofs: np.ndarray
+    cols: np.ndarray
+    U: np.ndarray
+    Vt: np.ndarray
+
+
+@dataclass(frozen=True)
 class _Factors:
-    """A model's parameter factors stacked: ``U`` (n, r), ``V`` (n, r), each column's parameter and kind."""
+    """A model's parameter factors stacked: ``U`` (n, r), ``V`` (n, r), each column's parameter and kind, and the
+    columns grouped by the block of the model they lie on (:attr:`AffineModel.blocks`: ``V^T Z^-1 U`` is block
+    diagonal in the groups)."""
 
     U: np.ndarray
     V: np.ndarray
     param: np.ndarray  # (r,) int
     kind: np.ndarray  # (r,) str
-    groups: tuple[np.ndarray, ...] = ()  # the columns on each of the model's blocks (AffineModel.blocks)
+    groups: tuple[_Group, ...] = ()
 
     @functools.cached_property
     def starts(self) -> np.ndarray:
@@ -120,14 +134,18 @@ class _Factors:
                 kind += [k] * u.shape[1]
         n = model.K.shape[0]
         U = np.hstack(us) if us else np.zeros((n, 0))
+        V = np.hstack(vs) if vs else np.zeros((n, 0))
         # each column lies on one block (AffineModel factors block by block): the block of its support
         where = np.full(n, -1)
         for i, d in enumerate(model.blocks):
             where[d] = i
         first = np.argmax(U != 0, axis=0)
-        groups = tuple(np.flatnonzero(where[first] == i) for i in range(len(model.blocks)))
-        return cls(U, np.hstack(vs) if vs else np.zeros((n, 0)), np.array(prm, dtype=int), np.array(kind),
-                   tuple(g for g in groups if g.size))
+        groups = []
+        for i, d in enumerate(model.blocks):
+            cols = np.flatnonzero(where[first] == i)
+            if cols.size:
+                groups.append(_Group(i, d, cols, U[np.ix_(d, cols)].astype(complex), V[np.ix_(d, cols)].T.copy()))
+        return cls(U, V, np.array(prm, dtype=int), np.array(kind), tuple(groups))
 
 
 def _s_of(kind: np.ndarray, w: np.ndarray) -> np.ndarray:
@@ -216,33 +234,35 @@ def examine_points(model: AffineModel, fac: _Factors, pts: Points, centre: np.nd
             at = at[upper[at] > best]
             if not at.size:
                 break
-            # N_s = diag(sc) V^T Z^-1 U diag(scale / sc) at these points; V^T on Re and Im side by side
-            Q = Z.take(at).solve(fac.U)
-            Q *= (scale[at] / sc[at])[:, None, :]  # (k, n, r)
-            Ns = (fac.V.T @ Q.view(float)).view(complex) * sc[at][:, :, None]
-            frob = np.sqrt(np.einsum("kij,kij->k", Ns.view(float), Ns.view(float)))
+            # N_s = diag(sc) V^T Z^-1 U diag(scale / sc) at these points, block diagonal in the column groups (each
+            # on one block of Z, whose inverse is block diagonal too): per group, V^T on Re and Im side by side
+            ns, qs = [], []
+            for g in fac.groups:
+                Q = np.linalg.solve(Z.parts[g.block][at], np.broadcast_to(g.U, (at.size, *g.U.shape)))
+                Q *= (scale[at][:, g.cols] / sc[at][:, g.cols])[:, None, :]  # (k, n_g, r_g)
+                qs.append(Q)
+                ns.append((g.Vt @ Q.view(float)).view(complex) * sc[at][:, g.cols, None])
+            frob = np.sqrt(sum(np.einsum("kij,kij->k", N.view(float), N.view(float)) for N in ns))
             here = margin_of(frob, at)
             top = float(np.nanmax(here)) if np.any(~np.isnan(here)) else -np.inf
             # where the Frobenius norm costs much (>= 0.5) and a lower bound of the spectral norm (the largest
-            # column or row) leaves room above the best, the exact spectral norm
+            # column or row) leaves room above the best, the exact spectral norm: the largest of the groups'
             big = np.flatnonzero(frob >= 0.5)
             if big.size and top <= 0.0:
-                nb = Ns[big]
-                low_n = np.maximum(np.linalg.norm(nb, axis=1).max(axis=1), np.linalg.norm(nb, axis=2).max(axis=1))
+                low_n = np.max([np.maximum(np.linalg.norm(N[big], axis=1).max(axis=1),
+                                           np.linalg.norm(N[big], axis=2).max(axis=1)) for N in ns], axis=0)
                 big = big[margin_of(low_n, at[big]) > max(best, top)]
             if big.size and top <= 0.0:
-                if len(fac.groups) > 1:
-                    # N_s is block diagonal in the column groups (each lies on one block of Z, whose inverse is
-                    # block diagonal too): its norm is the largest of the groups' norms
-                    nb = Ns[big]
-                    lam = np.max([np.linalg.eigvalsh(B @ np.conj(np.swapaxes(B, 1, 2)))[:, -1]
-                                  for g in fac.groups for B in [nb[:, g[:, None], g[None, :]]]], axis=0)
-                else:
-                    # ||N_s|| with N_s = P Q, P = diag(sc) V^T (r, n): with P = Q_p R, ||N_s|| = ||R Q||, an n x n
-                    # Hermitian eigenvalue problem instead of r x r (r > n with E and speed)
-                    R = np.linalg.qr(sc[at[big]][:, :, None] * fac.V.T[None], mode="r")
-                    C = R @ Q[big]
-                    lam = np.linalg.eigvalsh(C @ np.conj(np.swapaxes(C, 1, 2)))[:, -1]  # ||N||^2, Hermitian
+                lam = np.zeros(big.size)
+                for g, N, Q in zip(fac.groups, ns, qs):
+                    if g.cols.size > g.dofs.size:
+                        # N_s = P Q, P = diag(sc) V^T (r_g, n_g): with P = Q_p R, ||N_s|| = ||R Q||, an n_g x n_g
+                        # Hermitian eigenvalue problem instead of r_g x r_g (r > n with E and speed)
+                        R = np.linalg.qr(sc[at[big]][:, g.cols, None] * g.Vt[None], mode="r")
+                        C = R @ Q[big]
+                    else:
+                        C = N[big]
+                    lam = np.maximum(lam, np.linalg.eigvalsh(C @ np.conj(np.swapaxes(C, 1, 2)))[:, -1])  # ||N||^2
                 nrm = np.minimum(frob[big], np.sqrt(np.maximum(lam, 0.0)) * (1.0 + 1e-12))
                 here[big] = margin_of(nrm, at[big])
             margin[at] = here
