@@ -107,6 +107,14 @@ def depth_of_loss(loss: float, relation: Any) -> float | None:
     return float(brentq(lambda d: relation(d) - loss, shallow, MAX_DEPTH, xtol=1e-10, rtol=1e-12))
 
 
+def depth_interval(lower: float, upper: float, relation: Any) -> tuple[float | None, float | None]:
+    """The depths (fractions of the diameter) of the loss interval ``[lower, upper]`` under ``relation``: the
+    upper end None beyond :data:`MAX_DEPTH` (not bounded), the lower end :data:`MAX_DEPTH` there (a loss beyond
+    the relation's range means a depth of at least its deepest)."""
+    lo = depth_of_loss(lower, relation)
+    return (float(MAX_DEPTH) if lo is None else lo), depth_of_loss(upper, relation)
+
+
 @dataclass(frozen=True)
 class CandidateResult:
     """One candidate element's certificate (severities as the element's stiffness loss, fraction)."""
@@ -498,15 +506,14 @@ def locate(config: RigConfig, box: Any, pairs: Sequence[ChannelPair], change: Sw
             rel = _hb_relation(config, box.system, models[e], e, change.speed_rpm, pts, crack_section_length)
         consistent = r is None or r.status == "consistent"
         if r is not None and consistent and rel is not None:
-            depth: tuple[float | None, float | None] = (depth_of_loss(r.lower, rel), depth_of_loss(r.upper, rel))
+            depth: tuple[float | None, float | None] = depth_interval(r.lower, r.upper, rel)
         elif r is None and rel is not None:
-            d = depth_of_loss(fit.loss, rel)
-            depth = (d, d)
+            depth = depth_interval(fit.loss, fit.loss, rel)
         else:
             depth = (None, None)
         ranked = e in order and damage_found
         est_depth = (None if fit.loss_interval is None or rel is None else
-                     (depth_of_loss(fit.loss_interval[0], rel), depth_of_loss(fit.loss_interval[1], rel)))
+                     depth_interval(fit.loss_interval[0], fit.loss_interval[1], rel))
         cands.append(CandidateResult(
             e, float(config.stations[e - 1]), float(config.stations[e]),
             "not certified" if r is None else r.status, order.index(e) + 1 if ranked else None,

@@ -95,6 +95,23 @@ def test_depth_of_loss_inverts_the_depth_relations() -> None:
         assert depth_of_loss(0.0, rel) == 0.0
 
 
+def test_a_loss_interval_beyond_the_relation_reads_as_at_least_its_deepest() -> None:
+    """A certified loss interval wholly beyond the relation's deepest loss bounds the depth from below by
+    MAX_DEPTH ("at least 50 %", not nothing); inside the range both ends invert the relation."""
+    from rotorcheck.location import MAX_DEPTH, depth_interval, depth_text, open_loss
+
+    def rel(d: float) -> float:
+        return float(open_loss(d, 0.0125, 0.04, 0.3))
+
+    top = rel(MAX_DEPTH)
+    lo, hi = depth_interval(1.05 * top, 1.2 * top, rel)
+    assert (lo, hi) == (MAX_DEPTH, None) and depth_text(lo, hi) == "at least 50 %"
+    lo, hi = depth_interval(rel(0.2), 1.1 * top, rel)
+    assert lo == pytest.approx(0.2, abs=1e-8) and hi is None and depth_text(lo, hi) == "at least 20 %"
+    lo, hi = depth_interval(rel(0.2), rel(0.3), rel)
+    assert (lo, hi) == (pytest.approx(0.2, abs=1e-8), pytest.approx(0.3, abs=1e-8)) and depth_text(lo, hi) == "20-30 %"
+
+
 def test_a_best_fit_its_certificate_excludes_is_said_not_hidden() -> None:
     """The ranking's best fit (relative likelihood 1.00) excluded by its certificate (the pedestal truth with x/y
     probes: element 5, 40 % loss, excluded at 268 Hz, the pedestal's own mode): the result is 'ranked', not

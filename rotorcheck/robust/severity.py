@@ -84,6 +84,15 @@ class Points:
     def size(self) -> int:
         return int(self.w.size)
 
+    def touched(self, blocks: tuple[np.ndarray, ...]) -> tuple[np.ndarray, ...]:
+        """Per DOF set of ``blocks``, (m,) bool: the point's input or output has an entry there (kept once made)."""
+        key = tuple(int(d[0]) for d in blocks)
+        cache: dict[tuple[int, ...], tuple[np.ndarray, ...]] = self.__dict__.setdefault("_touched", {})
+        if key not in cache:
+            on = (self.b != 0) | (self.c != 0)
+            cache[key] = tuple(np.any(on[:, d], axis=1) for d in blocks)
+        return cache[key]
+
     def take(self, idx: np.ndarray) -> Points:
         """The points ``idx`` (an index array) only."""
         def t(x: np.ndarray) -> np.ndarray:
@@ -173,7 +182,10 @@ def examine_points(model: AffineModel, fac: _Factors, pts: Points, centre: np.nd
     The cost: the centre's receptance and the bound's numerator (``x = c^T Z^-1 U``, ``y = V^T Z^-1 b``)
     take two right-hand sides per point (one solve of ``[b, c]`` when Z is symmetric); the small-gain
     norm needs ``Z^-1 U`` (r right-hand sides) and is computed only at the points whose margin with a
-    zero norm (an upper bound: the margin falls as the norm grows) could still beat the best found."""
+    zero norm (an upper bound: the margin falls as the norm grows) could still beat the best found. Where Z is
+    block diagonal (:attr:`AffineModel.blocks`, e.g. the two bending planes of a rotor that does not spin), the
+    small-gain matrix is too, and only the blocks a point's input or output touches enter its bound (the others
+    do not reach its receptance): a smaller norm, and half the solves for a single-plane pair."""
     w = pts.w
     m = w.size
     p = len(model.parameters)
@@ -224,6 +236,7 @@ def examine_points(model: AffineModel, fac: _Factors, pts: Points, centre: np.nd
         # where that bound beats the best margin found, the most promising points first; a positive margin
         # (the box excluded) ends the search
         upper = margin_of(np.zeros(m))
+        touched = pts.touched(model.blocks)
         upper = np.where(np.isnan(upper), np.inf, upper)
         order = np.argsort(-upper, kind="stable")
         order = order[upper[order] > -np.inf]
@@ -235,35 +248,51 @@ def examine_points(model: AffineModel, fac: _Factors, pts: Points, centre: np.nd
             if not at.size:
                 break
             # N_s = diag(sc) V^T Z^-1 U diag(scale / sc) at these points, block diagonal in the column groups (each
-            # on one block of Z, whose inverse is block diagonal too): per group, V^T on Re and Im side by side
-            ns, qs = [], []
+            # on one block of Z, whose inverse is block diagonal too); x and y vanish on a group whose block neither
+            # the point's input nor its output touches, so that the group's block of N_s does not enter the bound:
+            # per point, the groups it touches (per group: V^T on Re and Im side by side)
+            frob2 = np.zeros(at.size)
+            ns = []
             for g in fac.groups:
-                Q = np.linalg.solve(Z.parts[g.block][at], np.broadcast_to(g.U, (at.size, *g.U.shape)))
-                Q *= (scale[at][:, g.cols] / sc[at][:, g.cols])[:, None, :]  # (k, n_g, r_g)
-                qs.append(Q)
-                ns.append((g.Vt @ Q.view(float)).view(complex) * sc[at][:, g.cols, None])
-            frob = np.sqrt(sum(np.einsum("kij,kij->k", N.view(float), N.view(float)) for N in ns))
+                sel = np.flatnonzero(touched[g.block][at])  # positions in at
+                if not sel.size:
+                    continue
+                ag = at[sel]
+                Q = np.linalg.solve(Z.parts[g.block][ag], np.broadcast_to(g.U, (sel.size, *g.U.shape)))
+                Q *= (scale[ag][:, g.cols] / sc[ag][:, g.cols])[:, None, :]  # (k, n_g, r_g)
+                N = (g.Vt @ Q.view(float)).view(complex) * sc[ag][:, g.cols, None]
+                frob2[sel] += np.einsum("kij,kij->k", N.view(float), N.view(float))
+                ns.append((g, sel, N, Q))
+            frob = np.sqrt(frob2)
             here = margin_of(frob, at)
             top = float(np.nanmax(here)) if np.any(~np.isnan(here)) else -np.inf
             # where the Frobenius norm costs much (>= 0.5) and a lower bound of the spectral norm (the largest
             # column or row) leaves room above the best, the exact spectral norm: the largest of the groups'
             big = np.flatnonzero(frob >= 0.5)
             if big.size and top <= 0.0:
-                low_n = np.max([np.maximum(np.linalg.norm(N[big], axis=1).max(axis=1),
-                                           np.linalg.norm(N[big], axis=2).max(axis=1)) for N in ns], axis=0)
-                big = big[margin_of(low_n, at[big]) > max(best, top)]
+                low_n = np.zeros(at.size)
+                for _, sel, N, _ in ns:
+                    low_n[sel] = np.maximum(low_n[sel], np.maximum(np.linalg.norm(N, axis=1).max(axis=1),
+                                                                   np.linalg.norm(N, axis=2).max(axis=1)))
+                big = big[margin_of(low_n[big], at[big]) > max(best, top)]
             if big.size and top <= 0.0:
-                lam = np.zeros(big.size)
-                for g, N, Q in zip(fac.groups, ns, qs):
+                lam = np.zeros(at.size)
+                in_big = np.zeros(at.size, dtype=bool)
+                in_big[big] = True
+                for g, sel, N, Q in ns:
+                    keep = in_big[sel]
+                    if not np.any(keep):
+                        continue
                     if g.cols.size > g.dofs.size:
                         # N_s = P Q, P = diag(sc) V^T (r_g, n_g): with P = Q_p R, ||N_s|| = ||R Q||, an n_g x n_g
                         # Hermitian eigenvalue problem instead of r_g x r_g (r > n with E and speed)
-                        R = np.linalg.qr(sc[at[big]][:, g.cols, None] * g.Vt[None], mode="r")
-                        C = R @ Q[big]
+                        R = np.linalg.qr(sc[at[sel[keep]]][:, g.cols, None] * g.Vt[None], mode="r")
+                        C = R @ Q[keep]
                     else:
-                        C = N[big]
-                    lam = np.maximum(lam, np.linalg.eigvalsh(C @ np.conj(np.swapaxes(C, 1, 2)))[:, -1])  # ||N||^2
-                nrm = np.minimum(frob[big], np.sqrt(np.maximum(lam, 0.0)) * (1.0 + 1e-12))
+                        C = N[keep]
+                    pos = sel[keep]
+                    lam[pos] = np.maximum(lam[pos], np.linalg.eigvalsh(C @ np.conj(np.swapaxes(C, 1, 2)))[:, -1])
+                nrm = np.minimum(frob[big], np.sqrt(np.maximum(lam[big], 0.0)) * (1.0 + 1e-12))
                 here[big] = margin_of(nrm, at[big])
             margin[at] = here
             if np.any(~np.isnan(here)):
