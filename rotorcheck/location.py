@@ -54,7 +54,7 @@ from rotorcheck.ranking import (
     rank_elements,
     section_length,
 )
-from rotorcheck.robust.real_box import AffineModel
+from rotorcheck.robust.affine import AffineModel
 from rotorcheck.robust.severity import SEVERITY_RULE
 
 #: a located element: relative likelihood at least this (else the ranked candidates are the answer)
@@ -364,7 +364,7 @@ def _hb_relation(config: RigConfig, sysm: Any, model: AffineModel, element: int,
 
     from rotorcheck.faults.crack import crack_stiffness
     from rotorcheck.faults.harmonic_balance import HBSolver
-    from rotorcheck.robust.severity import point_receptances
+    from rotorcheck.robust.box_test import point_receptances
 
     f = pts.w / (2.0 * np.pi)
     in_dofs = [int(np.flatnonzero(b)[0]) for b in pts.b]
@@ -427,7 +427,8 @@ def locate(config: RigConfig, box: Any, pairs: Sequence[ChannelPair], change: Sw
     (:func:`rotorcheck.ranking.section_length`). ``false_alarm``: the chance that the true element is
     excluded when its hypothesis holds and the model errs within its stated bounds (Sidak over the points
     used). ``progress`` hears each element ranked and certified."""
-    from rotorcheck.robust.severity import Points, severity_interval
+    from rotorcheck.robust.box_test import Points
+    from rotorcheck.robust.severity import severity_interval
     from rotorcheck.signatures import candidate_elements
 
     f = change.freq_hz

@@ -32,8 +32,8 @@ import numpy as np
 from rotorcheck.config import Crack, RigConfig
 from rotorcheck.nominal import ChannelPair
 from rotorcheck.progress import Progress, report
+from rotorcheck.robust.affine import AffineModel, AffineParameter
 from rotorcheck.robust.joint import linearized_se
-from rotorcheck.robust.real_box import AffineModel, AffineParameter
 
 #: assumed bound on the model's error in the predicted change at a point, relative to that change: the
 #: nominal model's crack shapes agree with the truth rig's to a cosine of 0.987-0.990 (limits.md 1), an

@@ -32,8 +32,8 @@ from rotorcheck.modal_anchor import (
 )
 from rotorcheck.modal_anchor import SILENT as MODAL_SILENT
 from rotorcheck.nominal import ChannelPair, model_pairs, nominal_model, pair_receptance, primary_pair
+from rotorcheck.robust.affine import AffineModel, AffineParameter
 from rotorcheck.robust.joint import ModelForm
-from rotorcheck.robust.real_box import AffineModel, AffineParameter
 from rotorcheck.variability import BenignParameter, benign_parameters, with_benign
 
 #: stiffness loss (fraction of the element's E) at which a crack signature is re-solved
@@ -401,7 +401,7 @@ def _modal_benign(anchor: ModalAnchor, config: RigConfig, speed_rpm: float, th: 
 @dataclass(frozen=True)
 class BenignBox:
     """The rig's benign parameters as an affine real-parameter model of the dynamic stiffness
-    (:class:`rotorcheck.robust.real_box.AffineModel`, seen from one channel pair) plus the gain factor's
+    (:class:`rotorcheck.robust.affine.AffineModel`, seen from one channel pair) plus the gain factor's
     range; ``notes`` name the parameters whose damping change is held at its healthy value."""
 
     model: AffineModel

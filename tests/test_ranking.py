@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from rotorcheck.ranking import SweepChange, _Fit, _solve, _starts
-from rotorcheck.robust.real_box import AffineModel, AffineParameter
+from rotorcheck.robust.affine import AffineModel, AffineParameter
 from tests.robust.test_severity import _chain, _spring
 
 B, C = np.eye(4)[3], np.eye(4)[1]

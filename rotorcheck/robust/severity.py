@@ -7,7 +7,7 @@ at a range end explains almost any change near a resonance; jointly it must expl
 
 The severity's range is cut into slices. For each slice, a branch and bound over the other parameters
 (benign, real) proves the slice *excluded* when every sub-box is excluded by at least one point (the
-small-gain bound of :func:`rotorcheck.robust.real_box._examine`, batched here in :func:`examine_points`),
+small-gain bound of :func:`rotorcheck.robust.box_test.examine_points`, every point against one box),
 or finds a *witness* (a parameter value that explains every point, evaluated exactly), or runs out of its
 budget ("open": not excluded, kept). Each end of the interval is found from outside in: the outermost slice
 not excluded is halved until ``tol`` wide, then searched for a witness. The interval is certified (no
@@ -19,7 +19,6 @@ the data).
 
 from __future__ import annotations
 
-import functools
 import heapq
 import itertools
 from collections import Counter
@@ -27,7 +26,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rotorcheck.robust.real_box import AffineModel
+from rotorcheck.robust.affine import AffineModel
+from rotorcheck.robust.box_test import BoxFactors, Points, examine_points, point_ratios, ratio_jacobian
 
 #: how the severity interval is made (report.json)
 SEVERITY_RULE = ("one severity and one set of benign parameter values (real, in their ranges) and gain for every point "
@@ -57,296 +57,7 @@ class SeverityInterval:
     excluded_slices: tuple[tuple[float, float], ...] = ()  # the slices of the severity proved excluded
 
 
-@dataclass(frozen=True)
-class Points:
-    """The points of :func:`severity_interval` as arrays (m,): frequency ``w`` rad/s, the model's
-    receptance at the parameters' zero ``g0``, new and healthy FRFs and their variances, the quantile
-    ``z``, the variance-like allowance ``a2``, the gain range, the deterministic ``tolerance`` (m/N) and
-    ``relative_error`` of the prediction (see :class:`rotorcheck.robust.real_box._Point`); ``b``, ``c``
-    (m, n) each point's force input and displacement output."""
-
-    w: np.ndarray
-    g0: np.ndarray
-    t_new: np.ndarray
-    t_healthy: np.ndarray
-    var_new: np.ndarray
-    var_healthy: np.ndarray
-    z: float
-    a2: np.ndarray
-    g_lo: float
-    g_hi: float
-    tolerance: np.ndarray
-    relative_error: np.ndarray
-    b: np.ndarray
-    c: np.ndarray
-
-    @property
-    def size(self) -> int:
-        return int(self.w.size)
-
-    def touched(self, blocks: tuple[np.ndarray, ...]) -> tuple[np.ndarray, ...]:
-        """Per DOF set of ``blocks``, (m,) bool: the point's input or output has an entry there (kept once made)."""
-        key = tuple(int(d[0]) for d in blocks)
-        cache: dict[tuple[int, ...], tuple[np.ndarray, ...]] = self.__dict__.setdefault("_touched", {})
-        if key not in cache:
-            on = (self.b != 0) | (self.c != 0)
-            cache[key] = tuple(np.any(on[:, d], axis=1) for d in blocks)
-        return cache[key]
-
-    def take(self, idx: np.ndarray) -> Points:
-        """The points ``idx`` (an index array) only."""
-        def t(x: np.ndarray) -> np.ndarray:
-            return np.asarray(x)[idx]
-
-        return Points(t(self.w), t(self.g0), t(self.t_new), t(self.t_healthy), t(self.var_new), t(self.var_healthy),
-                      self.z, t(self.a2), self.g_lo, self.g_hi, t(self.tolerance), t(self.relative_error), t(self.b),
-                      t(self.c))
-
-
-@dataclass(frozen=True)
-class _Group:
-    """The factor columns ``cols`` (r_g,) that lie on block ``block`` of the model (its DOFs ``dofs``): ``U`` there
-    (n_g, r_g) complex and ``Vt`` = ``V^T`` there (r_g, n_g)."""
-
-    block: int
-    dofs: np.ndarray
-    cols: np.ndarray
-    U: np.ndarray
-    Vt: np.ndarray
-
-
-@dataclass(frozen=True)
-class _Factors:
-    """A model's parameter factors stacked: ``U`` (n, r), ``V`` (n, r), each column's parameter and kind, and the
-    columns grouped by the block of the model they lie on (:attr:`AffineModel.blocks`: ``V^T Z^-1 U`` is block
-    diagonal in the groups)."""
-
-    U: np.ndarray
-    V: np.ndarray
-    param: np.ndarray  # (r,) int
-    kind: np.ndarray  # (r,) str
-    groups: tuple[_Group, ...] = ()
-
-    @functools.cached_property
-    def starts(self) -> np.ndarray:
-        """The first column of each parameter's block (its columns are adjacent)."""
-        return np.flatnonzero(np.r_[True, self.param[1:] != self.param[:-1]]) if self.param.size else self.param
-
-    @classmethod
-    def of(cls, model: AffineModel) -> _Factors:
-        us, vs, prm, kind = [], [], [], []
-        for i, terms in enumerate(model.factors):
-            for k, u, v in terms:
-                us.append(u)
-                vs.append(v)
-                prm += [i] * u.shape[1]
-                kind += [k] * u.shape[1]
-        n = model.K.shape[0]
-        U = np.hstack(us) if us else np.zeros((n, 0))
-        V = np.hstack(vs) if vs else np.zeros((n, 0))
-        # each column lies on one block (AffineModel factors block by block): the block of its support
-        where = np.full(n, -1)
-        for i, d in enumerate(model.blocks):
-            where[d] = i
-        first = np.argmax(U != 0, axis=0)
-        groups = []
-        for i, d in enumerate(model.blocks):
-            cols = np.flatnonzero(where[first] == i)
-            if cols.size:
-                groups.append(_Group(i, d, cols, U[np.ix_(d, cols)].astype(complex), V[np.ix_(d, cols)].T.copy()))
-        return cls(U, V, np.array(prm, dtype=int), np.array(kind), tuple(groups))
-
-
-def _s_of(kind: np.ndarray, w: np.ndarray) -> np.ndarray:
-    """(m, r) the factor s(w) of each column: 1 (K), j w (D), -w^2 (M)."""
-    out = np.ones((w.size, kind.size), dtype=complex)
-    out[:, kind == "D"] = 1j * w[:, None]
-    out[:, kind == "M"] = -(w**2)[:, None]
-    return out
-
-
-#: points whose small-gain norm is computed together, most promising first (:func:`examine_points`)
-BATCH = 4
-
-
-def examine_points(model: AffineModel, fac: _Factors, pts: Points, centre: np.ndarray, half: np.ndarray
-                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Every point at once, for the box ``centre``, ``half`` (p,) (or (m, p) one box per point): ``(explained
-    at the centre (m,), margin of the exclusion test (m,) (> 0: excluded; -inf where explained or
-    unbounded), each parameter's share of the bound (m, p))`` -- the batched form of
-    :func:`rotorcheck.robust.real_box._examine` (the same bounds). When no margin is positive, the margin is
-    exact (Frobenius norm for the small-gain condition, the spectral norm where that is >= 0.5) at the
-    largest (the point that decides) and at every point that could be the largest, and -inf (a lower
-    bound) elsewhere; otherwise one positive margin (a lower bound) is enough: the box is excluded.
-
-    The cost: the centre's receptance and the bound's numerator (``x = c^T Z^-1 U``, ``y = V^T Z^-1 b``)
-    take two right-hand sides per point (one solve of ``[b, c]`` when Z is symmetric); the small-gain
-    norm needs ``Z^-1 U`` (r right-hand sides) and is computed only at the points whose margin with a
-    zero norm (an upper bound: the margin falls as the norm grows) could still beat the best found. Where Z is
-    block diagonal (:attr:`AffineModel.blocks`, e.g. the two bending planes of a rotor that does not spin), the
-    small-gain matrix is too, and only the blocks a point's input or output touches enter its bound (the others
-    do not reach its receptance): a smaller norm, and half the solves for a single-plane pair."""
-    w = pts.w
-    m = w.size
-    p = len(model.parameters)
-    half = np.broadcast_to(np.asarray(half, dtype=float), (m, p))
-    Z = model.stiffness_stack(w, centre)
-    r = fac.U.shape[1]
-    u, v = (x[:, :, 0] for x in model.solve_both(Z, pts.b[:, :, None], pts.c[:, :, None]))
-    g_c = np.sum(pts.c * u, axis=1)
-    scale = _s_of(fac.kind, w) * half[:, fac.param]  # (m, r)
-    x = (v @ fac.U) * scale  # c^T Z^-1 U diag(scale)
-    y = u @ fac.V  # V^T Z^-1 b
-    # one positive scale per parameter block (commutes with delta_i I): the blocks' norms summed over their
-    # columns (a parameter's columns are adjacent, fac.starts)
-    share = np.zeros((m, p))
-    sc = np.ones((m, r))
-    if r:
-        nx = np.sqrt(np.add.reduceat(x.real**2 + x.imag**2, fac.starts, axis=1))  # (m, blocks)
-        ny = np.sqrt(np.add.reduceat(y.real**2 + y.imag**2, fac.starts, axis=1))
-        share[:, fac.param[fac.starts]] = nx * ny
-        good = (nx > 0) & (ny > 0)
-        sc = np.repeat(np.where(good, np.sqrt(np.where(good, nx, 1.0) / np.where(good, ny, 1.0)), 1.0),
-                       np.diff(np.r_[fac.starts, r]), axis=1)
-    xs, ys = x / sc, y * sc
-    with np.errstate(divide="ignore", invalid="ignore"):
-        rho = g_c / pts.g0
-        pred = pts.t_healthy * rho
-        den = np.abs(pred) ** 2
-        gm = np.where(den > 0, (pts.t_new * np.conj(pred)).real / np.where(den > 0, den, 1.0), 1.0)
-        gm = np.clip(gm, pts.g_lo, pts.g_hi)
-        resid = np.abs(pts.t_new - gm * pred)
-        extra = pts.tolerance + pts.relative_error * np.abs(pts.t_healthy) * np.abs(gm * rho - 1.0)
-        ok = resid <= pts.z * np.sqrt(pts.var_new + np.abs(gm * rho) ** 2 * pts.var_healthy + pts.a2) + extra
-        gain_change = np.maximum(np.abs(pts.g_lo * rho - 1.0), np.abs(pts.g_hi * rho - 1.0))
-        xy = np.linalg.norm(xs, axis=1) * np.linalg.norm(ys, axis=1)
-
-        def margin_of(nrm: np.ndarray, at: np.ndarray | slice = slice(None)) -> np.ndarray:
-            """The exclusion margin at the points ``at`` for the norm bounds ``nrm`` (falls as nrm grows)."""
-            rad = np.where(nrm < 1.0, xy[at] / (1.0 - nrm), np.inf)
-            eps = rad / np.abs(pts.g0[at])
-            low = resid[at] - pts.g_hi * np.abs(pts.t_healthy[at]) * eps
-            change = gain_change[at] + pts.g_hi * eps
-            extra = pts.tolerance[at] + pts.relative_error[at] * np.abs(pts.t_healthy[at]) * change
-            up = pts.z * np.sqrt(pts.var_new[at] + (pts.g_hi * (np.abs(rho[at]) + eps)) ** 2 * pts.var_healthy[at]
-                                 + pts.a2[at]) + extra
-            return np.where(ok[at] | ~np.isfinite(rad), -np.inf, low - up)
-
-        # a zero norm bounds every point's margin from above (the margin falls as the norm grows): the norm only
-        # where that bound beats the best margin found, the most promising points first; a positive margin
-        # (the box excluded) ends the search
-        upper = margin_of(np.zeros(m))
-        touched = pts.touched(model.blocks)
-        upper = np.where(np.isnan(upper), np.inf, upper)
-        order = np.argsort(-upper, kind="stable")
-        order = order[upper[order] > -np.inf]
-        margin = np.full(m, -np.inf)
-        best = -np.inf
-        for start in range(0, order.size, BATCH):
-            at = order[start:start + BATCH]
-            at = at[upper[at] > best]
-            if not at.size:
-                break
-            # N_s = diag(sc) V^T Z^-1 U diag(scale / sc) at these points, block diagonal in the column groups (each
-            # on one block of Z, whose inverse is block diagonal too); x and y vanish on a group whose block neither
-            # the point's input nor its output touches, so that the group's block of N_s does not enter the bound:
-            # per point, the groups it touches (per group: V^T on Re and Im side by side)
-            frob2 = np.zeros(at.size)
-            ns = []
-            for g in fac.groups:
-                sel = np.flatnonzero(touched[g.block][at])  # positions in at
-                if not sel.size:
-                    continue
-                ag = at[sel]
-                Q = np.linalg.solve(Z.parts[g.block][ag], np.broadcast_to(g.U, (sel.size, *g.U.shape)))
-                Q *= (scale[ag][:, g.cols] / sc[ag][:, g.cols])[:, None, :]  # (k, n_g, r_g)
-                N = (g.Vt @ Q.view(float)).view(complex) * sc[ag][:, g.cols, None]
-                frob2[sel] += np.einsum("kij,kij->k", N.view(float), N.view(float))
-                ns.append((g, sel, N, Q))
-            frob = np.sqrt(frob2)
-            here = margin_of(frob, at)
-            top = float(np.nanmax(here)) if np.any(~np.isnan(here)) else -np.inf
-            # where the Frobenius norm costs much (>= 0.5) and a lower bound of the spectral norm (the largest
-            # column or row) leaves room above the best, the exact spectral norm: the largest of the groups'
-            big = np.flatnonzero(frob >= 0.5)
-            if big.size and top <= 0.0:
-                low_n = np.zeros(at.size)
-                for _, sel, N, _ in ns:
-                    low_n[sel] = np.maximum(low_n[sel], np.maximum(np.linalg.norm(N, axis=1).max(axis=1),
-                                                                   np.linalg.norm(N, axis=2).max(axis=1)))
-                big = big[margin_of(low_n[big], at[big]) > max(best, top)]
-            if big.size and top <= 0.0:
-                lam = np.zeros(at.size)
-                in_big = np.zeros(at.size, dtype=bool)
-                in_big[big] = True
-                for g, sel, N, Q in ns:
-                    keep = in_big[sel]
-                    if not np.any(keep):
-                        continue
-                    if g.cols.size > g.dofs.size:
-                        # N_s = P Q, P = diag(sc) V^T (r_g, n_g): with P = Q_p R, ||N_s|| = ||R Q||, an n_g x n_g
-                        # Hermitian eigenvalue problem instead of r_g x r_g (r > n with E and speed)
-                        R = np.linalg.qr(sc[at[sel[keep]]][:, g.cols, None] * g.Vt[None], mode="r")
-                        C = R @ Q[keep]
-                    else:
-                        C = N[keep]
-                    pos = sel[keep]
-                    lam[pos] = np.maximum(lam[pos], np.linalg.eigvalsh(C @ np.conj(np.swapaxes(C, 1, 2)))[:, -1])
-                nrm = np.minimum(frob[big], np.sqrt(np.maximum(lam[big], 0.0)) * (1.0 + 1e-12))
-                here[big] = margin_of(nrm, at[big])
-            margin[at] = here
-            if np.any(~np.isnan(here)):
-                best = max(best, float(np.nanmax(here)))
-            if best > 0.0:
-                break
-    return ok, margin, share
-
-
-def point_receptances(model: AffineModel, pts: Points, theta: np.ndarray) -> np.ndarray:
-    """(m,) each point's receptance ``c^T Z(w, theta)^-1 b`` (m/N), one batched solve."""
-    Z = model.stiffness_stack(pts.w, theta)
-    return np.sum(pts.c * Z.solve(pts.b[:, :, None])[:, :, 0], axis=1)
-
-
-def _ratios_of(pts: Points, g: np.ndarray) -> np.ndarray:
-    """(m,) each point's residual over its allowance when the model's receptance there is ``g`` (m,) m/N
-    (best gain per point clipped to its range)."""
-    with np.errstate(divide="ignore", invalid="ignore"):
-        rho = g / pts.g0
-        pred = pts.t_healthy * rho
-        den = np.abs(pred) ** 2
-        gm = np.clip(np.where(den > 0, (pts.t_new * np.conj(pred)).real / np.where(den > 0, den, 1.0), 1.0),
-                     pts.g_lo, pts.g_hi)
-        allow = (pts.z * np.sqrt(pts.var_new + np.abs(gm * rho) ** 2 * pts.var_healthy + pts.a2) + pts.tolerance
-                 + pts.relative_error * np.abs(pts.t_healthy) * np.abs(gm * rho - 1.0))
-        return np.abs(pts.t_new - gm * pred) / allow
-
-
-def point_ratios(model: AffineModel, pts: Points, theta: np.ndarray) -> np.ndarray:
-    """(m,) each point's residual over its allowance at ``theta`` (exact; best gain per point clipped to
-    its range): every ratio <= 1 makes ``theta`` a witness."""
-    return _ratios_of(pts, point_receptances(model, pts, theta))
-
-
-def ratio_jacobian(model: AffineModel, fac: _Factors, pts: Points, theta: np.ndarray
-                   ) -> tuple[np.ndarray, np.ndarray]:
-    """``(ratios (m,), their derivatives by theta (m, p))`` at ``theta``: the receptance's derivative exact,
-    ``dG/dtheta_i = -sum s(w) (Z^-T c)^T U_i V_i^T Z^-1 b`` from one solve, the ratio's by G (an elementwise
-    function) by forward differences in G's real and imaginary parts (relative step 1e-7)."""
-    Z = model.stiffness_stack(pts.w, theta)
-    u, v = (x[:, :, 0] for x in model.solve_both(Z, pts.b[:, :, None], pts.c[:, :, None]))
-    g = np.sum(pts.c * u, axis=1)
-    cols = -(v @ fac.U) * (u @ fac.V) * _s_of(fac.kind, pts.w)  # (m, r)
-    dg = np.zeros((pts.size, len(model.parameters)), dtype=complex)
-    np.add.at(dg.T, fac.param, cols.T)
-    r0 = _ratios_of(pts, g)
-    step = 1e-7 * np.maximum(np.abs(g), 1e-300)
-    d_re = (_ratios_of(pts, g + step) - r0) / step
-    d_im = (_ratios_of(pts, g + 1j * step) - r0) / step
-    return r0, d_re[:, None] * dg.real + d_im[:, None] * dg.imag
-
-
-def _witness(model: AffineModel, fac: _Factors, pts: Points, lo: np.ndarray, hi: np.ndarray) -> np.ndarray | None:
+def _witness(model: AffineModel, fac: BoxFactors, pts: Points, lo: np.ndarray, hi: np.ndarray) -> np.ndarray | None:
     """Parameter values in ``[lo, hi]`` explaining every point (every ratio <= 1): the box's centre, else a
     bounded least squares of the ratios from it (Jacobian: :func:`ratio_jacobian`), then one that weighs
     the largest ratios; None if none."""
@@ -394,7 +105,7 @@ def _witness(model: AffineModel, fac: _Factors, pts: Points, lo: np.ndarray, hi:
     return None
 
 
-def _box(model: AffineModel, fac: _Factors, pts: Points, lo: np.ndarray, hi: np.ndarray, max_boxes: int,
+def _box(model: AffineModel, fac: BoxFactors, pts: Points, lo: np.ndarray, hi: np.ndarray, max_boxes: int,
          used: Counter[int]) -> tuple[str, np.ndarray | None, int]:
     """Branch and bound over one box, every point jointly: ``("excluded" | "witness" | "open", witness,
     boxes)``. A sub-box is excluded when one point excludes it; its centre is a witness when it explains
@@ -417,7 +128,7 @@ def _box(model: AffineModel, fac: _Factors, pts: Points, lo: np.ndarray, hi: np.
         for idx, sub in parts(tuple(k for k, _ in used.most_common(EARLY))):
             if not idx.size:
                 continue
-            ok, margins, shares = examine_points(model, fac, sub, c, h)
+            ok, margins, shares, _ = examine_points(model, fac, sub, c, h)
             k = int(np.argmax(margins))
             if margins[k] > 0:
                 used[int(idx[k])] += 1
@@ -461,7 +172,7 @@ def _box(model: AffineModel, fac: _Factors, pts: Points, lo: np.ndarray, hi: np.
     return "excluded", None, boxes
 
 
-def _end(model: AffineModel, fac: _Factors, pts: Points, lo: np.ndarray, hi: np.ndarray, index: int,
+def _end(model: AffineModel, fac: BoxFactors, pts: Points, lo: np.ndarray, hi: np.ndarray, index: int,
          upward: bool, tol: float, slices: int, max_boxes: int, used: Counter[int],
          cache: dict[tuple[float, float], str]) -> tuple[float, float, int, bool]:
     """One end of the interval: ``(certified end, witness value (nan: none found), boxes, witnessed)``;
@@ -511,7 +222,7 @@ def severity_interval(model: AffineModel, pts: Points, lo: np.ndarray, hi: np.nd
     if earlier is not None:
         cache.update(dict.fromkeys(earlier.excluded_slices, "excluded"))
         used.update({k: len(earlier.excluding) - i for i, k in enumerate(earlier.excluding)})
-    fac = _Factors.of(model)
+    fac = BoxFactors.of(model)
     n_sl = slices if hi[index] > lo[index] else 1
     if witnessed_at_lo:
         lower, w_lo, n1, done1 = float(lo[index]), float(lo[index]), 0, True

@@ -83,3 +83,19 @@ def gamma_methodmd_exact(me: np.ndarray, W: complex, Zt: complex, V: float) -> f
     if den == 0:
         return float("inf")
     return float(c0 / den)
+
+
+#: the 4-mass spring chain of the severity tests: spring i joins mass i-1 (ground for i = 0) and mass i
+CHAIN_K = np.array([4.0e5, 3.0e5, 2.5e5, 2.0e5])  # N/m
+CHAIN_MASS = np.array([1.0, 0.8, 0.7, 0.5])  # kg
+
+
+def chain_spring(i: int) -> np.ndarray:
+    """The 4 x 4 stiffness matrix of chain spring i (0-based) alone, per unit stiffness."""
+    A = np.zeros((4, 4))
+    A[i, i] += 1.0
+    if i > 0:
+        A[i - 1, i - 1] += 1.0
+        A[i, i - 1] -= 1.0
+        A[i - 1, i] -= 1.0
+    return A

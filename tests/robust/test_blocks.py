@@ -1,4 +1,4 @@
-"""Block-diagonal dynamic stiffness (robust.real_box.StiffnessStack): a rotor that does not spin has two
+"""Block-diagonal dynamic stiffness (robust.affine.StiffnessStack): a rotor that does not spin has two
 uncoupled bending planes, and the certificates solve them block by block.
 
 References: the full matrix (the same model glued by one negligible coupling entry, 1e-200 of the largest
@@ -13,21 +13,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rotorcheck.robust.real_box import AffineModel, AffineParameter, StiffnessStack, _factor, coupled_blocks
-from rotorcheck.robust.severity import Points, _Factors, examine_points, point_ratios, severity_interval
+from rotorcheck.robust.affine import AffineModel, AffineParameter, StiffnessStack, _factor, coupled_blocks
+from rotorcheck.robust.box_test import BoxFactors, Points, examine_points, point_ratios
+from rotorcheck.robust.severity import severity_interval
+from tests.robust.robust_helpers import CHAIN_K, CHAIN_MASS, chain_spring
 
-K = np.array([4.0e5, 3.0e5, 2.5e5, 2.0e5])  # N/m, spring i joins mass i-1 (ground for i = 1) and mass i
-MASS = np.array([1.0, 0.8, 0.7, 0.5])  # kg
-
-
-def _spring(i: int) -> np.ndarray:
-    A = np.zeros((4, 4))
-    A[i, i] += 1.0
-    if i > 0:
-        A[i - 1, i - 1] += 1.0
-        A[i, i - 1] -= 1.0
-        A[i - 1, i] -= 1.0
-    return A
+K, MASS, _spring = CHAIN_K, CHAIN_MASS, chain_spring
 
 
 def _planes(A: np.ndarray, Ay: np.ndarray | None = None) -> np.ndarray:
@@ -142,14 +133,14 @@ def test_each_points_margin_is_its_own_planes_model(planes: str, aniso: float) -
     split, glued = _model(aniso=aniso), _model(glue=1e-200, aniso=aniso)
     assert len(split.blocks) == 2 and len(glued.blocks) == 1
     pts = _points(split, planes)
-    fs = _Factors.of(split)
-    assert len(fs.groups) == 2 and len(_Factors.of(glued).groups) == 1
+    fs = BoxFactors.of(split)
+    assert len(fs.groups) == 2 and len(BoxFactors.of(glued).groups) == 1
     own = {}
     for d in split.blocks:
         idx = np.flatnonzero(np.any(pts.b[:, d] != 0, axis=1))
         if idx.size:
             red = _plane_model(split, d)
-            own[int(d[0])] = (idx, red, _Factors.of(red), _plane_points(pts, d, idx))
+            own[int(d[0])] = (idx, red, BoxFactors.of(red), _plane_points(pts, d, idx))
     assert len(own) == (2 if planes == "xy" else 1)
     decided = 0
     for centre, scale in ((c, s) for c in (np.array([0.0, 0.0, 0.1]), np.array([0.0, 0.1, 0.5]))
@@ -157,8 +148,8 @@ def test_each_points_margin_is_its_own_planes_model(planes: str, aniso: float) -
         half = scale * np.array([0.02, 0.3, 0.4])
         for idx, red, fr, rp in own.values():
             for j, k in enumerate(idx):
-                ok_s, m_s, sh_s = examine_points(split, fs, pts.take(np.array([k])), centre, half)
-                ok_r, m_r, sh_r = examine_points(red, fr, rp.take(np.array([j])), centre, half)
+                ok_s, m_s, sh_s, _ = examine_points(split, fs, pts.take(np.array([k])), centre, half)
+                ok_r, m_r, sh_r, _ = examine_points(red, fr, rp.take(np.array([j])), centre, half)
                 assert ok_s[0] == ok_r[0] and np.isfinite(m_s[0]) == np.isfinite(m_r[0])
                 if np.isfinite(m_s[0]):
                     assert m_s[0] == pytest.approx(m_r[0], rel=1e-8, abs=1e-20)

@@ -13,22 +13,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rotorcheck.robust.real_box import AffineModel, AffineParameter
-from rotorcheck.robust.severity import Points, point_ratios, severity_interval
+from rotorcheck.robust.affine import AffineModel, AffineParameter
+from rotorcheck.robust.box_test import Points, point_ratios
+from rotorcheck.robust.severity import severity_interval
+from tests.robust.robust_helpers import CHAIN_K, CHAIN_MASS, chain_spring
 
-K = np.array([4.0e5, 3.0e5, 2.5e5, 2.0e5])  # N/m, spring i joins mass i-1 (ground for i = 1) and mass i
-MASS = np.array([1.0, 0.8, 0.7, 0.5])  # kg
-
-
-def _spring(i: int) -> np.ndarray:
-    """The stiffness matrix of spring i (0-based) alone."""
-    A = np.zeros((4, 4))
-    A[i, i] += 1.0
-    if i > 0:
-        A[i - 1, i - 1] += 1.0
-        A[i, i - 1] -= 1.0
-        A[i - 1, i] -= 1.0
-    return A
+K, MASS, _spring = CHAIN_K, CHAIN_MASS, chain_spring
 
 
 def _chain(benign: float, loss: dict[int, float]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -139,10 +129,10 @@ def test_a_point_that_excludes_a_box_is_explained_by_no_member_of_it(symmetric: 
     """examine_points against brute force: wherever a box's margin is positive at a point, 400 members of the
     box drawn at random (corners included) all leave that point unexplained; and the receptance of each member
     stays inside the small-gain disc the margin assumed."""
-    from rotorcheck.robust.severity import _Factors, examine_points
+    from rotorcheck.robust.box_test import BoxFactors, examine_points
 
     model = _model(2) if symmetric else _gyro_model()
-    fac = _Factors.of(model)
+    fac = BoxFactors.of(model)
     assert model.symmetric is symmetric
     pts, _ = _points(0.005)
     rng = np.random.default_rng(3)
@@ -152,7 +142,7 @@ def test_a_point_that_excludes_a_box_is_explained_by_no_member_of_it(symmetric: 
     for _ in range(40):
         c = lo + (hi - lo) * rng.uniform(size=lo.size)
         h = (hi - lo) / 2.0 ** rng.integers(2, 7, size=lo.size)
-        ok, margin, _share = examine_points(model, fac, pts, c, h)
+        ok, margin, _share, _ = examine_points(model, fac, pts, c, h)
         members = c + h * rng.uniform(-1.0, 1.0, size=(400, lo.size))
         members[:2 ** lo.size] = c + h * np.array(np.meshgrid(*[[-1.0, 1.0]] * lo.size)).reshape(lo.size, -1).T
         bad = np.flatnonzero(margin > 0)
@@ -166,12 +156,12 @@ def test_a_point_that_excludes_a_box_is_explained_by_no_member_of_it(symmetric: 
 
 @pytest.mark.parametrize("symmetric", [True, False])
 def test_ratio_jacobian_matches_central_differences(symmetric: bool) -> None:
-    from rotorcheck.robust.severity import _Factors, ratio_jacobian
+    from rotorcheck.robust.box_test import BoxFactors, ratio_jacobian
 
     model = _model(2) if symmetric else _gyro_model()
     pts, _ = _points(0.005)
     theta = np.array([0.01, 0.2]) if symmetric else np.array([0.01, 0.3, 0.2])
-    r, J = ratio_jacobian(model, _Factors.of(model), pts, theta)
+    r, J = ratio_jacobian(model, BoxFactors.of(model), pts, theta)
     assert np.array_equal(r, point_ratios(model, pts, theta))
     fd = np.zeros_like(J)
     for i in range(theta.size):
