@@ -192,8 +192,17 @@ class LocationResult:
 
     @property
     def best(self) -> CandidateResult | None:
+        """The answer to where: the best ranked candidate the certificates keep, or the ranking's best fit when its
+        certificate excludes it (:attr:`contradicted`: the model errs beyond its bounds, so the exclusions may not
+        hold and the fit stays the best evidence; ``detect`` and ``locate`` name it alike, whichever pass excluded
+        it)."""
+        if not self.damage_found:
+            return None
+        bad = self.contradicted
+        if bad is not None:
+            return bad
         ranked = self.ranked
-        return ranked[0] if ranked and self.damage_found else None
+        return ranked[0] if ranked else None
 
     @property
     def locatable(self) -> bool:
@@ -253,19 +262,29 @@ class LocationResult:
                     ", ".join(f"{c.element}" for c in ranked[1:4]) + " about as likely)" + advice + ex)
         b = ranked[0]
         lead = "crack most likely in element" if kind == "located" else "crack location uncertain: ranked, element"
-        bad = self.contradicted
-        if bad is not None and self.ranking is not None:
-            at = ", ".join(f"{x:.1f}" for x in bad.excluding_frequencies_hz[:4])
-            lead = (f"crack location uncertain: the best fit is element {bad.element} (relative likelihood "
-                    f"{self.ranking.fits[0].likelihood:.2f} over every element) but its certificate excludes it at "
-                    f"{at} Hz, so the model errs beyond its stated bounds there and the exclusions may not hold; "
-                    "of the elements the certificate keeps, element")
         sure = "" if b.likelihood is None else f"; relative likelihood {b.likelihood:.2f}"
         head = (f"{lead} {b.element} ({b.z_start_m:.3f}-{b.z_end_m:.3f} m{sure}"
                 + (f"; next: {others}" if others else "") + ")")
+        bad = self.contradicted
+        if bad is not None and self.ranking is not None:
+            # the answer stays the best fit (best); what the certificate keeps is said beside it
+            at = ", ".join(f"{x:.1f}" for x in bad.excluding_frequencies_hz[:4])
+            lik = self.ranking.fits[0].likelihood
+            head = (f"crack location uncertain: the best fit is element {bad.element} ({bad.z_start_m:.3f}-"
+                    f"{bad.z_end_m:.3f} m; relative likelihood {lik:.2f} over every element) "
+                    f"but its certificate excludes it at {at} Hz, so the model errs beyond its stated bounds there and "
+                    f"the exclusions may not hold; of the elements the certificate keeps, element {b.element} ranks "
+                    "first" + (f" ({b.likelihood:.2f})" if b.likelihood is not None else ""))
+            b = bad
         certified = (f"{100 * b.loss_interval[0]:.1f}-{100 * b.loss_interval[1]:.1f} % certified"
                      if b.status == "consistent" else "")
-        if self.certified and certified:
+        if b.status == "excluded":
+            est = b.estimate_interval
+            size = (f", stiffness loss about {100 * (b.loss_estimate or 0.0):.1f} % (best fit"
+                    + (f"; {INTERVAL_LEVEL:.0%} interval {100 * est[0]:.1f}-{100 * est[1]:.1f} % under the model's "
+                       "crack signature" if est is not None else "") + "; no certified interval: its certificate "
+                    "excludes it)")
+        elif self.certified and certified:
             mf = b.modulus_factor_interval
             size = f", stiffness loss {certified} (modulus factor {mf[0]:.3f}-{mf[1]:.3f}"
             size += f"; best fit {100 * b.loss_estimate:.1f} %)" if b.loss_estimate is not None else ")"

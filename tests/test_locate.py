@@ -115,8 +115,9 @@ def test_a_loss_interval_beyond_the_relation_reads_as_at_least_its_deepest() -> 
 def test_a_best_fit_its_certificate_excludes_is_said_not_hidden() -> None:
     """The ranking's best fit (relative likelihood 1.00) excluded by its certificate (the pedestal truth with x/y
     probes: element 5, 40 % loss, excluded at 268 Hz, the pedestal's own mode): the result is 'ranked', not
-    'located', its summary names the best fit, the frequencies and the consequence, location.json carries it; with
-    the best fit consistent nothing is said."""
+    'located'; its answer stays the best fit (the exclusion rests on bounds the model broke), the summary names the
+    frequencies, the consequence and the element the certificate keeps, location.json carries it; with the best
+    fit consistent nothing is said."""
     from rotorcheck.location import CandidateResult, LocationResult
     from rotorcheck.ranking import ElementFit, Ranking
 
@@ -137,8 +138,12 @@ def test_a_best_fit_its_certificate_excludes_is_said_not_hidden() -> None:
     bad = result("excluded")
     assert bad.contradicted is not None and bad.contradicted.element == 5
     assert bad.kind == "ranked"
+    assert bad.best is not None and bad.best.element == 5  # the answer stays the best fit
+    assert bad.to_dict()["best_element"] == 5
     text = bad.summary()
-    assert "the best fit is element 5" in text and "268.0, 49.7 Hz" in text and "element 6" in text
+    assert "the best fit is element 5" in text and "268.0, 49.7 Hz" in text
+    assert "the certificate keeps, element 6 ranks first" in text
+    assert "about 39.0 % (best fit; no certified interval: its certificate excludes it)" in text
     assert bad.to_dict()["contradicted_best_fit"] == {"element": 5, "excluding_frequencies_hz": [268.0, 49.7]}
     good = result("consistent")
     assert good.contradicted is None and good.kind == "located" and "best fit is" not in good.summary()
@@ -148,7 +153,7 @@ def test_a_best_fit_its_certificate_excludes_is_said_not_hidden() -> None:
 def test_a_refinement_that_excludes_the_best_ranked_makes_way_for_the_next(base0: Path, monkeypatch) -> None:
     """locate's refinement on the bundled open crack with the certificates scripted (consistent everywhere, but
     the refined budget excludes the best ranked, element 4): the next ranked consistent element is refined and
-    named, and the headline says that the best fit, element 4, is excluded by its certificate."""
+    named beside the answer, the best fit, element 4, which the headline says its certificate excludes."""
     import numpy as np
 
     import rotorcheck.robust.severity as severity
@@ -172,6 +177,8 @@ def test_a_refinement_that_excludes_the_best_ranked_makes_way_for_the_next(base0
     assert loc.ranking is not None and loc.ranking.fits[0].element == 4
     second = loc.ranking.fits[1].element
     assert refined == ["loss_4", f"loss_{second}"]
-    assert loc.best is not None and loc.best.element == second
+    assert loc.best is not None and loc.best.element == 4  # the answer stays the best fit, flagged
     assert loc.contradicted is not None and loc.contradicted.element == 4
+    assert loc.ranked[0].element == second
     assert "the best fit is element 4" in loc.summary()
+    assert f"the certificate keeps, element {second} ranks first" in loc.summary()
