@@ -6,6 +6,7 @@ every element: bench/results_location.md)."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from pathlib import Path
 
@@ -182,3 +183,43 @@ def test_a_refinement_that_excludes_the_best_ranked_makes_way_for_the_next(base0
     assert loc.ranked[0].element == second
     assert "the best fit is element 4" in loc.summary()
     assert f"the certificate keeps, element {second} ranks first" in loc.summary()
+
+
+def test_the_breathing_depth_relation_reads_xy_probes_as_one_probe() -> None:
+    """depth -> loss of a breathing crack (location._hb_relation) from x/y probes at two stations against the
+    one from the direct pair alone (an independent route: no cross pair there): alike within 10 % at every depth,
+    and a 5 % deep crack a loss below 1 %. The x force's y probes (which only the spin couples) are left out: with
+    them the relation read a 5 % deep crack as a 42 % loss."""
+    import numpy as np
+
+    from rotorcheck.config import load_config
+    from rotorcheck.location import HB_DEPTHS, _hb_relation
+    from rotorcheck.ranking import loss_model
+    from rotorcheck.resources import configs_dir
+    from rotorcheck.robust.box_test import Points, point_receptances
+    from rotorcheck.signatures import benign_box
+    from rotorcheck.variability import benign_at
+
+    cfg = load_config(configs_dir() / "crack_rig.yaml")
+    speed, element = 1000.0, 5
+    box = benign_box(cfg, speed, benign_at(cfg, speed))
+    model = loss_model(cfg, box, element, speed, "breathing")
+    system = box.system
+    f = np.linspace(35.0, 480.0, 24)
+    pairs = [(system.dof(8, a, None), system.dof(st, b, None)) for a in ("x", "y") for st in (6, 2)
+             for b in ("x", "y")]
+
+    def points(chosen: list[tuple[int, int]]) -> Points:
+        n = system.n_dof
+        w = np.tile(2.0 * np.pi * f, len(chosen))
+        b = np.concatenate([np.tile(np.eye(n)[i], (f.size, 1)) for i, _ in chosen])
+        c = np.concatenate([np.tile(np.eye(n)[o], (f.size, 1)) for _, o in chosen])
+        z = np.zeros(w.size)
+        pts = Points(w, z.astype(complex), z.astype(complex), z.astype(complex), z, z, 3.0, z, 1.0, 1.0, z, z, b, c)
+        return dataclasses.replace(pts, g0=point_receptances(model, pts, np.zeros(len(model.parameters))))
+
+    one = _hb_relation(cfg, system, model, element, speed, points(pairs[:1]), None)
+    xy = _hb_relation(cfg, system, model, element, speed, points(pairs), None)
+    assert one(0.05) < 0.01 and xy(0.05) < 0.01
+    for d in HB_DEPTHS:
+        assert xy(d) == pytest.approx(one(d), rel=0.1, abs=0.005), d
