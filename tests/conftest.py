@@ -1,7 +1,7 @@
 """Suite-wide: the order the files run in under xdist, and artefacts that several test files share.
 
 Order. ``pytest -n 2 --dist loadgroup`` (``make test``) hands each worker whole groups: a file, or the files
-of one of :data:`SHARED_GROUPS` together (each test is marked ``xdist_group`` here: its group or its file), so
+of one of :data:`SHARED_GROUPS` together (the units of :func:`pytest_xdist_make_scheduler`), so
 that what those files share per worker (:func:`sample_pipeline`, tests/report/figure_checks.py's figures) is
 computed once; ``--dist loadfile`` still runs (files apart, the shared work then done in each worker that
 needs it). xdist sorts the units by their number of tests (``loadscopereorder``), which puts the few slow
@@ -87,15 +87,32 @@ def pytest_configure(config: pytest.Config) -> None:
         config.option.loadscopereorder = False
 
 
-@pytest.hookimpl(tryfirst=True)  # before xdist's worker reads the xdist_group marks (--dist loadgroup)
+def unit_of(nodeid: str) -> str:
+    """The xdist work unit of a test under ``--dist loadgroup``: its :data:`SHARED_GROUPS` group, else its file."""
+    path = nodeid.split("::", 1)[0]
+    return next((name for name, paths in SHARED_GROUPS.items() if path in paths), path)
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_xdist_make_scheduler(config: pytest.Config, log: Any) -> Any:
+    """``--dist loadgroup`` with the units of :func:`unit_of`, taken from the test ids on the controller.
+    (xdist's own loadgroup reads ``xdist_group`` marks that the worker turns into an ``@group`` suffix of the
+    test id; under pytest 9 that suffix is lost (the id is ``Node._id``, xdist writes ``_nodeid``), so every
+    test was a unit of its own: the shared per-worker work was done in both workers.)"""
+    if config.getvalue("dist") != "loadgroup":
+        return None
+    from xdist.scheduler import LoadScopeScheduling
+
+    class FileGroupScheduling(LoadScopeScheduling):
+        def _split_scope(self, nodeid: str) -> str:
+            return unit_of(nodeid)
+
+    return FileGroupScheduling(config, log)
+
+
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
     rank = {path: k for k, path in enumerate(SLOW_FIRST)}
     items.sort(key=lambda item: rank.get(item.nodeid.split("::", 1)[0], len(rank)))  # stable: files stay whole
-    if getattr(config.option, "dist", None) == "loadgroup":
-        group = {path: name for name, paths in SHARED_GROUPS.items() for path in paths}
-        for item in items:
-            path = item.nodeid.split("::", 1)[0]
-            item.add_marker(pytest.mark.xdist_group(group.get(path, path)))
 
 
 @pytest.fixture(scope="session")
