@@ -29,45 +29,50 @@ import pytest
 
 from tests.shared_runs import CliRun, cli_run, crack_rig_sample, shared_root, validate_0rpm_steps
 
-#: the slowest test files, longest first (CPU seconds of a whole-suite run with -n 2 --dist loadgroup on 2026-11-27,
-#: the machine shared: load average 10-12, rounded): scheduled first under xdist, a SHARED_GROUPS group where its
-#: first file ranks. test_locate.py makes the shared open-crack location (conftest.located_open_crack) that
-#: report/test_html_report.py reads later on; the fleet files share tests/fleet/conftest.small_fleet.
+#: the slowest test files, longest first: scheduled first under xdist, a SHARED_GROUPS group where its first
+#: file ranks. The figures: CPU seconds per file (this process and the subprocesses it waited for) of a whole-suite
+#: run with -n 2 --dist loadgroup on 2026-11-27 23:24, the 2-core machine shared (load average 3.5-4.5: about 1.5x
+#: the figures of a quiet machine), rounded. test_fleet_runs.py makes the shared small fleet
+#: (tests/fleet/conftest.small_fleet) before test_fleet_executors.py and test_fleet_dask_kill.py start, so that
+#: neither waits for it; test_locate.py makes the shared open-crack location (conftest.located_open_crack) that
+#: report/test_html_report.py reads later on.
 SLOW_FIRST: tuple[str, ...] = (
-    "tests/test_multichannel.py",  # 37, group sample_pipeline (75 with the three below): x/y end to end
-    "tests/test_pipeline.py",  # 19
-    "tests/report/test_detection_figures.py",  # 17
-    "tests/report/test_report_parity.py",  # 0.1 (its detections are the two files' above)
-    "tests/report/test_model_figures.py",  # 24, group figures (45 with the file below)
-    "tests/report/test_figure_layout.py",  # 21
-    "tests/fleet/test_fleet_demo_trends.py",  # 27: the demo's 3 changing machines x 10 sweeps
-    "tests/faults/test_faults_time_sim.py",  # 26: harmonic balance against time integration
-    "tests/fleet/test_fleet_runs.py",  # 27 (with small_fleet)
-    "tests/fleet/test_fleet_executors.py",  # 22: serial, processes, Dask
-    "tests/test_locate.py",  # 22: the shared locate; detect and locate one element
-    "tests/test_sigkill.py",  # 19: commands in subprocesses, killed at four moments each
+    "tests/test_multichannel.py",  # 42, group sample_pipeline (101 with the three below): x/y end to end
+    "tests/test_pipeline.py",  # 28
+    "tests/report/test_detection_figures.py",  # 23
+    "tests/report/test_report_parity.py",  # 8 (its detections are the files' above)
+    "tests/report/test_model_figures.py",  # 28, group figures (43 with the file below)
+    "tests/report/test_figure_layout.py",  # 16
+    "tests/fleet/test_fleet_demo_trends.py",  # 42: the demo's 3 changing machines x 10 sweeps
+    "tests/fleet/test_fleet_runs.py",  # 17 (with small_fleet)
+    "tests/fleet/test_fleet_executors.py",  # 31: serial, processes, Dask
+    "tests/test_sigkill.py",  # 23: commands in subprocesses, killed at four moments each
+    "tests/sweep/test_sweep_simulator.py",  # 22: ODE time integration
     "tests/robust/test_robust_mu.py",  # 18: brute-force references
-    "tests/robust/test_damage_block.py",  # 17
-    "tests/test_measured_detection.py",  # 17: Monte Carlo coverage
-    "tests/sweep/test_sweep_simulator.py",  # 15: ODE time integration
-    "tests/test_cli_streams.py",  # 14
-    "tests/test_compressor_rig.py",  # 14
-    "tests/test_harden_claims.py",  # 13
-    "tests/test_rig_features.py",  # 13
-    "tests/test_golden.py",  # 12: 14 cases through the command line
-    "tests/report/test_html_report.py",  # 11
-    "tests/test_detectability.py",  # 9
-    "tests/test_open_crack_series.py",  # 8
-    "tests/test_samples.py",  # 8: regenerates every bundled sample
-    "tests/fleet/test_fleet_dask_kill.py",  # 8
-    "tests/test_install.py",  # 8: builds and installs the wheel
-    "tests/test_uff_detect.py",  # 7
-    "tests/robust/test_robust_defects.py",  # 6
-    "tests/test_ross_import.py",  # 6
-    "tests/test_baseline_digest.py",  # 5
-    "tests/fe/test_fe_plots.py",  # 5
-    "tests/robust/test_mixed_mu.py",  # 4
-    "tests/test_multirun.py",  # 4
+    "tests/faults/test_faults_time_sim.py",  # 17: harmonic balance against time integration
+    "tests/test_compressor_rig.py",  # 16
+    "tests/test_measured_detection.py",  # 15: Monte Carlo coverage
+    "tests/test_cli_streams.py",  # 15
+    "tests/fleet/test_fleet_dask_kill.py",  # 15
+    "tests/test_golden.py",  # 14: 14 cases through the command line
+    "tests/test_harden_claims.py",  # 14
+    "tests/test_open_crack_series.py",  # 13
+    "tests/test_install.py",  # 13: builds and installs the wheel
+    "tests/test_detectability.py",  # 10
+    "tests/test_uff_detect.py",  # 10
+    "tests/robust/test_damage_block.py",  # 10
+    "tests/test_locate.py",  # 9: the shared locate; detect and locate one element
+    "tests/test_samples.py",  # 9: regenerates every bundled sample
+    "tests/robust/test_severity.py",  # 8
+    "tests/test_rig_features.py",  # 8
+    "tests/report/test_html_report.py",  # 8
+    "tests/fe/test_fe_plots.py",  # 7
+    "tests/test_baseline_digest.py",  # 7
+    "tests/test_ross_import.py",  # 7
+    "tests/test_modal_anchor.py",  # 6
+    "tests/robust/test_mixed_mu.py",  # 6
+    "tests/fe/test_fe_taper_convergence.py",  # 5
+    "tests/test_multirun.py",  # 5
 )
 
 
