@@ -27,7 +27,14 @@ from typing import Any
 
 import pytest
 
-from tests.shared_runs import CliRun, cli_run, crack_rig_sample, shared_root, validate_0rpm_steps
+from tests.shared_runs import (
+    CliRun,
+    cli_run,
+    crack_rig_sample,
+    detect_breathing_1000rpm_steps,
+    shared_root,
+    validate_0rpm_steps,
+)
 
 #: the slowest test files, longest first: scheduled first under xdist, a SHARED_GROUPS group where its first
 #: file ranks. The figures: CPU seconds per file (this process and the subprocesses it waited for) of a whole-suite
@@ -146,6 +153,15 @@ def located_open_crack(cli_once: Callable[[str, Sequence[Sequence[str]]], CliRun
     candidate elements 1, 4 and 9 and ``--json`` (plots on): ``out/location.{json,html,png}``."""
     return cli_once("located_open_crack", [*validate_0rpm_steps(), [
         "locate", crack_rig_sample("open_crack_0rpm.h5"), "--out", "{out}", "--elements", "1,4,9", "--json"]])
+
+
+@pytest.fixture(scope="session")
+def detected_breathing_1000rpm(cli_once: Callable[[str, Sequence[Sequence[str]]], CliRun]) -> CliRun:
+    """`rotorcheck fit-noise`, `validate` and `detect --json` (plots on) of crack_rig/breathing_crack_1000rpm.h5
+    against healthy_1000rpm.h5: ``out/report.{json,md,html}``, the plots; the last command's JSON (exit 1)."""
+    run = cli_once("detected_breathing_1000rpm", detect_breathing_1000rpm_steps())
+    assert run.codes == (0, 0, 1)  # fit-noise, validate, detect's DAMAGE
+    return run
 
 
 @pytest.fixture(scope="session")

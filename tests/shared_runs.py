@@ -116,3 +116,11 @@ def validate_0rpm_steps() -> list[list[str]]:
     return [["fit-noise", h, "--out", "{out}"], ["validate", h, "--out", "{out}", "--no-plots"]]
 
 
+
+
+def detect_breathing_1000rpm_steps() -> list[list[str]]:
+    """fit-noise, validate (measured, plots) and detect --json (plots) of the crack rig's breathing crack at
+    1000 rpm against its healthy sweep."""
+    h = crack_rig_sample("healthy_1000rpm.h5")
+    return [["fit-noise", h, "--out", "{out}"], ["validate", h, "--out", "{out}"],
+            ["detect", crack_rig_sample("breathing_crack_1000rpm.h5"), "--out", "{out}", "--json"]]
