@@ -148,11 +148,13 @@ def validated_0rpm(cli_once: Callable[[str, Sequence[Sequence[str]]], CliRun]) -
 
 
 @pytest.fixture(scope="session")
-def located_open_crack(cli_once: Callable[[str, Sequence[Sequence[str]]], CliRun]) -> CliRun:
-    """:func:`validated_0rpm`'s commands, then `rotorcheck locate` of crack_rig/open_crack_0rpm.h5 with the
-    candidate elements 1, 4 and 9 and ``--json`` (plots on): ``out/location.{json,html,png}``."""
-    return cli_once("located_open_crack", [*validate_0rpm_steps(), [
-        "locate", crack_rig_sample("open_crack_0rpm.h5"), "--out", "{out}", "--elements", "1,4,9", "--json"]])
+def located_open_crack(validated_0rpm: CliRun, tmp_path_factory: pytest.TempPathFactory) -> CliRun:
+    """:func:`validated_0rpm`'s commands (its folder copied, not run again), then `rotorcheck locate` of
+    crack_rig/open_crack_0rpm.h5 with the candidate elements 1, 4 and 9 and ``--json`` (plots on):
+    ``out/location.{json,html,png}``; the codes and outputs of the three commands."""
+    return cli_run(shared_root(tmp_path_factory), "located_open_crack", [[
+        "locate", crack_rig_sample("open_crack_0rpm.h5"), "--out", "{out}", "--elements", "1,4,9", "--json"]],
+        base=validated_0rpm)
 
 
 @pytest.fixture(scope="session")
