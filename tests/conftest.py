@@ -105,7 +105,7 @@ def unit_of(nodeid: str) -> str:
     return next((name for name, paths in SHARED_GROUPS.items() if path in paths), path)
 
 
-@pytest.hookimpl(tryfirst=True)
+@pytest.hookimpl(tryfirst=True, optionalhook=True)  # optional: pytest without xdist (-p no:xdist)
 def pytest_xdist_make_scheduler(config: pytest.Config, log: Any) -> Any:
     """``--dist loadgroup`` with the units of :func:`unit_of`, taken from the test ids on the controller.
     (xdist's own loadgroup reads ``xdist_group`` marks that the worker turns into an ``@group`` suffix of the
