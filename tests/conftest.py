@@ -1,7 +1,7 @@
 """Suite-wide: the order the files run in under xdist, and artefacts that several test files share.
 
 Order. ``pytest -n 2 --dist loadgroup`` (``make test``) hands each worker whole groups: a file, or the files
-of one of :data:`SHARED_GROUPS` together (each test is marked ``xdist_group`` here: its group or its file), so
+of one of :data:`SHARED_GROUPS` together (the units of :func:`pytest_xdist_make_scheduler`), so
 that what those files share per worker (:func:`sample_pipeline`, tests/report/figure_checks.py's figures) is
 computed once; ``--dist loadfile`` still runs (files apart, the shared work then done in each worker that
 needs it). xdist sorts the units by their number of tests (``loadscopereorder``), which puts the few slow
@@ -27,47 +27,59 @@ from typing import Any
 
 import pytest
 
-from tests.shared_runs import CliRun, cli_run, crack_rig_sample, shared_root, validate_0rpm_steps
+from tests.shared_runs import (
+    CliRun,
+    cli_run,
+    crack_rig_sample,
+    detect_breathing_1000rpm_steps,
+    shared_root,
+    validate_0rpm_steps,
+)
 
-#: the slowest test files, longest first (CPU seconds of a whole-suite run with -n 2 --dist loadgroup on 2026-11-27,
-#: the machine shared: load average 10-12, rounded): scheduled first under xdist, a SHARED_GROUPS group where its
-#: first file ranks. test_locate.py makes the shared open-crack location (conftest.located_open_crack) that
-#: report/test_html_report.py reads later on; the fleet files share tests/fleet/conftest.small_fleet.
+#: the slowest test files, longest first: scheduled first under xdist, a SHARED_GROUPS group where its first
+#: file ranks. The figures: CPU seconds per file (this process and the subprocesses it waited for) of a whole-suite
+#: run with -n 2 --dist loadgroup on 2026-11-27 23:24, the 2-core machine shared (load average 3.5-4.5: about 1.5x
+#: the figures of a quiet machine), rounded. test_fleet_runs.py makes the shared small fleet
+#: (tests/fleet/conftest.small_fleet) before test_fleet_executors.py and test_fleet_dask_kill.py start, so that
+#: neither waits for it; test_locate.py makes the shared open-crack location (conftest.located_open_crack) that
+#: report/test_html_report.py reads later on.
 SLOW_FIRST: tuple[str, ...] = (
-    "tests/test_multichannel.py",  # 37, group sample_pipeline (75 with the three below): x/y end to end
-    "tests/test_pipeline.py",  # 19
-    "tests/report/test_detection_figures.py",  # 17
-    "tests/report/test_report_parity.py",  # 0.1 (its detections are the two files' above)
-    "tests/report/test_model_figures.py",  # 24, group figures (45 with the file below)
-    "tests/report/test_figure_layout.py",  # 21
-    "tests/fleet/test_fleet_demo_trends.py",  # 27: the demo's 3 changing machines x 10 sweeps
-    "tests/faults/test_faults_time_sim.py",  # 26: harmonic balance against time integration
-    "tests/fleet/test_fleet_runs.py",  # 27 (with small_fleet)
-    "tests/fleet/test_fleet_executors.py",  # 22: serial, processes, Dask
-    "tests/test_locate.py",  # 22: the shared locate; detect and locate one element
-    "tests/test_sigkill.py",  # 19: commands in subprocesses, killed at four moments each
+    "tests/test_multichannel.py",  # 42, group sample_pipeline (101 with the three below): x/y end to end
+    "tests/test_pipeline.py",  # 28
+    "tests/report/test_detection_figures.py",  # 23
+    "tests/report/test_report_parity.py",  # 8 (its detections are the files' above)
+    "tests/report/test_model_figures.py",  # 28, group figures (43 with the file below)
+    "tests/report/test_figure_layout.py",  # 16
+    "tests/fleet/test_fleet_demo_trends.py",  # 42: the demo's 3 changing machines x 10 sweeps
+    "tests/fleet/test_fleet_runs.py",  # 17 (with small_fleet)
+    "tests/fleet/test_fleet_executors.py",  # 31: serial, processes, Dask
+    "tests/test_sigkill.py",  # 23: commands in subprocesses, killed at four moments each
+    "tests/sweep/test_sweep_simulator.py",  # 22: ODE time integration
     "tests/robust/test_robust_mu.py",  # 18: brute-force references
-    "tests/robust/test_damage_block.py",  # 17
-    "tests/test_measured_detection.py",  # 17: Monte Carlo coverage
-    "tests/sweep/test_sweep_simulator.py",  # 15: ODE time integration
-    "tests/test_cli_streams.py",  # 14
-    "tests/test_compressor_rig.py",  # 14
-    "tests/test_harden_claims.py",  # 13
-    "tests/test_rig_features.py",  # 13
-    "tests/test_golden.py",  # 12: 14 cases through the command line
-    "tests/report/test_html_report.py",  # 11
-    "tests/test_detectability.py",  # 9
-    "tests/test_open_crack_series.py",  # 8
-    "tests/test_samples.py",  # 8: regenerates every bundled sample
-    "tests/fleet/test_fleet_dask_kill.py",  # 8
-    "tests/test_install.py",  # 8: builds and installs the wheel
-    "tests/test_uff_detect.py",  # 7
-    "tests/robust/test_robust_defects.py",  # 6
-    "tests/test_ross_import.py",  # 6
-    "tests/test_baseline_digest.py",  # 5
-    "tests/fe/test_fe_plots.py",  # 5
-    "tests/robust/test_mixed_mu.py",  # 4
-    "tests/test_multirun.py",  # 4
+    "tests/faults/test_faults_time_sim.py",  # 17: harmonic balance against time integration
+    "tests/test_compressor_rig.py",  # 16
+    "tests/test_measured_detection.py",  # 15: Monte Carlo coverage
+    "tests/test_cli_streams.py",  # 15
+    "tests/fleet/test_fleet_dask_kill.py",  # 15
+    "tests/test_golden.py",  # 14: 14 cases through the command line
+    "tests/test_harden_claims.py",  # 14
+    "tests/test_open_crack_series.py",  # 13
+    "tests/test_install.py",  # 13: builds and installs the wheel
+    "tests/test_detectability.py",  # 10
+    "tests/test_uff_detect.py",  # 10
+    "tests/robust/test_damage_block.py",  # 10
+    "tests/test_locate.py",  # 9: the shared locate; detect and locate one element
+    "tests/test_samples.py",  # 9: regenerates every bundled sample
+    "tests/robust/test_severity.py",  # 8
+    "tests/test_rig_features.py",  # 8
+    "tests/report/test_html_report.py",  # 8
+    "tests/fe/test_fe_plots.py",  # 7
+    "tests/test_baseline_digest.py",  # 7
+    "tests/test_ross_import.py",  # 7
+    "tests/test_modal_anchor.py",  # 6
+    "tests/robust/test_mixed_mu.py",  # 6
+    "tests/fe/test_fe_taper_convergence.py",  # 5
+    "tests/test_multirun.py",  # 5
 )
 
 
@@ -87,15 +99,32 @@ def pytest_configure(config: pytest.Config) -> None:
         config.option.loadscopereorder = False
 
 
-@pytest.hookimpl(tryfirst=True)  # before xdist's worker reads the xdist_group marks (--dist loadgroup)
+def unit_of(nodeid: str) -> str:
+    """The xdist work unit of a test under ``--dist loadgroup``: its :data:`SHARED_GROUPS` group, else its file."""
+    path = nodeid.split("::", 1)[0]
+    return next((name for name, paths in SHARED_GROUPS.items() if path in paths), path)
+
+
+@pytest.hookimpl(tryfirst=True, optionalhook=True)  # optional: pytest without xdist (-p no:xdist)
+def pytest_xdist_make_scheduler(config: pytest.Config, log: Any) -> Any:
+    """``--dist loadgroup`` with the units of :func:`unit_of`, taken from the test ids on the controller.
+    (xdist's own loadgroup reads ``xdist_group`` marks that the worker turns into an ``@group`` suffix of the
+    test id; under pytest 9 that suffix is lost (the id is ``Node._id``, xdist writes ``_nodeid``), so every
+    test was a unit of its own: the shared per-worker work was done in both workers.)"""
+    if config.getvalue("dist") != "loadgroup":
+        return None
+    from xdist.scheduler import LoadScopeScheduling
+
+    class FileGroupScheduling(LoadScopeScheduling):
+        def _split_scope(self, nodeid: str) -> str:
+            return unit_of(nodeid)
+
+    return FileGroupScheduling(config, log)
+
+
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
     rank = {path: k for k, path in enumerate(SLOW_FIRST)}
     items.sort(key=lambda item: rank.get(item.nodeid.split("::", 1)[0], len(rank)))  # stable: files stay whole
-    if getattr(config.option, "dist", None) == "loadgroup":
-        group = {path: name for name, paths in SHARED_GROUPS.items() for path in paths}
-        for item in items:
-            path = item.nodeid.split("::", 1)[0]
-            item.add_marker(pytest.mark.xdist_group(group.get(path, path)))
 
 
 @pytest.fixture(scope="session")
@@ -119,11 +148,22 @@ def validated_0rpm(cli_once: Callable[[str, Sequence[Sequence[str]]], CliRun]) -
 
 
 @pytest.fixture(scope="session")
-def located_open_crack(cli_once: Callable[[str, Sequence[Sequence[str]]], CliRun]) -> CliRun:
-    """:func:`validated_0rpm`'s commands, then `rotorcheck locate` of crack_rig/open_crack_0rpm.h5 with the
-    candidate elements 1, 4 and 9 and ``--json`` (plots on): ``out/location.{json,html,png}``."""
-    return cli_once("located_open_crack", [*validate_0rpm_steps(), [
-        "locate", crack_rig_sample("open_crack_0rpm.h5"), "--out", "{out}", "--elements", "1,4,9", "--json"]])
+def located_open_crack(validated_0rpm: CliRun, tmp_path_factory: pytest.TempPathFactory) -> CliRun:
+    """:func:`validated_0rpm`'s commands (its folder copied, not run again), then `rotorcheck locate` of
+    crack_rig/open_crack_0rpm.h5 with the candidate elements 1, 4 and 9 and ``--json`` (plots on):
+    ``out/location.{json,html,png}``; the codes and outputs of the three commands."""
+    return cli_run(shared_root(tmp_path_factory), "located_open_crack", [[
+        "locate", crack_rig_sample("open_crack_0rpm.h5"), "--out", "{out}", "--elements", "1,4,9", "--json"]],
+        base=validated_0rpm)
+
+
+@pytest.fixture(scope="session")
+def detected_breathing_1000rpm(cli_once: Callable[[str, Sequence[Sequence[str]]], CliRun]) -> CliRun:
+    """`rotorcheck fit-noise`, `validate` and `detect --json` (plots on) of crack_rig/breathing_crack_1000rpm.h5
+    against healthy_1000rpm.h5: ``out/report.{json,md,html}``, the plots; the last command's JSON (exit 1)."""
+    run = cli_once("detected_breathing_1000rpm", detect_breathing_1000rpm_steps())
+    assert run.codes == (0, 0, 1)  # fit-noise, validate, detect's DAMAGE
+    return run
 
 
 @pytest.fixture(scope="session")

@@ -96,12 +96,21 @@ def run_steps(folder: Path, steps: Sequence[Sequence[str]]) -> None:
     tmp.replace(folder / "done.json")
 
 
-def cli_run(root: Path, name: str, steps: Sequence[Sequence[str]]) -> CliRun:
+def cli_run(root: Path, name: str, steps: Sequence[Sequence[str]], base: CliRun | None = None) -> CliRun:
     """The ``rotorcheck`` commands ``steps`` (``{out}``: the output folder) run in-process once per pytest run
-    under ``root`` (:func:`shared_root`), whichever worker asks first."""
-    folder = once(root, run_key(name, steps), lambda f: run_steps(f, steps))
+    under ``root`` (:func:`shared_root`), whichever worker asks first. ``base``: an earlier shared run whose
+    output folder the commands start from (a copy): its commands' codes and outputs come first."""
+
+    def make(folder: Path) -> None:
+        if base is not None:
+            base.copy_to(folder / "out")
+        run_steps(folder, steps)
+
+    key = run_key(name, steps) + ("" if base is None else f"-on-{base.out.parent.name}")
+    folder = once(root, key, make)
     doc = json.loads((folder / "done.json").read_text())
-    return CliRun(folder / "out", tuple(doc["codes"]), tuple(doc["stdout"]))
+    first = CliRun(folder, (), ()) if base is None else base
+    return CliRun(folder / "out", first.codes + tuple(doc["codes"]), first.stdout + tuple(doc["stdout"]))
 
 
 def crack_rig_sample(name: str) -> str:
@@ -116,3 +125,11 @@ def validate_0rpm_steps() -> list[list[str]]:
     return [["fit-noise", h, "--out", "{out}"], ["validate", h, "--out", "{out}", "--no-plots"]]
 
 
+
+
+def detect_breathing_1000rpm_steps() -> list[list[str]]:
+    """fit-noise, validate (measured, plots) and detect --json (plots) of the crack rig's breathing crack at
+    1000 rpm against its healthy sweep."""
+    h = crack_rig_sample("healthy_1000rpm.h5")
+    return [["fit-noise", h, "--out", "{out}"], ["validate", h, "--out", "{out}"],
+            ["detect", crack_rig_sample("breathing_crack_1000rpm.h5"), "--out", "{out}", "--json"]]

@@ -16,16 +16,17 @@ from rotorcheck import fileio
 from rotorcheck.cli import main
 from rotorcheck.errors import InputError
 from rotorcheck.resources import samples_dir
+from tests.shared_runs import CliRun
 
 SAMPLES = samples_dir() / "crack_rig"
 REPO = Path(__file__).resolve().parents[1]
 
 
 @pytest.fixture(scope="module")
-def validated(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    out = tmp_path_factory.mktemp("v")
-    assert main(["validate", str(SAMPLES / "healthy_0rpm.h5"), "--out", str(out), "--no-plots"]) == 0
-    return out / "baseline.h5"
+def validated(validated_0rpm: CliRun) -> Path:
+    """A validated baseline of healthy_0rpm.h5 (the shared fit-noise and validate, conftest; read only: the
+    tests pass it as --baseline and write elsewhere)."""
+    return validated_0rpm.out / "baseline.h5"
 
 
 @pytest.fixture

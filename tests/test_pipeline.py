@@ -294,10 +294,12 @@ def test_solver_failure_at_one_point_is_reported_not_a_number(tmp_path: Path, ca
     assert "--fail-at" in capsys.readouterr().err
 
 
-def test_outputs_are_never_overwritten_silently(validated_1000rpm: Path, capsys: pytest.CaptureFixture) -> None:
-    out = validated_1000rpm
+def test_outputs_are_never_overwritten_silently(detected_breathing_1000rpm: CliRun, tmp_path: Path,
+                                               capsys: pytest.CaptureFixture) -> None:
+    # a folder where validate and detect wrote (the shared run, conftest.detected_breathing_1000rpm): a copy
+    out = detected_breathing_1000rpm.copy_to(tmp_path / "out")
+    assert detected_breathing_1000rpm.codes[-1] == EXIT_DAMAGE
     args = ["detect", str(CR / "breathing_crack_1000rpm.h5"), "--out", str(out), "--no-plots"]
-    assert main(args) == EXIT_DAMAGE
     before = _digest(out)
     assert main(args) == EXIT_INPUT
     assert "--force" in capsys.readouterr().err
@@ -307,12 +309,11 @@ def test_outputs_are_never_overwritten_silently(validated_1000rpm: Path, capsys:
     assert main([*args, "--force"]) == EXIT_DAMAGE
 
 
-def test_detect_json_and_files(validated_1000rpm: Path, capsys: pytest.CaptureFixture) -> None:
-    out = validated_1000rpm
-    capsys.readouterr()
-    assert main(["detect", str(CR / "breathing_crack_1000rpm.h5"), "--out", str(out), "--json"]) == EXIT_DAMAGE
-    cap = capsys.readouterr()
-    rep = json.loads(cap.out)  # stdout holds exactly one JSON document
+def test_detect_json_and_files(detected_breathing_1000rpm: CliRun) -> None:
+    """`detect --json` with plots (the shared run, conftest.detected_breathing_1000rpm)."""
+    out = detected_breathing_1000rpm.out
+    assert detected_breathing_1000rpm.codes[-1] == EXIT_DAMAGE
+    rep = detected_breathing_1000rpm.json()  # stdout holds exactly one JSON document
     for key in ("verdict", "n_points", "n_fault_points", "fault_frequencies_hz", "frequency_hz", "gamma_healthy",
                 "gamma_required", "fault", "damage_dynamics_re", "damage_dynamics_im", "damage_bound_min_abs",
                 "damage_bound_max_abs"):

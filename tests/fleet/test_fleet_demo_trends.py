@@ -1,6 +1,7 @@
 """The demo fleet's trends (`make fleet-demo`: 20 machines x 10 weekly sweeps, seed 0) against the simulator's
 truth: its two growing cracks and its benign bearing drift, each made exactly as in the demo
-(tools.fleet_sim ``only``), checked through ``rotorcheck fleet`` as the demo runs it (``--limit 3000``).
+(tools.fleet_sim ``only``), checked through ``rotorcheck fleet`` as the demo runs it (``--limit 3000``; here
+``--serial``).
 
 The truth: a crack's growth of the low-frequency stiffness figure from the noise-free simulation of the crack
 alone (the truth rig, the demo's loss rate), the drift's from the noise-free figure of every sweep
@@ -36,7 +37,9 @@ def demo(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Any]:
 @pytest.mark.slow
 def test_demo_trends_bracket_the_truth(demo: tuple[Path, Any], capsys: pytest.CaptureFixture[str]) -> None:
     root, _ = demo
-    rc = main(["fleet", str(root), "--limit", "3000", "--locate", "none", "--workers", "2"])
+    # --serial: the tasks in this process (the executors give the same summary byte for byte:
+    # test_fleet_executors.py); a pool of 2 beside xdist's 2 workers on 2 cores costs 4-5 s CPU more (imports)
+    rc = main(["fleet", str(root), "--limit", "3000", "--locate", "none", "--serial"])
     err = capsys.readouterr().err
     assert rc == 1  # the cracks are in alarm
     # progress on stderr, per sweep, with the time elapsed and left

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from rotorcheck import __version__, workflow
-from rotorcheck.cli import EXIT_DAMAGE, main
+from rotorcheck.cli import EXIT_DAMAGE
 from rotorcheck.resources import samples_dir
 from tests.shared_runs import CliRun
 
@@ -35,13 +35,11 @@ def chromium() -> str | None:
 
 
 @pytest.fixture(scope="module")
-def detected(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """`rotorcheck fit-noise`, `validate`, `detect --locate` on the breathing crack at 1000 rpm."""
-    out = tmp_path_factory.mktemp("html") / "out"
-    assert main(["fit-noise", str(CR / "healthy_1000rpm.h5"), "--out", str(out)]) == 0
-    assert main(["validate", str(CR / "healthy_1000rpm.h5"), "--out", str(out)]) == 0
-    assert main(["detect", str(CR / "breathing_crack_1000rpm.h5"), "--out", str(out)]) == EXIT_DAMAGE
-    return out
+def detected(detected_breathing_1000rpm: CliRun) -> Path:
+    """`rotorcheck fit-noise`, `validate`, `detect` on the breathing crack at 1000 rpm, plots on (the run shared
+    with tests/test_pipeline.py: conftest.detected_breathing_1000rpm, exit codes 0, 0, 1; read only)."""
+    assert detected_breathing_1000rpm.codes[-1] == EXIT_DAMAGE
+    return detected_breathing_1000rpm.out
 
 
 def _sha256(path: Path) -> str:
