@@ -271,9 +271,8 @@ def fit_anchor(system: MechanicalSystem, speed_rpm: float, dofs: Sequence[tuple[
     # a mode the model says a pair does not hear (a y-plane mode at an x probe, at rest) gets no residue there
     seen = np.abs(r0) > SILENT * np.maximum(np.max(np.abs(r0), axis=0, keepdims=True), 1e-300)
     pinned = np.zeros(lam0.size, dtype=bool)
-    mode_plane = np.array([plane[idx[member == j][0]] for j in range(lam0.size)])
     for _ in range(lam0.size):
-        lam, R, misfit, moved = _fit_split(lam0, fe_out, w, T, pinned, seen, mode_plane)
+        lam, R, misfit, moved = _fit_split(lam0, fe_out, w, T, pinned, seen)
         if not np.any(moved & ~pinned):
             if misfit > MAX_MISFIT:
                 return None
@@ -285,22 +284,18 @@ def fit_anchor(system: MechanicalSystem, speed_rpm: float, dofs: Sequence[tuple[
 
 
 def _fit_split(lam0: np.ndarray, fe_out: np.ndarray, w: np.ndarray, T: np.ndarray, pinned: np.ndarray,
-               seen: np.ndarray | None = None, mode_plane: np.ndarray | None = None
-               ) -> tuple[np.ndarray, np.ndarray, float, np.ndarray]:
+               seen: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, float, np.ndarray]:
     """:func:`_fit` from the model's poles, and when that leaves more than :data:`SPLIT_MISFIT` of the data,
-    from starts that split each close pair of free poles of one plane (``mode_plane`` (k,) int: forward and
-    backward whirl, within :data:`CLOSE_PAIR` of each other) symmetrically by each of :data:`SPLIT_STARTS`:
-    started together, a pair stays together (the misfit is symmetric in the two), while the machine's may be
-    split further (anisotropic supports; on the bearing-damper truth at 1000 rpm 54.39 / 54.96 Hz, the model's
-    3.5e-4 apart); the best."""
+    from starts that split each close pair of free poles (forward and backward whirl, within
+    :data:`CLOSE_PAIR` of each other) symmetrically by each of :data:`SPLIT_STARTS`: started together, a pair
+    stays together (the misfit is symmetric in the two), while the machine's may be split further (anisotropic
+    supports; on the bearing-damper truth at 1000 rpm 54.39 / 54.96 Hz, the model's 3.5e-4 apart); the best."""
     best = _fit(lam0, fe_out, w, T, pinned, seen=seen)
     if best[2] <= SPLIT_MISFIT:
         return best
     free = np.flatnonzero(~pinned)
-    same = np.zeros(lam0.size, dtype=int) if mode_plane is None else mode_plane
-    # a pair of one plane only (two planes' modes hear different pairs: the fit is not symmetric in them)
     pairs = [(int(i), int(j)) for a, i in enumerate(free) for j in free[a + 1:]
-             if abs(lam0[i] - lam0[j]) <= CLOSE_PAIR * abs(lam0[i]) and same[i] == same[j]]
+             if abs(lam0[i] - lam0[j]) <= CLOSE_PAIR * abs(lam0[i])]
     if not pairs:
         return best
     for spread in SPLIT_STARTS:
