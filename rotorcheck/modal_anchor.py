@@ -33,7 +33,6 @@ import numpy as np
 
 from rotorcheck.fe.system import RPM_TO_RAD_S, MechanicalSystem
 from rotorcheck.lazy import lazy_module
-from rotorcheck.robust.affine import coupled_blocks
 
 optimize = lazy_module("scipy.optimize")
 linalg = lazy_module("scipy.linalg")
@@ -77,45 +76,20 @@ class FEModes:
     poles: np.ndarray
     residues: np.ndarray
     real: np.ndarray
-    plane: np.ndarray | None = None  # (m,) int: the uncoupled DOF set the mode lives on (None: one set)
-
-    def planes(self) -> np.ndarray:
-        """(m,) int: :attr:`plane`, zeros when the system is one coupled set."""
-        return np.zeros(self.poles.size, dtype=int) if self.plane is None else self.plane
 
 
 def fe_modes(system: MechanicalSystem, speed_rpm: float, dofs: Sequence[tuple[int, int]]) -> FEModes:
     """Every mode of ``system`` at ``speed_rpm`` and its residue at each (input DOF, output DOF) pair, from
-    the first-order state matrix with left and right eigenvectors (``H(s) = sum_r R_r / (s - lambda_r)``).
-    Where no matrix couples two DOF sets (the bending planes of a rotor that does not spin) each set's modes
-    are its own (:attr:`FEModes.plane`): the x and y modes of an isotropic rotor share a pole but not a pair."""
+    the first-order state matrix with left and right eigenvectors (``H(s) = sum_r R_r / (s - lambda_r)``)."""
     M, C, G, K = system.matrices(speed_rpm)
     D = C + speed_rpm * RPM_TO_RAD_S * G
-    blocks = coupled_blocks([M, D, K])
-    if len(blocks) > 1:
-        parts = []
-        for i, d in enumerate(blocks):
-            cut = np.ix_(d, d)
-            where = {int(g): k for k, g in enumerate(d)}
-            inside = [k for k, (a, b) in enumerate(dofs) if a in where and b in where]
-            sub = _modes(M[cut], D[cut], K[cut], [(where[a], where[b]) for a, b in (dofs[k] for k in inside)])
-            res = np.zeros((sub.poles.size, len(dofs)), dtype=complex)
-            res[:, inside] = sub.residues
-            parts.append((sub, res, np.full(sub.poles.size, i)))
-        return FEModes(np.concatenate([x.poles for x, _, _ in parts]), np.concatenate([r for _, r, _ in parts]),
-                       np.concatenate([x.real for x, _, _ in parts]), np.concatenate([k for _, _, k in parts]))
-    return _modes(M, D, K, dofs)
-
-
-def _modes(M: np.ndarray, D: np.ndarray, K: np.ndarray, dofs: Sequence[tuple[int, int]]) -> FEModes:
-    """:func:`fe_modes` of the second-order system ``M, D, K`` (n, n) for the (input, output) DOF pairs."""
     n = M.shape[0]
     Minv = np.linalg.inv(M)
     A = np.block([[np.zeros((n, n)), np.eye(n)], [-Minv @ K, -Minv @ D]])
     lam, wl, vr = linalg.eig(A, left=True, right=True)
     scale = np.einsum("ij,ij->j", wl.conj(), vr)
     B = np.zeros((2 * n, len(dofs)))
-    out = np.array([o for _, o in dofs], dtype=int)
+    out = np.array([o for _, o in dofs])
     for k, (i, _) in enumerate(dofs):
         B[n:, k] = Minv[:, i]
     res = vr[out, :].T * (wl.conj().T @ B) / scale[:, None]  # (2n, P)
@@ -149,21 +123,17 @@ def modal_frf(poles: np.ndarray, residues: np.ndarray, real: np.ndarray, omega: 
 
 
 def _merged(modes: FEModes, index: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The modes of ``index`` with repeated poles (:data:`REPEATED`) of one plane merged: (poles, residues summed,
-    members (m,) int: which merged mode each of ``index`` joined)."""
+    """The modes of ``index`` with repeated poles (:data:`REPEATED`) merged: (poles, residues summed, members
+    (m,) int: which merged mode each of ``index`` joined)."""
     poles: list[complex] = []
     res: list[np.ndarray] = []
-    plane: list[int] = []
-    where = modes.planes()
     member = np.empty(index.size, dtype=int)
     for k, i in enumerate(index):
         lam = modes.poles[i]
-        j = next((j for j, p in enumerate(poles) if abs(p - lam) <= REPEATED * abs(lam) and plane[j] == where[i]),
-                 None)
+        j = next((j for j, p in enumerate(poles) if abs(p - lam) <= REPEATED * abs(lam)), None)
         if j is None:
             poles.append(complex(lam))
             res.append(modes.residues[i].copy())
-            plane.append(int(where[i]))
             member[k] = len(poles) - 1
         else:
             res[j] = res[j] + modes.residues[i]
@@ -254,9 +224,8 @@ def fit_anchor(system: MechanicalSystem, speed_rpm: float, dofs: Sequence[tuple[
     inside = (fr >= 0.98 * f.min()) & (fr <= 1.02 * f.max()) & ~fe.real
     visible = inside & (peak > VISIBLE_PEAK * (peak[inside].max() if np.any(inside) else 0.0))
     # a repeated pole (x and y of an isotropic rotor) is one mode: all its members or none (its residues add)
-    plane = fe.planes()
     for i in np.flatnonzero(visible):
-        visible |= inside & (np.abs(fe.poles - fe.poles[i]) <= REPEATED * np.abs(fe.poles[i])) & (plane == plane[i])
+        visible |= inside & (np.abs(fe.poles - fe.poles[i]) <= REPEATED * np.abs(fe.poles[i]))
     if not np.any(visible) or f.size < 8:
         return None
     idx = np.flatnonzero(visible)
@@ -268,11 +237,9 @@ def fit_anchor(system: MechanicalSystem, speed_rpm: float, dofs: Sequence[tuple[
     T = T * heard  # a pair the model says is silent is fitted as none (its data are noise)
     rest = ~visible
     fe_out = modal_frf(fe.poles[rest], fe.residues[rest], fe.real[rest], w)
-    # a mode the model says a pair does not hear (a y-plane mode at an x probe, at rest) gets no residue there
-    seen = np.abs(r0) > SILENT * np.maximum(np.max(np.abs(r0), axis=0, keepdims=True), 1e-300)
     pinned = np.zeros(lam0.size, dtype=bool)
     for _ in range(lam0.size):
-        lam, R, misfit, moved = _fit_split(lam0, fe_out, w, T, pinned, seen)
+        lam, R, misfit, moved = _fit_split(lam0, fe_out, w, T, pinned)
         if not np.any(moved & ~pinned):
             if misfit > MAX_MISFIT:
                 return None
@@ -283,14 +250,14 @@ def fit_anchor(system: MechanicalSystem, speed_rpm: float, dofs: Sequence[tuple[
     return None
 
 
-def _fit_split(lam0: np.ndarray, fe_out: np.ndarray, w: np.ndarray, T: np.ndarray, pinned: np.ndarray,
-               seen: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, float, np.ndarray]:
+def _fit_split(lam0: np.ndarray, fe_out: np.ndarray, w: np.ndarray, T: np.ndarray, pinned: np.ndarray
+               ) -> tuple[np.ndarray, np.ndarray, float, np.ndarray]:
     """:func:`_fit` from the model's poles, and when that leaves more than :data:`SPLIT_MISFIT` of the data,
     from starts that split each close pair of free poles (forward and backward whirl, within
     :data:`CLOSE_PAIR` of each other) symmetrically by each of :data:`SPLIT_STARTS`: started together, a pair
     stays together (the misfit is symmetric in the two), while the machine's may be split further (anisotropic
     supports; on the bearing-damper truth at 1000 rpm 54.39 / 54.96 Hz, the model's 3.5e-4 apart); the best."""
-    best = _fit(lam0, fe_out, w, T, pinned, seen=seen)
+    best = _fit(lam0, fe_out, w, T, pinned)
     if best[2] <= SPLIT_MISFIT:
         return best
     free = np.flatnonzero(~pinned)
@@ -304,25 +271,21 @@ def _fit_split(lam0: np.ndarray, fe_out: np.ndarray, w: np.ndarray, T: np.ndarra
             lo_i = lam0[i].imag <= lam0[j].imag
             start[i] = lam0[i].real + 1j * lam0[i].imag * (1.0 - (0.5 if lo_i else -0.5) * spread)
             start[j] = lam0[j].real + 1j * lam0[j].imag * (1.0 + (0.5 if lo_i else -0.5) * spread)
-        trial = _fit(lam0, fe_out, w, T, pinned, start, seen)
+        trial = _fit(lam0, fe_out, w, T, pinned, start)
         if trial[2] < best[2]:
             best = trial
     return best
 
 
 def _fit(lam0: np.ndarray, fe_out: np.ndarray, w: np.ndarray, T: np.ndarray, pinned: np.ndarray,
-         start: np.ndarray | None = None, seen: np.ndarray | None = None
-         ) -> tuple[np.ndarray, np.ndarray, float, np.ndarray]:
+         start: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, float, np.ndarray]:
     """One fit of :func:`fit_anchor`: poles from ``start`` (default the model's ``lam0`` (k,, merged), around
     which they are bounded), those of ``pinned`` held at the model's, the model's other modes ``fe_out`` (f, P)
-    fixed; ``seen`` (k, P) bool the modes each pair hears (default all; the others' residues there are 0):
-    (poles, residues, misfit, moved (k,) bool: a pole at its bound, :data:`MAX_POLE_MOVE` from the model's, or
-    at no damping)."""
+    fixed: (poles, residues, misfit, moved (k,) bool: a pole at its bound, :data:`MAX_POLE_MOVE` from the
+    model's, or at no damping)."""
     m = lam0.size
     free = ~pinned
     target = T - fe_out
-    use = np.ones((m, T.shape[1]), dtype=bool) if seen is None else np.asarray(seen, dtype=bool)
-    every = bool(np.all(use))
     scale = np.maximum(np.max(np.abs(target), axis=0), 1e-300)  # each pair to unit size: pairs weigh alike
 
     def poles(x: np.ndarray) -> np.ndarray:
@@ -339,13 +302,7 @@ def _fit(lam0: np.ndarray, fe_out: np.ndarray, w: np.ndarray, T: np.ndarray, pin
         basis = np.column_stack([a, b, np.ones_like(w), 1.0 / w**2])
         A = np.vstack([basis.real, basis.imag])
         Y = np.vstack([(target / scale).real, (target / scale).imag])
-        if every:
-            coef = np.linalg.lstsq(A, Y, rcond=None)[0]
-        else:  # pair by pair, with the modes it hears
-            coef = np.zeros((A.shape[1], Y.shape[1]))
-            for q in range(Y.shape[1]):
-                cols = np.r_[np.flatnonzero(use[:, q]), np.flatnonzero(use[:, q]) + m, 2 * m, 2 * m + 1]
-                coef[cols, q] = np.linalg.lstsq(A[:, cols], Y[:, q], rcond=None)[0]
+        coef = np.linalg.lstsq(A, Y, rcond=None)[0]
         return lam, coef, (Y - A @ coef).ravel()
 
     lf = lam0[free]
@@ -389,8 +346,6 @@ def sensitivity(anchor: ModalAnchor, changed: FEModes, step: float) -> ModalSens
     base = anchor.fe
     # one to one, the least total move (close modes, 172.72 and 172.78 Hz at 1000 rpm, must not both follow one)
     dist = np.abs(changed.poles[:, None] - base.poles[None, :])
-    # a mode follows one of its own plane (x and y modes of an isotropic rotor at rest share their poles)
-    dist = np.where(changed.planes()[:, None] == base.planes()[None, :], dist, 1e6 * (dist.max() + 1.0))
     rows, cols = optimize.linear_sum_assignment(dist)
     near = np.full(changed.poles.size, -1, dtype=int)
     near[rows] = cols
