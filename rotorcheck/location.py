@@ -501,6 +501,7 @@ def locate(config: RigConfig, box: Any, pairs: Sequence[ChannelPair], change: Sw
         notes.append(f"certified loss intervals to {coarse_step:.0%} (their ends halved to that width) for every "
                      f"candidate, to {step:.0%} with a {refine_boxes}-box budget per slice for the {refine} best "
                      "ranked")
+        report(progress, 0, len(els), "certifying")
         for k, e in enumerate(els):
             results[e] = severity_interval(models[e], pts, lo, hi, p, coarse_step, slices, max_boxes, at_zero)
             report(progress, k + 1, len(els), f"certifying: element {e}")

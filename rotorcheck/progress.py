@@ -2,8 +2,9 @@
 
 A step that loops over items (shaft elements, candidate elements, sweeps, frequency points) takes an
 optional ``progress: Progress`` and calls it after each item as ``progress(done, total, label)``:
-``done`` items of ``total`` finished, ``label`` naming the one just done (e.g. ``"element 4"``).
-The library never prints; ``None`` means nobody listens.
+``done`` items of ``total`` finished, ``label`` naming the one just done (e.g. ``"element 4"``); and with
+``done`` 0 before the first item (the step starts: a display times the step's items from there, not from
+whatever ran before it). The library never prints; ``None`` means nobody listens.
 """
 
 from __future__ import annotations
@@ -31,9 +32,9 @@ def clock(seconds: float) -> str:
 class ConsoleSteps:
     """A :data:`Progress` shown on a rich console (stderr): a bar with the items done, the label, the elapsed
     and the remaining time on a terminal; otherwise plain lines ``[k/n] text label: elapsed h:mm:ss, about
-    h:mm:ss left`` (remaining = elapsed / done x items left), the first after ``every_s`` seconds and then at
-    most one per ``every_s`` (0: one per item); nothing when ``quiet``. The one progress display of the CLI
-    and the fleet.
+    h:mm:ss left`` (remaining = the step's time per item so far x items left; the step's time counts from its
+    ``done`` 0 call, else from the start), the first after ``every_s`` seconds and then at most one per
+    ``every_s`` (0: one per item); nothing when ``quiet``. The one progress display of the CLI and the fleet.
 
     ``with ConsoleSteps(console, "locating") as tick: library_call(..., progress=tick)``"""
 
@@ -42,6 +43,7 @@ class ConsoleSteps:
         self._bar: Any = None
         self._task: Any = None
         self._start = self._last = 0.0
+        self._step: tuple[int, float] | None = None  # (total, when) of the last step that said it started
 
     def __enter__(self) -> ConsoleSteps:
         self._start = self._last = time.monotonic()
@@ -69,12 +71,16 @@ class ConsoleSteps:
             self._bar.update(self._task, completed=done, total=total, label=label)
             return
         now = time.monotonic()
-        if done <= 0 or now - self._last < self.every_s:
+        if done <= 0:
+            self._step = (total, now)  # a step starts: its items are timed from here
+            return
+        if now - self._last < self.every_s:
             return
         self._last = now
         elapsed = now - self._start
+        since = self._step[1] if self._step is not None and self._step[0] == total else self._start
         self.console.print(f"[{done}/{total}] {self.text} {label}: elapsed {clock(elapsed)}, about "
-                           f"{clock(elapsed * (total - done) / done)} left", markup=False, highlight=False)
+                           f"{clock((now - since) * (total - done) / done)} left", markup=False, highlight=False)
 
     def __exit__(self, *exc: object) -> None:
         if self._bar is not None:

@@ -487,6 +487,7 @@ def rank_elements(config: RigConfig, box: Any, change: SweepChange, elements: Se
     fitted: dict[int, tuple[_Fit, np.ndarray, np.ndarray]] = {}
     chi2_benign = float("nan")
     n_res = 0
+    report(progress, 0, len(elements), "ranking")
     for k, e in enumerate(elements):
         if e not in models:
             models[e] = loss_model(config, box, e, change.speed_rpm, change.hypothesis)

@@ -93,6 +93,8 @@ import clarabel
 import numpy as np
 import scipy.sparse as sp
 
+from rotorcheck.progress import Progress, report
+
 __all__ = ["KINDS", "DamageBlockBound", "damage_block_bound"]
 
 KINDS = ("bounded", "unbounded", "empty", "undecided")
@@ -175,7 +177,8 @@ def _stack(X: np.ndarray | float, name: str, shape: tuple[int, int] | None) -> n
 
 
 def damage_block_bound(E11: np.ndarray, E12: np.ndarray, E21: np.ndarray, Q0: np.ndarray,
-                       R: np.ndarray | float, angles: int = 8, refine: int = 2) -> DamageBlockBound:
+                       R: np.ndarray | float, angles: int = 8, refine: int = 2,
+                       progress: Progress | None = None) -> DamageBlockBound:
     """Certified outer and witnessed inner intervals of ``Re``/``Im`` of ``D_xx``, ``D_yy`` (N/m).
 
     Parameters
@@ -197,6 +200,8 @@ def damage_block_bound(E11: np.ndarray, E12: np.ndarray, E21: np.ndarray, Q0: np
     refine : int
         Refinement rounds per interval side (0: none); each costs 20 solves. A side is refined while
         its gap exceeds 1 % of the outer width and the previous round removed at least 10 % of it.
+    progress : Progress, optional
+        Hears each frequency done (:mod:`rotorcheck.progress`).
 
     Returns
     -------
@@ -230,7 +235,10 @@ def damage_block_bound(E11: np.ndarray, E12: np.ndarray, E21: np.ndarray, Q0: np
     consistent = np.zeros(f, dtype=bool)
     kind = np.full(f, "undecided", dtype="<U9")
     bounds = np.full((4, f, 2, 2), np.nan)  # re_outer, im_outer, re_inner, im_inner
+    report(progress, 0, f, "damage dynamics")
     for i in range(f):
+        if i:  # the points before this one done
+            report(progress, i, f, "damage dynamics")
         pt = _Point(E11s[i], E12s[i], E21s[i], Q0s[i], Rs[i])
         try:
             estimate[i], consistent[i] = pt.estimate()
@@ -242,6 +250,7 @@ def damage_block_bound(E11: np.ndarray, E12: np.ndarray, E21: np.ndarray, Q0: np
             continue
         if out is not None:
             bounds[:, i] = out
+    report(progress, f, f, "damage dynamics")
     return DamageBlockBound(estimate, consistent, kind, *bounds)
 
 

@@ -439,7 +439,7 @@ def diagnose(rig: RigConfig, baseline: Baseline, run: MeasuredRun, found: Detect
     if identifiable and baseline.enclose == "measured" and run.n_pairs > 1:
         damage_xy = damage_per_direction(rig, run, np.asarray(baseline.healthy_frf),
                                          np.asarray(baseline.healthy_frf_var),
-                                         radius=None if measured is None else measured.radius)
+                                         radius=None if measured is None else measured.radius, progress=progress)
         if damage_xy is not None:
             notes.append("damage_dynamics_by_direction: D at the damage station in x and y from every channel "
                          "pair (eq. 3.11 in matrix form: the weighted least-squares member, anchored at the "

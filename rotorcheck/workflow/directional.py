@@ -8,6 +8,7 @@ import numpy as np
 
 from rotorcheck.config import Port, RigConfig
 from rotorcheck.nominal import ChannelPair, pair_receptance
+from rotorcheck.progress import Progress
 from rotorcheck.robust.damage_block import DamageBlockBound, damage_block_bound
 from rotorcheck.robust.identify import damage_dynamics
 from rotorcheck.workflow.measured import MeasuredRun, PairGrid
@@ -35,14 +36,16 @@ class DirectionalDamage:
 
 def damage_per_direction(rig: RigConfig, run: MeasuredRun, healthy_frf: np.ndarray,
                          healthy_var: np.ndarray | None = None, draws: int = 200, seed: int = 20261124,
-                         radius: np.ndarray | None = None) -> DirectionalDamage | None:
+                         radius: np.ndarray | None = None, progress: Progress | None = None
+                         ) -> DirectionalDamage | None:
     """With several channel pairs: the damage dynamics at the damage port's station in x and y, (f, 2, 2)
     N/m (rows and columns x, y; a stiffness loss is positive on the diagonal), eq. 3.11 in matrix form
     anchored at the measured healthy FRF: ``D = [E12 (T - T_h)^+ E21 + E11]^-1`` with the model's
     receptances between the damage DOFs and the channels, and its Monte Carlo intervals
     (:class:`DirectionalDamage`; ``healthy_var`` (f, P) the healthy FRF's variance, none: no interval).
     ``radius`` (f, P) m/N: the noise allowance of each pair's difference at a family-wise confidence; with
-    it, the certified set of D over that noise polydisc (:func:`rotorcheck.robust.damage_block.damage_block_bound`).
+    it, the certified set of D over that noise polydisc (:func:`rotorcheck.robust.damage_block.damage_block_bound`;
+    ``progress`` hears each frequency).
     None with one pair or no damage port, or when the pairs are not every output against every input."""
 
     grid = PairGrid.of(run)
@@ -76,7 +79,7 @@ def damage_per_direction(rig: RigConfig, run: MeasuredRun, healthy_frf: np.ndarr
     if radius is not None:
 
         bound = damage_block_bound(E11, E12, E21, T - Th, matrix(np.asarray(radius, dtype=float).reshape(nf, -1)),
-                                   refine=DAMAGE_BOUND_REFINE)
+                                   refine=DAMAGE_BOUND_REFINE, progress=progress)
         est = bound.estimate  # the weighted least-squares member (its W) rather than the pseudo-inverse's
     nan = np.full((nf, 2), np.nan)
     if healthy_var is None or run.var_pairs is None or draws < 2:
