@@ -112,7 +112,8 @@ def depth_interval(lower: float, upper: float, relation: Any) -> tuple[float | N
     upper end None beyond :data:`MAX_DEPTH` (not bounded), the lower end :data:`MAX_DEPTH` there (a loss beyond
     the relation's range means a depth of at least its deepest)."""
     lo = depth_of_loss(lower, relation)
-    return (float(MAX_DEPTH) if lo is None else lo), depth_of_loss(upper, relation)
+    hi = lo if upper == lower else depth_of_loss(upper, relation)  # a best fit: one depth, found once
+    return (float(MAX_DEPTH) if lo is None else lo), hi
 
 
 @dataclass(frozen=True)

@@ -174,19 +174,23 @@ class AffineModel:
                 terms.append((kind, *_factor(A, blocks)))
             out.append(tuple(terms))
         object.__setattr__(self, "factors", tuple(out))
-        # every matrix of Z stacked (rows K, M, D, then each parameter's terms), one matrix product per stack
-        mats = [self.K, self.M, self.D, *(A for prm in self.parameters for _, A in prm.terms)]
-        # and per block (:attr:`blocks`): each matrix's entries on that block's DOFs
+        # every matrix of Z stacked (rows K, M, D, then each parameter's terms), one matrix product per stack, per
+        # block (:attr:`blocks`): each matrix's entries on that block's DOFs
         object.__setattr__(self, "_stacks", tuple(np.stack([np.asarray(A, dtype=float)[np.ix_(d, d)].reshape(-1)
-                                                            for A in mats]) for d in blocks))
+                                                            for A in self.matrices]) for d in blocks))
         object.__setattr__(self, "_terms", tuple((i, k) for i, prm in enumerate(self.parameters) for k, _ in prm.terms))
+
+    @property
+    def matrices(self) -> list[np.ndarray]:
+        """Every matrix of ``Z``: K, M, D, then each parameter's terms in order (n, n)."""
+        return [self.K, self.M, self.D, *(A for prm in self.parameters for _, A in prm.terms)]
 
     @functools.cached_property
     def blocks(self) -> tuple[np.ndarray, ...]:
         """The DOF sets in which ``Z(w, theta)`` is block diagonal for every ``w`` and ``theta``
         (:func:`coupled_blocks` of every matrix): e.g. the two bending planes of a rotor with no gyroscopic or
         cross-coupled term. :meth:`stiffness_stack` holds ``Z`` block by block."""
-        return coupled_blocks([self.K, self.M, self.D, *(A for prm in self.parameters for _, A in prm.terms)])
+        return coupled_blocks(self.matrices)
 
     def solve_both(self, Z: StiffnessStack, B: np.ndarray, C: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``(Z^-1 B, Z^-T C)`` for a stack of this model's ``Z`` (:func:`solve_both`)."""
@@ -196,8 +200,8 @@ class AffineModel:
     def symmetric(self) -> bool:
         """``Z(w, theta) = Z^T`` for every ``w`` and ``theta`` (every matrix symmetric, 1e-12 of its largest entry:
         no gyroscopic term), so that ``Z^-T c = Z^-1 c``."""
-        mats = [self.K, self.M, self.D, *(A for prm in self.parameters for _, A in prm.terms)]
-        return all(np.allclose(A, A.T, rtol=0.0, atol=1e-12 * max(float(np.abs(A).max()), 1e-300)) for A in mats)
+        return all(np.allclose(A, A.T, rtol=0.0, atol=1e-12 * max(float(np.abs(A).max()), 1e-300))
+                   for A in self.matrices)
 
     @staticmethod
     def _s(kind: str, w: float) -> complex:

@@ -188,15 +188,9 @@ def examine_points(model: AffineModel, fac: BoxFactors, pts: Points, centre: np.
         sc = np.repeat(np.where(good, np.sqrt(np.where(good, nx, 1.0) / np.where(good, ny, 1.0)), 1.0),
                        np.diff(np.r_[fac.starts, r]), axis=1)
     xs, ys = x / sc, y * sc
+    rho, gm, resid, allow = _best_gain(pts, g_c)
+    ok = resid <= allow
     with np.errstate(divide="ignore", invalid="ignore"):
-        rho = g_c / pts.g0
-        pred = pts.t_healthy * rho
-        den = np.abs(pred) ** 2
-        gm = np.where(den > 0, (pts.t_new * np.conj(pred)).real / np.where(den > 0, den, 1.0), 1.0)
-        gm = np.clip(gm, pts.g_lo, pts.g_hi)
-        resid = np.abs(pts.t_new - gm * pred)
-        extra = pts.tolerance + pts.relative_error * np.abs(pts.t_healthy) * np.abs(gm * rho - 1.0)
-        ok = resid <= pts.z * np.sqrt(pts.var_new + np.abs(gm * rho) ** 2 * pts.var_healthy + pts.a2) + extra
         gain_change = np.maximum(np.abs(pts.g_lo * rho - 1.0), np.abs(pts.g_hi * rho - 1.0))
         xy = np.linalg.norm(xs, axis=1) * np.linalg.norm(ys, axis=1)
 
@@ -290,18 +284,27 @@ def point_receptances(model: AffineModel, pts: Points, theta: np.ndarray) -> np.
     return np.sum(pts.c * Z.solve(pts.b[:, :, None])[:, :, 0], axis=1)
 
 
-def _ratios_of(pts: Points, g: np.ndarray) -> np.ndarray:
-    """(m,) each point's residual over its allowance when the model's receptance there is ``g`` (m,) m/N
-    (best gain per point clipped to its range)."""
+def _best_gain(pts: Points, g: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """``(rho, gain, residual, allowance)`` (m,) each when the model's receptance at the points is ``g`` (m,) m/N:
+    ``rho = g / g0``, the gain in its range closest to explaining ``T_new`` by ``gain T_h rho``, the residual
+    ``|T_new - gain T_h rho|`` and the allowance it is held to (m/N; module docstring)."""
     with np.errstate(divide="ignore", invalid="ignore"):
         rho = g / pts.g0
         pred = pts.t_healthy * rho
         den = np.abs(pred) ** 2
         gm = np.clip(np.where(den > 0, (pts.t_new * np.conj(pred)).real / np.where(den > 0, den, 1.0), 1.0),
                      pts.g_lo, pts.g_hi)
-        allow = (pts.z * np.sqrt(pts.var_new + np.abs(gm * rho) ** 2 * pts.var_healthy + pts.a2) + pts.tolerance
-                 + pts.relative_error * np.abs(pts.t_healthy) * np.abs(gm * rho - 1.0))
-        return np.abs(pts.t_new - gm * pred) / allow
+        extra = pts.tolerance + pts.relative_error * np.abs(pts.t_healthy) * np.abs(gm * rho - 1.0)
+        allow = pts.z * np.sqrt(pts.var_new + np.abs(gm * rho) ** 2 * pts.var_healthy + pts.a2) + extra
+        return rho, gm, np.abs(pts.t_new - gm * pred), allow
+
+
+def _ratios_of(pts: Points, g: np.ndarray) -> np.ndarray:
+    """(m,) each point's residual over its allowance when the model's receptance there is ``g`` (m,) m/N
+    (best gain per point clipped to its range)."""
+    _, _, resid, allow = _best_gain(pts, g)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return resid / allow
 
 
 def point_ratios(model: AffineModel, pts: Points, theta: np.ndarray) -> np.ndarray:
