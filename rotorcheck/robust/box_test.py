@@ -141,6 +141,21 @@ def _s_of(kind: np.ndarray, w: np.ndarray) -> np.ndarray:
     return out
 
 
+def halve(centre: np.ndarray, half: np.ndarray, share: np.ndarray, fallback: np.ndarray
+          ) -> tuple[int, np.ndarray, tuple[np.ndarray, np.ndarray]]:
+    """A box (``centre``, ``half`` (p,)) halved along the parameter with the largest share of the bound (``share``
+    (p,), :func:`examine_points`; ``fallback`` (p,) ranks the parameters when no share is positive):
+    ``(that parameter, the halves' half-widths, (the lower half's centre, the upper half's))``."""
+    weight = np.where(half > 0, np.nan_to_num(share), 0.0)
+    i = int(np.argmax(weight)) if np.any(weight > 0) else int(np.argmax(fallback))
+    h1 = half.copy()
+    h1[i] /= 2.0
+    lower, upper = centre.copy(), centre.copy()
+    lower[i] -= h1[i]
+    upper[i] += h1[i]
+    return i, h1, (lower, upper)
+
+
 #: points whose small-gain norm is computed together, most promising first (:func:`examine_points`)
 BATCH = 4
 

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rotorcheck.robust.affine import AffineModel
-from rotorcheck.robust.box_test import BoxFactors, Points, examine_points, point_receptances
+from rotorcheck.robust.box_test import BoxFactors, Points, examine_points, halve, point_receptances
 
 #: how the certified per-point verdict is made (report.json)
 BOX_RULE = ("per point: unexplained iff for every benign parameter value in its range (real, branch and bound "
@@ -100,14 +100,8 @@ def certify_points(model: AffineModel, omega: np.ndarray, t_new: np.ndarray, t_h
                 del heaps[k]  # undecided
                 continue
             _, _, c0, h0, sh = heapq.heappop(heap)
-            weight = np.where(h0 > 0, sh, 0.0)
-            i = int(np.argmax(weight)) if np.any(weight > 0) else int(np.argmax(h0))
-            h1 = h0.copy()
-            h1[i] /= 2.0
-            for sign in (-1.0, 1.0):
-                c1 = c0.copy()
-                c1[i] += sign * h1[i]
-                kids.append((k, c1, h1))
+            _, h1, children = halve(c0, h0, sh, h0)
+            kids.extend((k, c1, h1) for c1 in children)
         if not kids:
             break
         at = np.array([k for k, _, _ in kids])

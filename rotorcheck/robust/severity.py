@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rotorcheck.robust.affine import AffineModel
-from rotorcheck.robust.box_test import BoxFactors, Points, examine_points, point_ratios, ratio_jacobian
+from rotorcheck.robust.box_test import BoxFactors, Points, examine_points, halve, point_ratios, ratio_jacobian
 
 #: how the severity interval is made (report.json)
 SEVERITY_RULE = ("one severity and one set of benign parameter values (real, in their ranges) and gain for every point "
@@ -152,15 +152,10 @@ def _box(model: AffineModel, fac: BoxFactors, pts: Points, lo: np.ndarray, hi: n
         if boxes >= max_boxes:
             return "open", None, boxes
         _, _, c, h, sh = heapq.heappop(heap)
-        weight = np.where(h > 0, np.nan_to_num(sh), 0.0)
-        i = int(np.argmax(weight)) if np.any(weight > 0) else int(np.argmax(np.where(hi > lo, h / span, -1.0)))
+        i, h1, children = halve(c, h, sh, np.where(hi > lo, h / span, -1.0))
         if h[i] <= 0.0:
             return "open", None, boxes
-        h1 = h.copy()
-        h1[i] /= 2.0
-        for sgn in (-1.0, 1.0):
-            c1 = c.copy()
-            c1[i] += sgn * h1[i]
+        for c1 in children:
             margin, share = examine(c1, h1)
             boxes += 1
             if margin > 0:
