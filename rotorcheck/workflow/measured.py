@@ -393,7 +393,10 @@ def healthy_reference(runs: list[MeasuredRun], exclude: np.ndarray | None = None
                                 f"the {k} healthy sweeps are repeats of one state (each within {thr:.4g} of the "
                                 f"others' mean in chi-square, the largest {dist.max():.4g}): their mean is the "
                                 "healthy FRF")
-    pair = np.array([[chi2(a, b)[0] if i != j else 0.0 for j, b in enumerate(ests)] for i, a in enumerate(ests)])
+    pair = np.zeros((k, k))  # symmetric: each pair once
+    for i in range(k):
+        for j in range(i + 1, k):
+            pair[i, j] = pair[j, i] = chi2(ests[i], ests[j])[0]
     central = int(np.argmin([np.median(np.delete(row, i)) for i, row in enumerate(pair)]))
     note = (f"the {k} healthy sweeps differ beyond their noise ({int(np.sum(dist > thr))} of them from the others' "
             f"mean: chi-square up to {dist.max():.4g} against {thr:.4g} at {REPEAT_LEVEL:g}; drift between them): a "
