@@ -23,6 +23,8 @@ from bench.detection_limit import _inside, sweep_run
 from bench.detection_power import _open_crack
 from bench.truth_variants import VARIANTS, nominal, truth_variant
 from rotorcheck import workflow
+from rotorcheck.workflow.detectors.base import DetectorSettings
+from rotorcheck.workflow.detectors.registry import make_detector
 
 LOSSES = (0.02, 0.05)
 DEPTHS = (0.20,)
@@ -34,7 +36,10 @@ def _baseline(truth: Any, nom: Any, speed: float, seed: int) -> Any:
 
 
 def _called(nom: Any, base: Any, run: Any) -> bool:
-    return workflow.detect(nom, base, run).verdict.verdict == "damage"
+    """The verdict of the product's default detector on ``run`` (the verdict alone: what follows it, the
+    certificates and the diagnosis, does not change it)."""
+    detector = make_detector(nom, base, None, DetectorSettings(verdict_only=True))
+    return detector.detect(run).verdict.verdict == "damage"
 
 
 def run_variant(name: str, n_healthy: int, n_cracks: int, log: Any, losses: tuple[float, ...] = LOSSES,
