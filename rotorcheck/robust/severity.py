@@ -39,10 +39,6 @@ SEVERITY_RULE = ("one severity and one set of benign parameter values (real, in 
                  "excluded when every one of its slices is excluded.")
 
 
-#: points tried first on every box (the ones that excluded boxes most often)
-EARLY = 6
-
-
 @dataclass(frozen=True)
 class SeverityInterval:
     """What :func:`severity_interval` certifies about one hypothesis."""
@@ -112,32 +108,16 @@ def _box(model: AffineModel, fac: BoxFactors, pts: Points, lo: np.ndarray, hi: n
     every point; the sub-box closest to exclusion is split first (along the parameter with the largest
     share of that point's bound); "open": the budget ran out first."""
 
-    split: dict[tuple[int, ...], tuple[tuple[np.ndarray, Points], tuple[np.ndarray, Points]]] = {}
-
-    def parts(first: tuple[int, ...]) -> tuple[tuple[np.ndarray, Points], tuple[np.ndarray, Points]]:
-        """The points ``first`` and the rest, each as an index array and as points (made once per set)."""
-        if first not in split:
-            a = np.array(first, dtype=int)
-            b = np.setdiff1d(np.arange(pts.size), a)
-            split[first] = ((a, pts.take(a)), (b, pts.take(b)))
-        return split[first]
-
     def examine(c: np.ndarray, h: np.ndarray) -> tuple[float, np.ndarray | None]:
-        # the points that excluded boxes most often first (most boxes fall to one of them), then the rest
-        found: list[tuple[float, bool, np.ndarray]] = []  # per part: largest margin, not all explained, its share
-        for idx, sub in parts(tuple(k for k, _ in used.most_common(EARLY))):
-            if not idx.size:
-                continue
-            ok, margins, shares, _ = examine_points(model, fac, sub, c, h)
-            k = int(np.argmax(margins))
-            if margins[k] > 0:
-                used[int(idx[k])] += 1
-                return float(margins[k]), shares[k]
-            found.append((float(margins[k]), not bool(np.all(ok)), shares[k]))
-        if not any(open_ for _, open_, _ in found):
+        """The box's largest margin and that point's shares; ``(-inf, None)`` when its centre explains every point."""
+        ok, margins, shares, _ = examine_points(model, fac, pts, c, h)
+        k = int(np.argmax(margins))
+        if margins[k] > 0:
+            used[k] += 1
+            return float(margins[k]), shares[k]
+        if np.all(ok):
             return -np.inf, None
-        top = max(found, key=lambda t: (t[0], t[1]))  # ties: the part not all explained, then the first
-        return top[0], top[2]
+        return float(margins[k]), shares[k]
 
     c0, h0 = (lo + hi) / 2.0, (hi - lo) / 2.0
     margin, share = examine(c0, h0)
@@ -210,7 +190,7 @@ def severity_interval(model: AffineModel, pts: Points, lo: np.ndarray, hi: np.nd
     sub-boxes per slice. ``witnessed_at_lo``: the caller holds a witness with the parameter at ``lo[index]``
     (e.g. the healthy hypothesis's): the lower end is ``lo[index]``, attained, without a search.
     ``earlier``: this hypothesis's result with a smaller budget on the same box, points and slices (its
-    excluded slices stay excluded: they are not examined again; its excluding points are tried first)."""
+    excluded slices stay excluded: they are not examined again; its excluding points stay named)."""
     lo, hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
     used: Counter[int] = Counter()
     cache: dict[tuple[float, float], str] = {}

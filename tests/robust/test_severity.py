@@ -169,3 +169,18 @@ def test_ratio_jacobian_matches_central_differences(symmetric: bool) -> None:
         e[i] = 1e-6
         fd[:, i] = (point_ratios(model, pts, theta + e) - point_ratios(model, pts, theta - e)) / 2e-6
     assert np.max(np.abs(J - fd)) <= 1e-4 * np.max(np.abs(fd))
+
+
+
+def test_a_refinement_from_an_earlier_pass_ends_where_a_fresh_run_does() -> None:
+    """A refinement that starts from an earlier, coarser pass (its excluded slices not examined again) certifies
+    the same ends as a fresh run at the refined budget and width, and the truth stays inside."""
+    pts, _ = _points(0.005)
+    model = _model(2)
+    lo, hi = np.array([-0.02, 0.0]), np.array([0.02, 0.8])
+    coarse = severity_interval(model, pts, lo, hi, 1, tol=0.02, slices=16, max_boxes=8)
+    refined = severity_interval(model, pts, lo, hi, 1, tol=0.01, slices=16, max_boxes=48, earlier=coarse)
+    fresh = severity_interval(model, pts, lo, hi, 1, tol=0.01, slices=16, max_boxes=48)
+    assert (refined.lower, refined.upper) == (fresh.lower, fresh.upper)
+    assert refined.lower <= 0.30 <= refined.upper
+    assert refined.boxes <= fresh.boxes
