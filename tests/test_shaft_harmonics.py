@@ -147,7 +147,7 @@ def _validate_detect(rig: Path, healthy: Path, repeat: Path):  # type: ignore[no
 def test_grid_on_1x_flagged_and_a_healthy_repeat_stays_healthy(unbalanced_rig: tuple[Path, Path, Path],
                                                                 monkeypatch: pytest.MonkeyPatch) -> None:
     """25 Hz (1X), 50 Hz (2X), 75 Hz (3X) and 97.5-102.5 Hz (4X, r = f/32 >= 3.05 Hz) are flagged in validate and
-    detect; the repeat is healthy with no certified point and no benign parameter at a range edge, and the
+    detect; the repeat is healthy with no certified point and no benign parameter pushed beyond its range, and the
     warning names 25 Hz as 1X. Without the flags (orders = 0) the same repeat is called damage with 25 Hz
     certified beyond every benign change: the unbalance response, not the FRF."""
     v, o = _validate_detect(*unbalanced_rig)

@@ -61,7 +61,7 @@ def fmt_p(p: float | None) -> str:
 
 
 def fmt_interval(lo: float, hi: float, fmt: str = "+.4g") -> str:
-    """"[lo, hi]", or in words where it is not defined (a parameter at its range edge: NaN ends)."""
+    """"[lo, hi]", or in words where it is not defined (a parameter held at its range end: NaN ends)."""
     a, b = float(lo), float(hi)
     if not (np.isfinite(a) and np.isfinite(b)):
         return "not defined (at the range edge)"
@@ -143,13 +143,13 @@ def conclusion(report: DetectionReport) -> str:
 
 
 def benign_rows(report: DetectionReport) -> list[list[str]]:
-    """The benign parameters fitted (name, estimate, 95 % interval, unit, at range edge), as every rendering
-    shows them."""
+    """The benign parameters fitted (name, estimate, 95 % interval, unit, beyond its range: at a range end with the
+    data pushing beyond it, chi2 >= 3.84), as every rendering shows them."""
     return [[b["name"], f"{b['estimate']:+.4g}", fmt_interval(*b["interval"]), b["unit"],
              "yes" if b.get("at_range_edge") else "no"] for b in (report.benign_parameters or [])]
 
 
-BENIGN_HEADER = ("benign parameter", "estimate", "95 % interval", "unit", "at range edge")
+BENIGN_HEADER = ("benign parameter", "estimate", "95 % interval", "unit", "pushed beyond its range")
 
 
 def method_paragraphs(report: DetectionReport, ranges: Callable[[list[float]], str]) -> list[str]:

@@ -57,6 +57,9 @@ class ModelForm:
 
 #: a model-form coefficient is kept within this many of its prior scales (the penalty does the rest)
 FORM_BOX = 6.0
+#: chi2 gain (one dof, 95 %) from freeing a benign parameter beyond its range end above which the data are said
+#: to push it beyond the range (:attr:`JointResult.theta_beyond_range`)
+EDGE_EVIDENCE = 3.841458820694124
 
 
 @dataclass(frozen=True)
@@ -101,11 +104,12 @@ def linearized_se(J: np.ndarray, free: np.ndarray) -> np.ndarray:
     conditioned inverse), inf where held (at a bound). Multiply by ``sqrt(chi2 / dof)`` for residuals whitened
     by an unknown scale."""
     se = np.full(J.shape[1], np.inf)
-    if np.any(free):
-        Jf = J[:, free]
-        size = np.maximum(np.linalg.norm(Jf, axis=0), 1e-300)
+    seen = free & (np.linalg.norm(J, axis=0) > 0)  # a column the data do not see leaves its unknown unbounded
+    if np.any(seen):
+        Jf = J[:, seen]
+        size = np.linalg.norm(Jf, axis=0)
         cov = np.linalg.pinv((Jf / size).T @ (Jf / size), rcond=1e-12) / np.outer(size, size)
-        se[free] = np.sqrt(np.maximum(np.diag(cov), 0.0))
+        se[seen] = np.sqrt(np.maximum(np.diag(cov), 0.0))
     return se
 
 
@@ -139,6 +143,17 @@ class JointResult:
     model_error: np.ndarray  # (n,) m/N: the model-error allowance kappa m_k carried in H0 (sd per point)
     notes: list[str] = field(default_factory=list)
     benign: BenignModel | None = None  # the benign change the test allowed (None: none)
+    #: (p,) chi2 the linearized H0 fit would gain were each parameter at a range end free beyond it (0 inside): the
+    #: data's evidence that the change exceeds that range (:data:`EDGE_EVIDENCE` and more: 95 %, one dof)
+    theta_edge_chi2: np.ndarray | None = None
+
+    @property
+    def theta_beyond_range(self) -> np.ndarray:
+        """(p,) bool: parameters at a range end that the data would move beyond it (:attr:`theta_edge_chi2` >=
+        :data:`EDGE_EVIDENCE`); one at an end without that evidence is merely not fixed by the data."""
+        if self.theta_edge_chi2 is None:
+            return np.asarray(self.theta_at_bound, dtype=bool)
+        return np.asarray(self.theta_at_bound, dtype=bool) & (np.asarray(self.theta_edge_chi2) >= EDGE_EVIDENCE)
 
     @property
     def remaining(self) -> np.ndarray:
@@ -417,12 +432,37 @@ def joint_test(residual: np.ndarray, var_total: np.ndarray, signatures: np.ndarr
     thr = float(np.quantile(null, 1.0 - false_alarm))
     detectable = np.where(ok, (np.sqrt(thr) + POWER_Z) / np.where(ok, nrm, 1.0), np.inf)
     best = int(np.argmax(t_el)) if np.any(t_el > 0) else int(np.argmin(detectable))
-    # every free nuisance column (benign parameters, learned and model-form coefficients, the prior's rows in J):
-    # a parameter confounded with the model-form directions is as uncertain as they leave it
-    theta_se = linearized_se(J, ~at_bound)[:p]
+    edge_chi2 = np.zeros(p)
     if np.any(at_bound[:p]) and benign is not None:
-        names = ", ".join(n for n, b in zip(benign.names, at_bound[:p]) if b)
-        notes.append(f"benign parameters at the edge of their range: {names} (the change may exceed the range)")
+        # each parameter at an end freed beyond it (three spans), the rest as they are: the linearized chi2 it gains
+        span = np.maximum(hi - lo, 1e-300)
+        base = optimize.lsq_linear(J, res0, bounds=(lo - theta, hi - theta), method="bvls")
+        chi2_base = min(chi2_h0, float(base.fun @ base.fun))
+        for i in np.flatnonzero(at_bound[:p]):
+            lb, ub = lo - theta, hi - theta
+            if hi[i] - theta[i] <= 1e-6 * span[i]:
+                ub[i] = 3.0 * span[i]
+            else:
+                lb[i] = -3.0 * span[i]
+            freed = optimize.lsq_linear(J, res0, bounds=(lb, ub), method="bvls")
+            edge_chi2[i] = max(0.0, chi2_base - float(freed.fun @ freed.fun))
+        beyond = at_bound[:p] & (edge_chi2 >= EDGE_EVIDENCE)
+        if np.any(beyond):
+            names = ", ".join(f"{n} (chi2 {g:.3g} lower beyond it)" for n, b, g in zip(benign.names, beyond, edge_chi2)
+                              if b)
+            notes.append(f"benign parameters the data push beyond their range: {names}; the change may exceed the "
+                         "range")
+    loose = np.zeros(lo.size, dtype=bool)
+    loose[:p] = at_bound[:p] & (edge_chi2 < EDGE_EVIDENCE)
+    # the standard errors of the free parameters and of those at an end the data do not fix (as if free: how far
+    # the data leave them), over every free nuisance column (benign parameters, learned and model-form coefficients,
+    # the prior's rows in J): a parameter confounded with the model-form directions is as uncertain as they leave it
+    theta_se = linearized_se(J, ~at_bound | loose)[:p]
+    if benign is not None:
+        if np.any(loose):
+            names = ", ".join(n for n, b in zip(benign.names, loose[:p]) if b)
+            notes.append(f"benign parameters at the edge of their range that the data do not fix (freeing them beyond "
+                         f"it lowers chi2 by less than {EDGE_EVIDENCE:.3g}, 95 %): {names}")
     return JointResult(
         statistic=stat, threshold=thr, p_value=p_value, false_alarm=false_alarm,
         damage=bool(p_value < false_alarm), elements=tuple(int(e) for e in elements), t_element=t_el,
@@ -432,5 +472,5 @@ def joint_test(residual: np.ndarray, var_total: np.ndarray, signatures: np.ndarr
         learned=q, kappa=kappa, n_points=n_used, unexplained=r - model_ri(theta),
         point_statistic=res0[: r.size] ** 2 + res0[r.size:2 * r.size] ** 2,
         point_threshold=float(-2.0 * np.log(-np.expm1(np.log1p(-false_alarm) / max(n_used, 1)))),
-        model_error=allowance, notes=notes, benign=benign,
+        model_error=allowance, notes=notes, benign=benign, theta_edge_chi2=edge_chi2,
     )

@@ -22,12 +22,15 @@ from rotorcheck.workflow.measured import MeasuredRun, frf_estimate, per_pair
 
 
 def benign_table(joint: JointResult, rig: RigConfig) -> list[dict[str, Any]]:
-    """The fitted benign parameters: {name, estimate, interval (95 %, linearized), unit, at_range_edge};
-    relative changes in percent, offsets in their unit."""
+    """The fitted benign parameters: {name, estimate, interval (95 %, linearized), unit, at_range_edge (the
+    estimate at a range end and the data pushing it beyond: :attr:`JointResult.theta_beyond_range`), edge_chi2
+    (that push, chi2 units; 0 inside the range)}; relative changes in percent, offsets in their unit."""
 
     params = {p.name: p for p in benign_parameters(rig)}
     out = []
-    for name, x, se, edge in zip(joint.theta_names, joint.theta, joint.theta_se, joint.theta_at_bound):
+    pushes = joint.theta_edge_chi2 if joint.theta_edge_chi2 is not None else np.zeros(len(joint.theta_names))
+    for name, x, se, edge, push in zip(joint.theta_names, joint.theta, joint.theta_se, joint.theta_beyond_range,
+                                       pushes):
         prm = params.get(name)
         factor = prm is None or prm.kind == "factor"
         scale, unit = (100.0, "%") if factor else (1.0, prm.unit if prm is not None else "")
@@ -35,7 +38,7 @@ def benign_table(joint: JointResult, rig: RigConfig) -> list[dict[str, Any]]:
         interval = [scale * (float(x) - half), scale * (float(x) + half)] if np.isfinite(half) else [
             float("nan"), float("nan")]
         out.append({"name": name, "estimate": scale * float(x), "interval": interval,
-                    "unit": unit, "at_range_edge": bool(edge)})
+                    "unit": unit, "at_range_edge": bool(edge), "edge_chi2": float(push)})
     return out
 
 

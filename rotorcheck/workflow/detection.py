@@ -490,7 +490,8 @@ def joint_summary(outcome: DetectionOutcome) -> str:
         parts = []
         for b in benign_table(j, outcome.rig):
             lo, hi = b["interval"]
-            iv = f" [{lo:+.3g}, {hi:+.3g}]" if np.isfinite(lo) and np.isfinite(hi) else " (range edge)"
+            iv = (" (at its range end, the data pushing beyond it)" if b["at_range_edge"] else
+                  f" [{lo:+.3g}, {hi:+.3g}]" if np.isfinite(lo) and np.isfinite(hi) else " (not fixed by the data)")
             parts.append(f"{b['name']} {b['estimate']:+.3g}{' ' if b['unit'] != '%' else ''}{b['unit']}{iv}")
         lines.append("benign change fitted: " + ", ".join(parts))
     c = outcome.beyond_benign

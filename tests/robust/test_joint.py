@@ -93,6 +93,33 @@ def test_bounded_nuisance_cannot_absorb_a_change_beyond_its_range() -> None:
     assert not joint_test(4.0 * B + _noise(rng, var), var, S, [1, 2], free).damage
 
 
+def test_a_parameter_at_its_range_end_is_beyond_it_only_when_the_data_push_it() -> None:
+    """Two benign directions, noiseless data: ``a`` drifted to 1.5x its range end, ``b`` along a direction the
+    data do not see (B_b = 0: any value fits), held at an end by a start there. The edge evidence of ``a`` is the
+    closed form ||(1.5 - 1) B_a||_W^2 minus what the other directions take, well above 3.84: beyond the range;
+    ``b``'s is 0: at the end but not beyond (its standard error infinite: nothing bounds it), and notes that say
+    which is which."""
+    rng = np.random.default_rng(11)
+    var = np.ones(N)
+    S = _signatures(rng, 2)
+    Ba = rng.standard_normal(N) + 1j * rng.standard_normal(N)
+    Ba = Ba * np.sqrt(400.0 / (2.0 * np.sum(np.abs(Ba) ** 2)))  # whitened squared norm (2 |B|^2 / var) 400 per unit a
+    Bb = np.zeros(N, dtype=complex)
+    benign = BenignModel(lambda t: t[0] * Ba + t[1] * Bb, np.array([-1.0, 0.0]), np.array([1.0, 1.0]), ("a", "b"),
+                         0.0, 1e-6)
+    res = joint_test(1.5 * Ba, var, S, [1, 2], benign)
+    assert res.theta_at_bound[0] and res.theta[0] == pytest.approx(1.0)
+    # what freeing a removes: the part of 0.5 B_a the crack-free nuisance could not take (here all of it)
+    assert res.theta_edge_chi2 is not None
+    assert res.theta_edge_chi2[0] == pytest.approx(0.25 * 400.0, rel=1e-6)
+    assert res.theta_beyond_range[0]
+    # b: at an end (it starts there: its range is [0, 1]) with no evidence beyond it
+    assert res.theta_at_bound[1] and res.theta_edge_chi2[1] == pytest.approx(0.0, abs=1e-9)
+    assert not res.theta_beyond_range[1] and res.theta_se[1] == np.inf
+    assert any("push beyond their range: a" in n for n in res.notes)
+    assert any("do not fix" in n and n.endswith(": b") for n in res.notes)
+
+
 def test_a_change_the_benign_model_does_not_predict_is_no_excuse_for_itself() -> None:
     """With a model-error allowance (kappa = 2.5), a crack-shaped change a s_1 on top of a benign change
     inside its range, noiseless: the evidence keeps growing nearly as a^2 (10.3, 33.3, 91.3 for a = 0.5,
