@@ -258,7 +258,7 @@ def detectability(
     # chooses which of them are reported (the threshold is that of the whole candidate set)
     # the model's own FRF (stated noise) is re-solved; a measured healthy FRF anchors its fitted modes
     els, S = crack_signatures(config, f, speed_rpm, th, candidates, pairs=multi, model_frf=model_frf,
-                              modal=model_frf is None)
+                              modal=model_frf is None, healthy_var=None if model_frf is not None else as_th(var_base))
     notes: list[str] = []
     wanted = set(els) if elements is None else set(elements)
     if elements is not None and not wanted <= set(els):

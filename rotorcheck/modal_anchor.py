@@ -33,6 +33,7 @@ import numpy as np
 
 from rotorcheck.fe.system import RPM_TO_RAD_S, MechanicalSystem
 from rotorcheck.lazy import lazy_module
+from rotorcheck.robust.affine import coupled_blocks
 
 optimize = lazy_module("scipy.optimize")
 linalg = lazy_module("scipy.linalg")
@@ -80,20 +81,45 @@ class FEModes:
     poles: np.ndarray
     residues: np.ndarray
     real: np.ndarray
+    plane: np.ndarray | None = None  # (m,) int: the uncoupled DOF set the mode lives on (None: one set)
+
+    def planes(self) -> np.ndarray:
+        """(m,) int: :attr:`plane`, zeros when the system is one coupled set."""
+        return np.zeros(self.poles.size, dtype=int) if self.plane is None else self.plane
 
 
 def fe_modes(system: MechanicalSystem, speed_rpm: float, dofs: Sequence[tuple[int, int]]) -> FEModes:
     """Every mode of ``system`` at ``speed_rpm`` and its residue at each (input DOF, output DOF) pair, from
-    the first-order state matrix with left and right eigenvectors (``H(s) = sum_r R_r / (s - lambda_r)``)."""
+    the first-order state matrix with left and right eigenvectors (``H(s) = sum_r R_r / (s - lambda_r)``).
+    Where no matrix couples two DOF sets (the bending planes of a rotor that does not spin) each set's modes
+    are its own (:attr:`FEModes.plane`): the x and y modes of an isotropic rotor share a pole but not a pair."""
     M, C, G, K = system.matrices(speed_rpm)
     D = C + speed_rpm * RPM_TO_RAD_S * G
+    blocks = coupled_blocks([M, D, K])
+    if len(blocks) > 1:
+        parts = []
+        for i, d in enumerate(blocks):
+            cut = np.ix_(d, d)
+            where = {int(g): k for k, g in enumerate(d)}
+            inside = [k for k, (a, b) in enumerate(dofs) if a in where and b in where]
+            sub = _modes(M[cut], D[cut], K[cut], [(where[a], where[b]) for a, b in (dofs[k] for k in inside)])
+            res = np.zeros((sub.poles.size, len(dofs)), dtype=complex)
+            res[:, inside] = sub.residues
+            parts.append((sub, res, np.full(sub.poles.size, i)))
+        return FEModes(np.concatenate([x.poles for x, _, _ in parts]), np.concatenate([r for _, r, _ in parts]),
+                       np.concatenate([x.real for x, _, _ in parts]), np.concatenate([k for _, _, k in parts]))
+    return _modes(M, D, K, dofs)
+
+
+def _modes(M: np.ndarray, D: np.ndarray, K: np.ndarray, dofs: Sequence[tuple[int, int]]) -> FEModes:
+    """:func:`fe_modes` of the second-order system ``M, D, K`` (n, n) for the (input, output) DOF pairs."""
     n = M.shape[0]
     Minv = np.linalg.inv(M)
     A = np.block([[np.zeros((n, n)), np.eye(n)], [-Minv @ K, -Minv @ D]])
     lam, wl, vr = linalg.eig(A, left=True, right=True)
     scale = np.einsum("ij,ij->j", wl.conj(), vr)
     B = np.zeros((2 * n, len(dofs)))
-    out = np.array([o for _, o in dofs])
+    out = np.array([o for _, o in dofs], dtype=int)
     for k, (i, _) in enumerate(dofs):
         B[n:, k] = Minv[:, i]
     res = vr[out, :].T * (wl.conj().T @ B) / scale[:, None]  # (2n, P)
@@ -127,17 +153,21 @@ def modal_frf(poles: np.ndarray, residues: np.ndarray, real: np.ndarray, omega: 
 
 
 def _merged(modes: FEModes, index: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The modes of ``index`` with repeated poles (:data:`REPEATED`) merged: (poles, residues summed, members
-    (m,) int: which merged mode each of ``index`` joined)."""
+    """The modes of ``index`` with repeated poles (:data:`REPEATED`) of one plane merged: (poles, residues summed,
+    members (m,) int: which merged mode each of ``index`` joined)."""
     poles: list[complex] = []
     res: list[np.ndarray] = []
+    plane: list[int] = []
+    where = modes.planes()
     member = np.empty(index.size, dtype=int)
     for k, i in enumerate(index):
         lam = modes.poles[i]
-        j = next((j for j, p in enumerate(poles) if abs(p - lam) <= REPEATED * abs(lam)), None)
+        j = next((j for j, p in enumerate(poles) if abs(p - lam) <= REPEATED * abs(lam) and plane[j] == where[i]),
+                 None)
         if j is None:
             poles.append(complex(lam))
             res.append(modes.residues[i].copy())
+            plane.append(int(where[i]))
             member[k] = len(poles) - 1
         else:
             res[j] = res[j] + modes.residues[i]
@@ -214,11 +244,14 @@ class ModalAnchor:
 
 
 def fit_anchor(system: MechanicalSystem, speed_rpm: float, dofs: Sequence[tuple[int, int]], freq_hz: np.ndarray,
-               healthy_frf: np.ndarray) -> ModalAnchor | None:
+               healthy_frf: np.ndarray, healthy_var: np.ndarray | None = None) -> ModalAnchor | None:
     """Fit the healthy FRF ``healthy_frf`` (f, P) m/N at ``freq_hz`` with the modes the model has inside the
     band: poles by nonlinear least squares from the model's, residues and a residual term per pair (a
     constant and a 1 / w^2 line) linear; the model's other modes fixed. None when no mode of the model is
-    visible inside the band or a pole would move more than :data:`MAX_POLE_MOVE`."""
+    visible inside the band, a pole would move more than :data:`MAX_POLE_MOVE` or the misfit exceeds
+    :data:`MAX_MISFIT`. With ``healthy_var`` (f, P) m^2/N^2, the variance of the healthy FRF at each point, the
+    pairs weigh by their signal to noise (each scaled by its rms noise, not its largest value) and the misfit is
+    what the fit leaves beyond that noise (:func:`_fit`): a quiet pair's noise is no model error."""
     f = np.asarray(freq_hz, dtype=float)
     w = 2.0 * np.pi * f
     T = np.asarray(healthy_frf, dtype=complex).reshape(f.size, len(dofs))
@@ -228,8 +261,9 @@ def fit_anchor(system: MechanicalSystem, speed_rpm: float, dofs: Sequence[tuple[
     inside = (fr >= 0.98 * f.min()) & (fr <= 1.02 * f.max()) & ~fe.real
     visible = inside & (peak > VISIBLE_PEAK * (peak[inside].max() if np.any(inside) else 0.0))
     # a repeated pole (x and y of an isotropic rotor) is one mode: all its members or none (its residues add)
+    plane = fe.planes()
     for i in np.flatnonzero(visible):
-        visible |= inside & (np.abs(fe.poles - fe.poles[i]) <= REPEATED * np.abs(fe.poles[i]))
+        visible |= inside & (np.abs(fe.poles - fe.poles[i]) <= REPEATED * np.abs(fe.poles[i])) & (plane == plane[i])
     if not np.any(visible) or f.size < 8:
         return None
     idx = np.flatnonzero(visible)
@@ -239,11 +273,14 @@ def fit_anchor(system: MechanicalSystem, speed_rpm: float, dofs: Sequence[tuple[
     g = modal_frf(fe.poles, fe.residues, fe.real, w)
     heard = np.max(np.abs(g), axis=0) > SILENT * np.max(np.abs(g))
     T = T * heard  # a pair the model says is silent is fitted as none (its data are noise)
+    noise = None if healthy_var is None else np.asarray(healthy_var, dtype=float).reshape(f.size, len(dofs)) * heard
     rest = ~visible
     fe_out = modal_frf(fe.poles[rest], fe.residues[rest], fe.real[rest], w)
+    # a mode the model says a pair does not hear (a y-plane mode at an x probe, at rest) gets no residue there
+    seen = np.abs(r0) > SILENT * np.maximum(np.max(np.abs(r0), axis=0, keepdims=True), 1e-300)
     pinned = np.zeros(lam0.size, dtype=bool)
     for _ in range(lam0.size):
-        lam, R, misfit, moved = _fit_split(lam0, fe_out, w, T, pinned)
+        lam, R, misfit, moved = _fit_split(lam0, fe_out, w, T, pinned, seen, noise)
         if not np.any(moved & ~pinned):
             if misfit > MAX_MISFIT:
                 return None
@@ -254,14 +291,15 @@ def fit_anchor(system: MechanicalSystem, speed_rpm: float, dofs: Sequence[tuple[
     return None
 
 
-def _fit_split(lam0: np.ndarray, fe_out: np.ndarray, w: np.ndarray, T: np.ndarray, pinned: np.ndarray
+def _fit_split(lam0: np.ndarray, fe_out: np.ndarray, w: np.ndarray, T: np.ndarray, pinned: np.ndarray,
+               seen: np.ndarray | None = None, noise: np.ndarray | None = None
                ) -> tuple[np.ndarray, np.ndarray, float, np.ndarray]:
     """:func:`_fit` from the model's poles, and when that leaves more than :data:`SPLIT_MISFIT` of the data,
     from starts that split each close pair of free poles (forward and backward whirl, within
     :data:`CLOSE_PAIR` of each other) symmetrically by each of :data:`SPLIT_STARTS`: started together, a pair
     stays together (the misfit is symmetric in the two), while the machine's may be split further (anisotropic
     supports; on the bearing-damper truth at 1000 rpm 54.39 / 54.96 Hz, the model's 3.5e-4 apart); the best."""
-    best = _fit(lam0, fe_out, w, T, pinned)
+    best = _fit(lam0, fe_out, w, T, pinned, seen=seen, noise=noise)
     if best[2] <= SPLIT_MISFIT:
         return best
     free = np.flatnonzero(~pinned)
@@ -275,22 +313,32 @@ def _fit_split(lam0: np.ndarray, fe_out: np.ndarray, w: np.ndarray, T: np.ndarra
             lo_i = lam0[i].imag <= lam0[j].imag
             start[i] = lam0[i].real + 1j * lam0[i].imag * (1.0 - (0.5 if lo_i else -0.5) * spread)
             start[j] = lam0[j].real + 1j * lam0[j].imag * (1.0 + (0.5 if lo_i else -0.5) * spread)
-        trial = _fit(lam0, fe_out, w, T, pinned, start)
+        trial = _fit(lam0, fe_out, w, T, pinned, start, seen, noise)
         if trial[2] < best[2]:
             best = trial
     return best
 
 
 def _fit(lam0: np.ndarray, fe_out: np.ndarray, w: np.ndarray, T: np.ndarray, pinned: np.ndarray,
-         start: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, float, np.ndarray]:
+         start: np.ndarray | None = None, seen: np.ndarray | None = None, noise: np.ndarray | None = None
+         ) -> tuple[np.ndarray, np.ndarray, float, np.ndarray]:
     """One fit of :func:`fit_anchor`: poles from ``start`` (default the model's ``lam0`` (k,, merged), around
     which they are bounded), those of ``pinned`` held at the model's, the model's other modes ``fe_out`` (f, P)
-    fixed: (poles, residues, misfit, moved (k,) bool: a pole at its bound, :data:`MAX_POLE_MOVE` from the
-    model's, or at no damping)."""
+    fixed; ``seen`` (k, P) bool the modes each pair hears (default all; the others' residues there are 0):
+    (poles, residues, misfit, moved (k,) bool: a pole at its bound, :data:`MAX_POLE_MOVE` from the model's, or
+    at no damping). The misfit: the residual's norm relative to the data's, each pair scaled to unit size (its
+    largest value); with ``noise`` (f, P) m^2/N^2 each pair scaled by its rms noise instead and the residual's
+    squared norm less what the noise leaves after the fit (its variance times the share of the real residuals the
+    pair's linear coefficients do not absorb), floored at 0: the model's error, not the quiet pairs' noise."""
     m = lam0.size
     free = ~pinned
     target = T - fe_out
+    use = np.ones((m, T.shape[1]), dtype=bool) if seen is None else np.asarray(seen, dtype=bool)
+    every = bool(np.all(use))
     scale = np.maximum(np.max(np.abs(target), axis=0), 1e-300)  # each pair to unit size: pairs weigh alike
+    if noise is not None:
+        rms = np.sqrt(np.mean(noise, axis=0))
+        scale = np.where(rms > 0, rms, scale)  # each pair by its noise: pairs weigh by their signal to noise
 
     def poles(x: np.ndarray) -> np.ndarray:
         lam = lam0.copy()
@@ -306,7 +354,13 @@ def _fit(lam0: np.ndarray, fe_out: np.ndarray, w: np.ndarray, T: np.ndarray, pin
         basis = np.column_stack([a, b, np.ones_like(w), 1.0 / w**2])
         A = np.vstack([basis.real, basis.imag])
         Y = np.vstack([(target / scale).real, (target / scale).imag])
-        coef = np.linalg.lstsq(A, Y, rcond=None)[0]
+        if every:
+            coef = np.linalg.lstsq(A, Y, rcond=None)[0]
+        else:  # pair by pair, with the modes it hears
+            coef = np.zeros((A.shape[1], Y.shape[1]))
+            for q in range(Y.shape[1]):
+                cols = np.r_[np.flatnonzero(use[:, q]), np.flatnonzero(use[:, q]) + m, 2 * m, 2 * m + 1]
+                coef[cols, q] = np.linalg.lstsq(A[:, cols], Y[:, q], rcond=None)[0]
         return lam, coef, (Y - A @ coef).ravel()
 
     lf = lam0[free]
@@ -329,7 +383,15 @@ def _fit(lam0: np.ndarray, fe_out: np.ndarray, w: np.ndarray, T: np.ndarray, pin
     lam, coef, left = solve(x)
     R = (coef[:m] + 1j * coef[m:2 * m]) * scale
     size_T = float(np.linalg.norm(np.vstack([(T / scale).real, (T / scale).imag])))
-    misfit = float(np.linalg.norm(left)) / size_T if size_T > 0 else 0.0
+    left2 = float(left @ left)
+    if noise is not None:
+        # the noise's expected share of the residual: its variance (both parts) scaled as the data, times the real
+        # residuals' share the pair's linear coefficients (residues of the modes it hears, two residual terms) leave
+        n_real = 2 * w.size
+        kept = np.maximum(0.0, 1.0 - (2 * use.sum(axis=0) + 2) / n_real)
+        share = np.divide(np.sum(noise, axis=0), scale**2, out=np.zeros(scale.size), where=scale > 1e-150)
+        left2 = max(0.0, left2 - float(np.sum(share * kept)))
+    misfit = float(np.sqrt(left2)) / size_T if size_T > 0 else 0.0
     return lam, R, misfit, moved
 
 
@@ -350,6 +412,8 @@ def sensitivity(anchor: ModalAnchor, changed: FEModes, step: float) -> ModalSens
     base = anchor.fe
     # one to one, the least total move (close modes, 172.72 and 172.78 Hz at 1000 rpm, must not both follow one)
     dist = np.abs(changed.poles[:, None] - base.poles[None, :])
+    # a mode follows one of its own plane (x and y modes of an isotropic rotor at rest share their poles)
+    dist = np.where(changed.planes()[:, None] == base.planes()[None, :], dist, 1e6 * (dist.max() + 1.0))
     rows, cols = optimize.linear_sum_assignment(dist)
     near = np.full(changed.poles.size, -1, dtype=int)
     near[rows] = cols

@@ -105,19 +105,22 @@ _ANCHORS: dict[tuple[Any, ...], ModalAnchor | None] = {}
 
 
 def modal_anchor(config: RigConfig, freq_hz: np.ndarray, speed_rpm: float, healthy_frf: np.ndarray,
-                 pairs: Sequence[ChannelPair] | None = None) -> ModalAnchor | None:
+                 pairs: Sequence[ChannelPair] | None = None, healthy_var: np.ndarray | None = None
+                 ) -> ModalAnchor | None:
     """The healthy FRF's modal model (:func:`rotorcheck.modal_anchor.fit_anchor`) with the rig's modes as the
-    start; ``healthy_frf`` (f,) or (f, P) m/N (stacked pair after pair is read too). None when the fit is
-    refused (the caller then anchors the model's own relative change). Kept for equal arguments."""
+    start; ``healthy_frf`` (f,) or (f, P) m/N (stacked pair after pair is read too), ``healthy_var`` its variance
+    (same shape, m^2/N^2; the misfit is then judged beyond the noise). None when the fit is refused (the caller
+    then anchors the model's own relative change). Kept for equal arguments."""
     f = np.asarray(freq_hz, dtype=float)
     P = 1 if not pairs else len(pairs)
     th = unstacked(np.asarray(healthy_frf, dtype=complex), (f.size, P))
+    vh = None if healthy_var is None else unstacked(np.asarray(healthy_var, dtype=float), (f.size, P))
     base = _frf_key(config, f, speed_rpm, pairs)
-    key = None if base is None else (*base, th.tobytes())
+    key = None if base is None else (*base, th.tobytes(), None if vh is None else vh.tobytes())
     if key is not None and key in _ANCHORS:
         return _ANCHORS[key]
     system = build_system(config)
-    out = fit_anchor(system, speed_rpm, _dofs(system, config, pairs), f, th)
+    out = fit_anchor(system, speed_rpm, _dofs(system, config, pairs), f, th, vh)
     if key is not None:
         _ANCHORS[key] = out
         _bounded(_ANCHORS, 32)
@@ -191,18 +194,19 @@ def candidate_elements(config: RigConfig) -> tuple[int, ...]:
 def crack_signatures(config: RigConfig, freq_hz: np.ndarray, speed_rpm: float, healthy_frf: np.ndarray,
                      elements: Sequence[int] | None = None, loss: float = SIGNATURE_LOSS,
                      pairs: Sequence[ChannelPair] | None = None, model_frf: np.ndarray | None = None,
-                     modal: bool = True) -> tuple[tuple[int, ...], np.ndarray]:
+                     modal: bool = True, healthy_var: np.ndarray | None = None) -> tuple[tuple[int, ...], np.ndarray]:
     """``(elements, S)``: S (n_e, f) complex, the FRF change per unit stiffness loss (m/N per 1) of
     each element, anchored at ``healthy_frf``: with ``modal`` (default) the healthy FRF's fitted modes moved
     by the model's sensitivities (:mod:`rotorcheck.modal_anchor`), else (or when that fit is refused) the
     model re-solved at ``loss`` as a relative change; with ``pairs`` (``healthy_frf`` (f, P)) each row is
     stacked over the pairs (P f,), pair after pair. ``model_frf``: the model's :func:`io_frf` at these
-    arguments when the caller has it (else solved here)."""
+    arguments when the caller has it (else solved here); ``healthy_var``: the healthy FRF's variance for the
+    anchor's fit (:func:`modal_anchor`)."""
     f = np.asarray(freq_hz, dtype=float)
     els = tuple(elements) if elements is not None else candidate_elements(config)
     g0 = model_frf if model_frf is not None else io_frf(config, f, speed_rpm, pairs)
     th = unstacked(healthy_frf, g0.shape)
-    anchor = modal_anchor(config, f, speed_rpm, th, pairs) if modal else None
+    anchor = modal_anchor(config, f, speed_rpm, th, pairs, healthy_var) if modal else None
 
     def signature(e: int) -> np.ndarray:
         if anchor is not None:
@@ -254,17 +258,19 @@ class BenignPrediction:
 
 def benign_prediction(config: RigConfig, freq_hz: np.ndarray, speed_rpm: float, healthy_frf: np.ndarray,
                       parameters: Sequence[BenignParameter] | None = None,
-                      pairs: Sequence[ChannelPair] | None = None, modal: bool = True) -> BenignPrediction:
+                      pairs: Sequence[ChannelPair] | None = None, modal: bool = True,
+                      healthy_var: np.ndarray | None = None) -> BenignPrediction:
     """The model's benign change around ``config`` at ``speed_rpm``, anchored at ``healthy_frf``: with
     ``modal`` (default) the healthy FRF's fitted modes moved by the model's sensitivities,
     ``g_s g_a (T_h + dT(theta)) - T_h`` (:mod:`rotorcheck.modal_anchor`); else (or when that fit is refused)
     ``T_h (g_s g_a G(theta) / G - 1)`` with the model re-solved at ``theta``; gains multiply; with ``pairs``
-    (``healthy_frf`` (f, P)) stacked over the pairs (P f,)."""
+    (``healthy_frf`` (f, P)) stacked over the pairs (P f,); ``healthy_var``: the healthy FRF's variance for the
+    anchor's fit (:func:`modal_anchor`)."""
     f = np.asarray(freq_hz, dtype=float)
     params = tuple(parameters) if parameters is not None else benign_parameters(config)
     g0 = io_frf(config, f, speed_rpm, pairs)
     th = unstacked(healthy_frf, g0.shape)
-    anchor = modal_anchor(config, f, speed_rpm, th, pairs) if modal else None
+    anchor = modal_anchor(config, f, speed_rpm, th, pairs, healthy_var) if modal else None
     if anchor is not None:
         modal_prediction = _modal_benign(anchor, config, speed_rpm, th, params, pairs)
         if modal_prediction is not None:

@@ -193,3 +193,118 @@ def test_the_bearing_damper_machine_at_speed_is_fitted_with_its_whirl_pairs_spli
     monkeypatch.setattr(ma, "SPLIT_STARTS", ())
     stuck = fit_anchor(sysm, 1000.0, _dofs(rig), f, T)
     assert stuck is not None and stuck.misfit > 5e-3
+
+
+def _xy_dofs(cfg: RigConfig) -> list[tuple[int, int]]:
+    """Force at station 8 in x and in y, probes at stations 6 and 2 in x and y: every output against every input."""
+    s = build_system(cfg)
+    return [(s.dof(8, a, None), s.dof(st, b, None)) for a in ("x", "y") for st in (6, 2) for b in ("x", "y")]
+
+
+def _direct_frf(cfg: RigConfig, dofs: list[tuple[int, int]]) -> np.ndarray:
+    """(f, P) m/N: the receptance of each (input, output) DOF pair at rest by a direct solve at every frequency."""
+    M, C, _, K = build_system(cfg).matrices(0.0)
+    return np.array([[np.linalg.solve(K - x**2 * M + 1j * x * C, np.eye(K.shape[0])[:, a])[b] for a, b in dofs]
+                     for x in W])
+
+
+def _aniso(cfg: RigConfig, factor: float) -> RigConfig:
+    """The rig with every bearing's y stiffness ``factor`` times its x stiffness (the planes' modes apart)."""
+    bearings = [b.model_copy(update={"kyy": factor * b.kxx}) for b in cfg.bearings]
+    return cfg.model_copy(update={"bearings": bearings})
+
+
+def test_modes_plane_by_plane_are_the_whole_systems(rig: RigConfig) -> None:
+    """At rest the planes are uncoupled and each plane's modes are its own (FEModes.plane): with the planes apart
+    (y bearings 1.3x stiffer: no repeated pole) they equal the whole system's eigen-decomposition (a second route)
+    pole by pole and residue by residue; with the isotropic rig every mode is heard only at its own plane's pairs and
+    the modes sum to the receptance of every pair (the cross pairs' zero included)."""
+    from rotorcheck.fe.system import RPM_TO_RAD_S
+    from rotorcheck.modal_anchor import _modes
+
+    aniso = _aniso(rig, 1.3)
+    system = build_system(aniso)
+    dofs = _xy_dofs(aniso)
+    planes = fe_modes(system, 0.0, dofs)
+    assert planes.plane is not None and set(planes.plane.tolist()) == {0, 1}
+    M, C, G, K = system.matrices(0.0)
+    whole = _modes(M, C + 0.0 * RPM_TO_RAD_S * G, K, dofs)
+    assert planes.poles.size == whole.poles.size
+    for p in planes.poles:
+        assert np.min(np.abs(whole.poles - p)) <= 1e-9 * abs(p)
+        # modes the two planes share (insensitive to the bearings) are one repeated pole of the whole system, whose
+        # residue is the block's: compare the residues summed over a pole
+        mine = np.abs(planes.poles - p) <= 1e-6 * abs(p)
+        theirs = np.abs(whole.poles - p) <= 1e-6 * abs(p)
+        a, b = planes.residues[mine].sum(axis=0), whole.residues[theirs].sum(axis=0)
+        np.testing.assert_allclose(a, b, rtol=1e-6, atol=1e-6 * np.abs(b).max())
+    iso = fe_modes(build_system(rig), 0.0, dofs)
+    assert iso.plane is not None
+    for q in range(len(dofs)):
+        heard = np.flatnonzero(np.abs(iso.residues[:, q]) > 0)
+        assert heard.size == 0 or len(set(iso.plane[heard].tolist())) == 1
+    direct = _direct_frf(rig, dofs)
+    h = modal_frf(iso.poles, iso.residues, iso.real, W)
+    assert np.max(np.abs(h - direct)) < 1e-6 * np.max(np.abs(direct))
+
+
+def test_xy_probes_on_a_machine_whose_planes_differ_are_fitted_plane_by_plane(rig: RigConfig) -> None:
+    """The isotropic model against x/y data of a machine whose y bearings are 2 % stiffer (its x and y modes
+    apart): the modal fit keeps x and y modes apart, one pole per plane near each of the machine's, and explains
+    the data to 1e-3 (one pole shared by both planes, as the model's repeated pole, left 100 % of it)."""
+    dofs = _xy_dofs(rig)
+    truth = _aniso(rig, 1.02)
+    anchor = fit_anchor(build_system(rig), 0.0, dofs, F, _direct_frf(truth, dofs))
+    assert anchor is not None and anchor.misfit < 1e-3
+    true_poles = fe_modes(build_system(truth), 0.0, dofs).poles
+    inside = true_poles[(true_poles.imag > W.min()) & (true_poles.imag < W.max())]
+    assert anchor.poles.size == inside.size == 6  # 3 modes in the band, per plane
+    for p in inside:
+        assert np.min(np.abs(anchor.poles - p)) < 1e-4 * abs(p)
+
+
+def test_a_quiet_pairs_noise_is_no_model_error_but_a_model_error_stays_one(rig: RigConfig) -> None:
+    """x/y data of a machine whose planes differ (y bearings 2 % stiffer), with noise of one rms level at every
+    pair, so that the quiet station-2 pairs are noisy relative to their size. Without the variance the fit's misfit
+    is that noise (above MAX_MISFIT: refused); with it (a second route: Monte Carlo noise of known variance) the
+    misfit is what lies beyond the noise: about 0, accepted, and the poles within 0.3 % of the machine's. A real
+    model error (a mode the model lacks, ten noise levels at its peak: what fitted poles and residues cannot absorb)
+    keeps a misfit well above that with the variance given."""
+    from rotorcheck.modal_anchor import MAX_MISFIT
+
+    dofs = _xy_dofs(rig)
+    machine = _aniso(rig, 1.02)
+    clean = _direct_frf(machine, dofs)
+    rng = np.random.default_rng(3)
+    sigma = 0.03 * np.max(np.abs(clean[:, 2]))  # 3 % of the station-2 x pair's largest value, at every pair
+    var = np.full(clean.shape, sigma**2)
+    noisy = clean + sigma / np.sqrt(2.0) * (rng.standard_normal(clean.shape) + 1j * rng.standard_normal(clean.shape))
+    system = build_system(rig)
+    import rotorcheck.modal_anchor as ma
+
+    keep = ma.MAX_MISFIT
+    ma.MAX_MISFIT = 10.0  # to read the misfit either way
+    try:
+        plain = fit_anchor(system, 0.0, dofs, F, noisy)
+        aware = fit_anchor(system, 0.0, dofs, F, noisy, var)
+    finally:
+        ma.MAX_MISFIT = keep
+    assert plain is not None and aware is not None
+    assert plain.misfit > MAX_MISFIT  # the noise read as misfit
+    assert aware.misfit < 0.1 * MAX_MISFIT
+    assert fit_anchor(system, 0.0, dofs, F, noisy, var) is not None
+    true_poles = fe_modes(build_system(machine), 0.0, dofs).poles
+    for p in aware.poles:
+        assert np.min(np.abs(true_poles - p)) < 3e-3 * abs(p)
+    # a model error beyond the noise: a mode the model lacks (300 Hz, 2 % damping) at every pair it hears, as large
+    # as the noise at its peak at the quiet pairs: the misfit with the variance is about its share of the data
+    lam = 2.0 * np.pi * 300.0 * (-0.02 + 1j * np.sqrt(1.0 - 0.02**2))
+    peak = np.abs(1.0 / (1j * lam.imag - lam) + 1.0 / (1j * lam.imag - np.conj(lam)))
+    heard = np.max(np.abs(clean), axis=0) > 1e-9 * np.max(np.abs(clean))
+    extra = modal_frf(np.array([lam]), (10.0 * sigma / peak * heard)[None, :].astype(complex), np.array([False]), W)
+    ma.MAX_MISFIT = 10.0
+    try:
+        off = fit_anchor(system, 0.0, dofs, F, noisy + extra, var)
+    finally:
+        ma.MAX_MISFIT = keep
+    assert off is not None and off.misfit > 10.0 * max(aware.misfit, 1e-6)

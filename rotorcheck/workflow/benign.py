@@ -68,18 +68,20 @@ def default_kappa(modal: bool) -> float:
 
 def benign_model(rig: RigConfig, f: np.ndarray, speed_rpm: float, Th: np.ndarray, kappa: float | None,
                   speed_offset: float = 0.0, correction: np.ndarray | None = None,
-                  pairs: Sequence[ChannelPair] | None = None, modal: bool = True) -> BenignModel | None:
+                  pairs: Sequence[ChannelPair] | None = None, modal: bool = True,
+                  healthy_var: np.ndarray | None = None) -> BenignModel | None:
     """The model's benign change (anchored at ``Th``: :func:`rotorcheck.signatures.benign_prediction`) for the joint
     test, with the model-error factor ``kappa`` (None: :func:`default_kappa` of the anchor in use); None without a
     ``variability`` section. A recorded speed offset shifts the speed parameter's range. ``correction``
-    (p, f) m/N per unit parameter, learned from healthy sweeps, is added: ``b(theta) + theta C``."""
+    (p, f) m/N per unit parameter, learned from healthy sweeps, is added: ``b(theta) + theta C``. ``healthy_var``:
+    the variance of ``Th`` (m^2/N^2), for the modal anchor's fit (its misfit judged beyond the noise)."""
 
     if not rig.variability:
         return None
     params = benign_at(rig, speed_rpm)
     if not params:  # at standstill a speed tolerance changes nothing
         return None
-    pred = benign_prediction(rig, f, speed_rpm, Th, params, pairs, modal)
+    pred = benign_prediction(rig, f, speed_rpm, Th, params, pairs, modal, healthy_var)
     n = int(np.asarray(Th).size)  # points of every channel pair
     lo, hi = pred.lo.copy(), pred.hi.copy()
     step = np.array([1e-4 if p.kind == "factor" else 1e-3 * max(p.hi - p.lo, 1e-9) for p in pred.parameters])
@@ -128,8 +130,8 @@ def joint_detection(rig: RigConfig, Th: np.ndarray, var_h: np.ndarray, run: Meas
     est = frf_estimate(run)
     th, vh = per_pair(Th, f, est.frf.shape[1], run), per_pair(var_h, f, est.frf.shape[1], run)
     pairs = run.pairs if run.n_pairs > 1 else None
-    els, S = crack_signatures(rig, f, speed, th, pairs=pairs, modal=modal)
-    benign = benign_model(rig, f, speed, th, kappa, run.speed_rpm - speed, correction, pairs, modal)
+    els, S = crack_signatures(rig, f, speed, th, pairs=pairs, modal=modal, healthy_var=vh)
+    benign = benign_model(rig, f, speed, th, kappa, run.speed_rpm - speed, correction, pairs, modal, vh)
     out = None if exclude is None else np.tile(np.asarray(exclude, dtype=bool), est.frf.shape[1])
     return joint_test(stacked(est.frf - th), stacked(est.var + vh), S, els, benign, learned, false_alarm,
                       exclude=out)

@@ -53,7 +53,8 @@ def location_inputs(rig: RigConfig, run: MeasuredRun, healthy_frf: np.ndarray, h
     params = benign_at(rig, speed) if rig.variability else ()
     box = benign_box(rig, speed, params, run.speed_rpm - speed)
     pairs = list(run.pairs)
-    bm = benign_model(rig, f, speed, th, None, run.speed_rpm - speed, None, pairs if n_pairs > 1 else None)
+    bm = benign_model(rig, f, speed, th, None, run.speed_rpm - speed, None, pairs if n_pairs > 1 else None,
+                      healthy_var=vh)
     env = np.zeros(f.size * n_pairs) if bm is None else np.asarray(bm.envelope, dtype=float)
     harmonics = run_harmonics([run], (speed,))
     change = sweep_change(box, pairs, f, speed, est.frf, est.var, th, vh, env, harmonics.flagged)

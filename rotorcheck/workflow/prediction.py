@@ -116,7 +116,9 @@ def detectability_for_rig(
                  "sweep(s); the new sweep as one)")
         th = th.reshape(f.size, -1)
         kappa = None if baseline.benign_kappa is None else float(baseline.benign_kappa)
-        bm = benign_model(config, f, speed, th[:, 0], kappa, modal=baseline.benign_kappa is None)
+        vh = None if baseline.healthy_frf_var is None else np.asarray(baseline.healthy_frf_var).reshape(f.size, -1)
+        bm = benign_model(config, f, speed, th[:, 0], kappa, modal=baseline.benign_kappa is None,
+                          healthy_var=None if vh is None else vh[:, 0])
         return detectability(config, f, speed, var_n.reshape(f.size, -1), var_b.reshape(f.size, -1), pairs,
                              th, false_alarm, bm, elements, None, noise, workers, progress=progress)
     f, speed, v, noise = _stated_prediction(config, speed_rpm, noise_std_m, periods, source)
