@@ -103,13 +103,13 @@ def test_xy_end_to_end_detects_at_least_as_much_as_one_channel(files, xy_validat
         assert docs[f"{tag}_joint"]["verdict_rule"] == JOINT_RULE
     xy, one = docs["xy"], docs["one"]
     assert xy["n_fault_points"] >= one["n_fault_points"] > 0
-    # the joint test: both predict benign change on the modal anchor (kappa 0.1): the x/y sweep's too, since each
-    # bending plane's modes are fitted apart at rest and a quiet pair's noise is not read as the model's error
-    # (before, its fit was refused and it fell back to the re-solved model, kappa 2); with four probes at two
-    # stations the smallest loss it can reveal is then at most the one channel's
+    # the joint test: one channel predicts benign change on the modal anchor (kappa 0.1); the x/y sweep at 1000 rpm
+    # does not (several pairs of a spinning rotor: the isotropic model's circular whirl modes cannot stand for the
+    # anisotropic rig's elliptical ones, and its plain misfit refuses the fit) and falls back to the re-solved model
+    # (kappa 2), so its detectable loss is no longer the smaller one (at rest the x/y anchor holds:
+    # test_modal_anchor)
     assert docs["one_joint"]["benign_model_error"] == workflow.KAPPA_MODAL
-    assert docs["xy_joint"]["benign_model_error"] == workflow.KAPPA_MODAL
-    assert min(docs["xy_joint"]["detectable_stiffness_loss"]) <= min(docs["one_joint"]["detectable_stiffness_loss"])
+    assert docs["xy_joint"]["benign_model_error"] == workflow.KAPPA_NOMINAL
 
 
 def test_detect_refuses_other_channels_than_the_baseline(files, xy_validated: Path, tmp_path: Path,  # type: ignore[no-untyped-def]
