@@ -170,7 +170,7 @@ class _BenignSearch:
     def margin(self, a: float, i: int) -> float:
         """``sqrt(T(a)) - sqrt(threshold) - z_0.9`` of the joint test on the noise-free change ``a s_i``."""
         j = joint_test(a * self.S[i], self.var, self.S, self.elements, self.benign, None, self.false_alarm,
-                       draws=DRAWS)
+                       draws=DRAWS, edge_evidence=False)
         return math.sqrt(float(np.max(j.t_element))) - math.sqrt(j.threshold) - POWER_Z
 
     def __call__(self, task: tuple[int, float]) -> float | None:
@@ -274,12 +274,13 @@ def detectability(
         notes.append("these channels see no shaft element: no crack is detectable with them")
     else:
         zero = np.zeros(var.size, dtype=complex)
-        noise_only = joint_test(zero, var, S, els, None, None, false_alarm)
+        noise_only = joint_test(zero, var, S, els, None, None, false_alarm, edge_evidence=False)
         # without a nuisance the test's standard error of a loss is 1 / ||s_e||_w (the whitened signature norm)
         lr = (z_upper(false_alarm) + POWER_Z) * noise_only.severity_se
         # the benign search starts at the test's linear prediction with the benign tangent projected out (the
         # box and the model-error allowance only make it harder)
-        start = joint_test(zero, var, S, els, bm, None, false_alarm, draws=DRAWS).detectable if bm is not None else None
+        start = (joint_test(zero, var, S, els, bm, None, false_alarm, draws=DRAWS, edge_evidence=False).detectable
+                 if bm is not None else None)
         a_noise_all = [float(x) if np.isfinite(x) else None for x in noise_only.detectable]
         a_benign_all: list[float | None] = list(a_noise_all)
         if bm is not None and start is not None:

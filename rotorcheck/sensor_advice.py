@@ -223,7 +223,8 @@ class _Model:
         flat = (cols[None, :] * self.n_f + fit[:, None]).T.ravel()  # stacked: pair after pair
         sig = self.S.reshape(len(self.elements), P, self.n_f)[:, cols][:, :, fit].reshape(len(self.elements), -1)
         bm = None if self.benign is None else _restricted(self.benign, flat)
-        jt = joint_test(stacked(change[fit]), stacked(var[fit]), sig, self.elements, bm, None, draws=_DRAWS)
+        jt = joint_test(stacked(change[fit]), stacked(var[fit]), sig, self.elements, bm, None, draws=_DRAWS,
+                        edge_evidence=False)
         t = np.asarray(jt.t_element, dtype=float)
         i = self.elements.index(hyp.element)
         evidence = max(math.sqrt(t[i]) - POWER_Z, 0.0) ** 2

@@ -254,12 +254,15 @@ def _max_one_sided(C: np.ndarray, draws: int, seed: int) -> np.ndarray:
 def joint_test(residual: np.ndarray, var_total: np.ndarray, signatures: np.ndarray,
                elements: Sequence[int], benign: BenignModel | None = None,
                learned: LearnedDirections | None = None, false_alarm: float = 0.01,
-               draws: int = MC_DRAWS, seed: int = MC_SEED, exclude: np.ndarray | None = None) -> JointResult:
+               draws: int = MC_DRAWS, seed: int = MC_SEED, exclude: np.ndarray | None = None,
+               edge_evidence: bool = True) -> JointResult:
     """The joint GLR test (module docstring). ``residual`` (n,) complex m/N; ``var_total`` (n,) m^2/N^2;
     ``signatures`` (n_e, n) complex m/N per unit stiffness loss of each candidate element. ``exclude`` (n,)
     bool: points that carry no evidence (weight 0 in every fit and statistic, not counted in ``n_points``,
     the per-point Sidak threshold or the dof; their ``point_statistic`` is 0), e.g. points on a shaft
-    harmonic. The benign model's own error (``benign.form``, :class:`ModelForm`) is part of H0."""
+    harmonic. The benign model's own error (``benign.form``, :class:`ModelForm`) is part of H0. ``edge_evidence``:
+    the chi2 each parameter at a range end would gain beyond it (:attr:`JointResult.theta_edge_chi2`; a caller that
+    needs the verdict alone, e.g. the detectability searches, leaves it out: zeros)."""
     if not 0.0 < false_alarm < 1.0:
         raise ValueError(f"false_alarm must be in (0, 1), got {false_alarm}")
     r = np.asarray(residual, dtype=complex).ravel()
@@ -433,7 +436,7 @@ def joint_test(residual: np.ndarray, var_total: np.ndarray, signatures: np.ndarr
     detectable = np.where(ok, (np.sqrt(thr) + POWER_Z) / np.where(ok, nrm, 1.0), np.inf)
     best = int(np.argmax(t_el)) if np.any(t_el > 0) else int(np.argmin(detectable))
     edge_chi2 = np.zeros(p)
-    if np.any(at_bound[:p]) and benign is not None:
+    if edge_evidence and np.any(at_bound[:p]) and benign is not None:
         # each parameter at an end freed beyond it (three spans), the rest as they are: the linearized chi2 it gains
         span = np.maximum(hi - lo, 1e-300)
         base = optimize.lsq_linear(J, res0, bounds=(lo - theta, hi - theta), method="bvls")
@@ -453,7 +456,8 @@ def joint_test(residual: np.ndarray, var_total: np.ndarray, signatures: np.ndarr
             notes.append(f"benign parameters the data push beyond their range: {names}; the change may exceed the "
                          "range")
     loose = np.zeros(lo.size, dtype=bool)
-    loose[:p] = at_bound[:p] & (edge_chi2 < EDGE_EVIDENCE)
+    if edge_evidence:
+        loose[:p] = at_bound[:p] & (edge_chi2 < EDGE_EVIDENCE)
     # the standard errors of the free parameters and of those at an end the data do not fix (as if free: how far
     # the data leave them), over every free nuisance column (benign parameters, learned and model-form coefficients,
     # the prior's rows in J): a parameter confounded with the model-form directions is as uncertain as they leave it
@@ -472,5 +476,5 @@ def joint_test(residual: np.ndarray, var_total: np.ndarray, signatures: np.ndarr
         learned=q, kappa=kappa, n_points=n_used, unexplained=r - model_ri(theta),
         point_statistic=res0[: r.size] ** 2 + res0[r.size:2 * r.size] ** 2,
         point_threshold=float(-2.0 * np.log(-np.expm1(np.log1p(-false_alarm) / max(n_used, 1)))),
-        model_error=allowance, notes=notes, benign=benign, theta_edge_chi2=edge_chi2,
+        model_error=allowance, notes=notes, benign=benign, theta_edge_chi2=edge_chi2 if edge_evidence else None,
     )
