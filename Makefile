@@ -19,10 +19,13 @@ venv: $(STAMP)
 demo: $(STAMP)
 	MPLBACKEND=Agg OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 $(BIN)/python -m tools.demo
 
+# PYTHONDONTWRITEBYTECODE emptied (unset, for Python): the suite starts ~25 Python processes that import rotorcheck
+# (tests/test_sigkill.py alone 15, the Dask workers, the claims tests) and two xdist workers; without bytecode
+# caches each compiles the package again (0.5-0.7 s), as bench/detect_speed.py notes. __pycache__ is ignored by git
 test: $(STAMP)
 	$(BIN)/ruff check rotorcheck tests bench tools
 	$(BIN)/python -m mypy rotorcheck
-	MPLBACKEND=Agg OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 $(BIN)/python -m pytest -q -n 2 --dist loadgroup
+	PYTHONDONTWRITEBYTECODE= MPLBACKEND=Agg OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 $(BIN)/python -m pytest -q -n 2 --dist loadgroup
 
 lint: $(STAMP)
 	$(BIN)/ruff check rotorcheck tests bench tools
