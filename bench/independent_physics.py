@@ -74,26 +74,39 @@ def run_variant(name: str, n_healthy: int, n_cracks: int, log: Any, losses: tupl
     return out
 
 
-def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def arguments(doc: str, losses: tuple[float, ...]) -> argparse.ArgumentParser:
+    """The drift benches' options: sweeps per cell (healthy, cracked), truth variants, open-crack losses."""
+    ap = argparse.ArgumentParser(description=doc.splitlines()[0])
     ap.add_argument("--healthy", type=int, default=20)
     ap.add_argument("--cracks", type=int, default=10)
     ap.add_argument("--variants", default=",".join(VARIANTS))
-    ap.add_argument("--losses", default=",".join(f"{x:g}" for x in LOSSES), help="open-crack losses, fractions")
+    ap.add_argument("--losses", default=",".join(f"{x:g}" for x in losses), help="open-crack losses, fractions")
+    return ap
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = arguments(__doc__ or "", LOSSES)
     ap.add_argument("--depths", default=",".join(f"{x:g}" for x in DEPTHS), help="breathing depths, of the diameter")
     a = ap.parse_args(argv)
     losses = tuple(float(x) for x in a.losses.split(","))
     depths = tuple(float(x) for x in a.depths.split(","))
     names = a.variants.split(",")
-    def log(msg: str) -> None:
-        print(msg, file=sys.stderr, flush=True)
-    cols = {n: run_variant(n, a.healthy, a.cracks, log, losses, depths) for n in names}
-    rows = list(next(iter(cols.values())))
-    print("| case | " + " | ".join(names) + " |")
-    print("|---|" + "---:|" * len(names))
-    for r in rows:
-        print(f"| {r} | " + " | ".join(cols[n][r] for n in names) + " |")
+    print_columns("case", {n: run_variant(n, a.healthy, a.cracks, log, losses, depths) for n in names})
     return 0
+
+
+def log(msg: str) -> None:
+    """A progress line on stderr."""
+    print(msg, file=sys.stderr, flush=True)
+
+
+def print_columns(head: str, cols: dict[str, dict[str, str]]) -> None:
+    """A Markdown table on stdout: one row per label of the first column's dict, one column per key of ``cols``."""
+    names = list(cols)
+    print(f"| {head} | " + " | ".join(names) + " |")
+    print("|---|" + "---:|" * len(names))
+    for r in next(iter(cols.values())):
+        print(f"| {r} | " + " | ".join(cols[n][r] for n in names) + " |")
 
 
 if __name__ == "__main__":

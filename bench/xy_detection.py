@@ -12,9 +12,7 @@ stations 6 and 2: eight channel pairs) at 0 rpm: healthy sweeps (false alarms) a
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
-import sys
 import time
 from typing import Any
 
@@ -22,9 +20,9 @@ import numpy as np
 
 from bench.detection_limit import _inside
 from bench.detection_power import GRID, _open_crack
-from bench.independent_physics import _called
+from bench.independent_physics import _called, arguments, log, print_columns
 from bench.location import XY_ACTUATORS, XY_SENSORS
-from bench.truth_variants import VARIANTS, nominal, truth_variant
+from bench.truth_variants import nominal, truth_variant
 from rotorcheck import workflow
 from rotorcheck.config import RigConfig
 from rotorcheck.sim.rig_sim import simulate_rig_patterns, step_settings
@@ -69,23 +67,11 @@ def run_variant(name: str, n_healthy: int, n_cracks: int, losses: tuple[float, .
 
 
 def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--healthy", type=int, default=20)
-    ap.add_argument("--cracks", type=int, default=10)
-    ap.add_argument("--variants", default=",".join(VARIANTS))
-    ap.add_argument("--losses", default=",".join(f"{x:g}" for x in LOSSES), help="open-crack losses, fractions")
-    a = ap.parse_args(argv)
+    a = arguments(__doc__ or "", LOSSES).parse_args(argv)
     losses = tuple(float(x) for x in a.losses.split(","))
     names = a.variants.split(",")
-
-    def log(msg: str) -> None:
-        print(msg, file=sys.stderr, flush=True)
-    cols = {n: run_variant(n, a.healthy, a.cracks, losses, log) for n in names}
-    rows = list(next(iter(cols.values())))
-    print("| x/y probes at stations 6 and 2, 0 rpm | " + " | ".join(names) + " |")
-    print("|---|" + "---:|" * len(names))
-    for r in rows:
-        print(f"| {r} | " + " | ".join(cols[n][r] for n in names) + " |")
+    print_columns("x/y probes at stations 6 and 2, 0 rpm",
+                  {n: run_variant(n, a.healthy, a.cracks, losses, log) for n in names})
     return 0
 
 
