@@ -279,7 +279,7 @@ def fit_anchor(system: MechanicalSystem, speed_rpm: float, dofs: Sequence[tuple[
     # modes stand for the machine's elliptical ones, whose residue sensitivities across x and y pairs it does not
     # know (measured: accepted, the x/y anchor at 1000 rpm missed 5 of 9 breathing cracks of 20-50 % depth that
     # the re-solved model finds on three truths, bench.diagnosis --quick)
-    planar = len(dofs) == 1 or len(set(fe.planes().tolist())) > 1
+    planar = len(dofs) == 1 or len(set(plane.tolist())) > 1
     noise = (None if healthy_var is None or not planar else
              np.asarray(healthy_var, dtype=float).reshape(f.size, len(dofs)) * heard)
     rest = ~visible

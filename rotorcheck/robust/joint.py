@@ -262,7 +262,7 @@ def joint_test(residual: np.ndarray, var_total: np.ndarray, signatures: np.ndarr
     the per-point Sidak threshold or the dof; their ``point_statistic`` is 0), e.g. points on a shaft
     harmonic. The benign model's own error (``benign.form``, :class:`ModelForm`) is part of H0. ``edge_evidence``:
     the chi2 each parameter at a range end would gain beyond it (:attr:`JointResult.theta_edge_chi2`; a caller that
-    needs the verdict alone, e.g. the detectability searches, leaves it out: zeros)."""
+    needs the verdict alone, e.g. the detectability searches, leaves it out: None)."""
     if not 0.0 < false_alarm < 1.0:
         raise ValueError(f"false_alarm must be in (0, 1), got {false_alarm}")
     r = np.asarray(residual, dtype=complex).ravel()
@@ -438,9 +438,7 @@ def joint_test(residual: np.ndarray, var_total: np.ndarray, signatures: np.ndarr
     edge_chi2 = np.zeros(p)
     if edge_evidence and np.any(at_bound[:p]) and benign is not None:
         # each parameter at an end freed beyond it (three spans), the rest as they are: the linearized chi2 it gains
-        span = np.maximum(hi - lo, 1e-300)
-        base = optimize.lsq_linear(J, res0, bounds=(lo - theta, hi - theta), method="bvls")
-        chi2_base = min(chi2_h0, float(base.fun @ base.fun))
+        # over the linearized H0 in the box (chi2_h0_lin and span: set above whenever a parameter is at a bound)
         for i in np.flatnonzero(at_bound[:p]):
             lb, ub = lo - theta, hi - theta
             if hi[i] - theta[i] <= 1e-6 * span[i]:
@@ -448,7 +446,7 @@ def joint_test(residual: np.ndarray, var_total: np.ndarray, signatures: np.ndarr
             else:
                 lb[i] = -3.0 * span[i]
             freed = optimize.lsq_linear(J, res0, bounds=(lb, ub), method="bvls")
-            edge_chi2[i] = max(0.0, chi2_base - float(freed.fun @ freed.fun))
+            edge_chi2[i] = max(0.0, chi2_h0_lin - float(freed.fun @ freed.fun))
         beyond = at_bound[:p] & (edge_chi2 >= EDGE_EVIDENCE)
         if np.any(beyond):
             names = ", ".join(f"{n} (chi2 {g:.3g} lower beyond it)" for n, b, g in zip(benign.names, beyond, edge_chi2)
