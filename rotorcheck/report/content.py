@@ -160,8 +160,11 @@ def method_paragraphs(report: DetectionReport, ranges: Callable[[list[float]], s
     if report.joint_statistic is None:
         return out
     learned = report.learned_benign_directions or 0
+    fit = ("" if report.joint_fit_chi2 is None else
+           f"; H0's goodness of fit chi2 = {report.joint_fit_chi2:.5g} on {report.joint_fit_dof} dof (p = "
+           f"{fmt_p(report.joint_fit_p_value)}), the GLR's own p = {fmt_p(report.joint_glr_p_value)}")
     out.append(f"Joint test: T = {report.joint_statistic:.4g}, threshold {report.joint_threshold:.4g} at false-alarm "
-               f"rate {report.false_alarm:g} (p = {fmt_p(report.joint_p_value)}); model-error fraction kappa = "
+               f"rate {report.false_alarm:g} (p = {fmt_p(report.joint_p_value)}{fit}); model-error fraction kappa = "
                f"{report.benign_model_error:g}"
                + (f"; {learned} benign directions learned from healthy sweeps." if learned else
                   "; no benign directions learned from healthy sweeps."))

@@ -157,6 +157,9 @@ def _key_numbers(report: DetectionReport) -> list[tuple[str, str]]:
         rows.append(("joint statistic T", f"{_num(report.joint_statistic)} against threshold "
                                           f"{_num(report.joint_threshold)} (p = {p}, "
                                           f"false alarm {report.false_alarm:g} per sweep)"))
+        if report.joint_fit_chi2 is not None:
+            rows.append(("H0's goodness of fit", f"chi2 = {report.joint_fit_chi2:.5g} on {report.joint_fit_dof} dof "
+                                                 f"(p = {fmt_p(report.joint_fit_p_value)})"))
     best = best_candidate(report)
     if best is not None:
         rows.append(("where", best))

@@ -107,7 +107,11 @@ class DetectionReport:
     # the joint test (verdict_rule names it when it decided)
     joint_statistic: float | None = None  # T = max_e T_e (chi-square units)
     joint_threshold: float | None = None  # T at which p = false_alarm
-    joint_p_value: float | None = None
+    joint_p_value: float | None = None  # the sweep's: min(GLR p / (1 - share), fit p / share, 1) (robust.joint)
+    joint_glr_p_value: float | None = None  # the GLR's own P(max_e T_e >= T | H0)
+    joint_fit_chi2: float | None = None  # H0's goodness of fit: chi2 of the best benign fit (chi-square units)
+    joint_fit_dof: int | None = None  # its degrees of freedom
+    joint_fit_p_value: float | None = None  # P(chi2 >= joint_fit_chi2 | H0)
     false_alarm: float | None = None  # per-sweep false-alarm rate the threshold gives
     candidate_elements: list[int] | None = None  # shaft elements tested (1-based)
     element_statistic: list[float] | None = None  # T_e per candidate

@@ -247,6 +247,8 @@ class DetectionOutcome:
         j = self.joint
         if j is not None:
             rep.joint_statistic, rep.joint_threshold, rep.joint_p_value = j.statistic, j.threshold, j.p_value
+            rep.joint_glr_p_value, rep.joint_fit_chi2 = j.glr_p_value, j.chi2_h0
+            rep.joint_fit_dof, rep.joint_fit_p_value = j.fit_dof, j.fit_p_value
             rep.false_alarm, rep.candidate_elements = j.false_alarm, list(j.elements)
             rep.element_statistic = [float(x) for x in j.t_element]
             if j.elements:

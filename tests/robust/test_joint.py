@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from scipy.stats import binom, chi2
+from scipy.stats import binom, chi2, norm
 
-from rotorcheck.robust.joint import BenignModel, change_scale, joint_test, learn_directions
+from rotorcheck.robust.joint import GOF_SHARE, BenignModel, ModelForm, change_scale, joint_test, learn_directions
 
 N = 60
 
@@ -23,7 +23,8 @@ def _noise(rng: np.random.Generator, var: np.ndarray) -> np.ndarray:
 
 def test_single_candidate_is_the_one_sided_normal_closed_form() -> None:
     """No nuisance, one element: T = max(0, z)^2 with z = Re<s, r>_W / ||s||_W, the severity z / ||s||_W,
-    p = P(chi2_1 >= T) / 2; all recomputed here by hand."""
+    the GLR's p = P(chi2_1 >= T) / 2 and its threshold at (1 - GOF_SHARE) of the rate; all recomputed here by
+    hand."""
     rng = np.random.default_rng(1)
     var = rng.uniform(0.5, 2.0, N)
     s = _signatures(rng, 1)
@@ -35,12 +36,14 @@ def test_single_candidate_is_the_one_sided_normal_closed_form() -> None:
     assert res.statistic == pytest.approx(max(z, 0.0) ** 2, rel=1e-10)
     assert res.severity[0] == pytest.approx(z / norm_s, rel=1e-10)
     assert res.severity_se[0] == pytest.approx(1.0 / norm_s, rel=1e-10)
-    assert res.p_value == pytest.approx(0.5 * chi2.sf(res.statistic, 1), abs=3e-3)
-    # the threshold of a one-sided normal at 1 %: z = 2.326, T = 5.41 (Monte Carlo: the quantile's standard
-    # error at 400,000 draws is 2 z / phi(z) sqrt(a (1 - a) / n) = 0.027; 4 of them allowed)
-    assert res.threshold == pytest.approx(2.3263478740408408**2, abs=0.11)
-    # detectable loss: (z_0.99 + z_0.9) / ||s||_W
-    assert res.detectable[0] == pytest.approx((2.3263478740408408 + 1.2815515655446004) / norm_s, rel=7e-3)
+    assert res.glr_p_value == pytest.approx(0.5 * chi2.sf(res.statistic, 1), abs=3e-3)
+    # the GLR spends (1 - GOF_SHARE) of 1 %: a one-sided normal at 0.9 %, z = 2.366, T = 5.60 (Monte Carlo: the
+    # quantile's standard error at 400,000 draws is 2 z / phi(z) sqrt(a (1 - a) / n) = 0.028; 4 of them allowed)
+    z_glr = norm.isf((1.0 - GOF_SHARE) * 0.01)
+    assert z_glr == pytest.approx(2.3656, abs=1e-4)
+    assert res.threshold == pytest.approx(z_glr**2, abs=0.11)
+    # detectable loss: (z_0.991 + z_0.9) / ||s||_W
+    assert res.detectable[0] == pytest.approx((z_glr + 1.2815515655446004) / norm_s, rel=7e-3)
 
 
 def test_false_alarm_rate_with_benign_nuisance_by_monte_carlo() -> None:
@@ -63,6 +66,58 @@ def test_false_alarm_rate_with_benign_nuisance_by_monte_carlo() -> None:
         hits += joint_test(r, var, S, [1, 2, 3, 4], benign, false_alarm=alpha, draws=20_000).damage
     lo, hi = binom.ppf([0.0005, 0.9995], n, alpha)
     assert lo <= hits <= hi, hits
+
+
+def test_goodness_of_fit_is_the_chi_square_tail_and_shares_the_rate() -> None:
+    """No nuisance: H0's chi2 is the whitened residual norm sum 2 |r|^2 / var on 2 N dof, its p-value the
+    chi-square tail (scipy.stats, a second implementation), and the sweep's p-value the Bonferroni combination
+    min(p_GLR / (1 - GOF_SHARE), p_fit / GOF_SHARE, 1)."""
+    rng = np.random.default_rng(21)
+    var = rng.uniform(0.5, 2.0, N)
+    S = _signatures(rng, 3)
+    for scale in (1.0, 1.3, 1.6):  # noise only, then noise larger than stated: the fit's p falls, the GLR's not
+        r = np.sqrt(scale) * _noise(rng, var)
+        res = joint_test(r, var, S, [1, 2, 3], draws=20_000)
+        c2 = float(np.sum(2.0 * np.abs(r) ** 2 / var))
+        assert res.chi2_h0 == pytest.approx(c2, rel=1e-12) and res.fit_dof == 2 * N
+        assert res.fit_p_value == pytest.approx(chi2.sf(c2, 2 * N), rel=1e-9)
+        assert res.p_value == pytest.approx(min(1.0, res.glr_p_value / (1 - GOF_SHARE), res.fit_p_value / GOF_SHARE))
+        assert res.damage == (res.p_value < 0.01)
+
+
+def test_a_large_change_no_signature_explains_is_damage_by_the_fit() -> None:
+    """A change of the opposite sign to every crack signature (a stiffening, 5x a signature: what a loss far
+    beyond the first-order signature can look like to it) gives T = 0, yet H0 fits it with chi2 far beyond its
+    dof: damage, decided by the fit; the same change at 1/20 of the size is not."""
+    rng = np.random.default_rng(22)
+    var = np.ones(N)
+    S = _signatures(rng, 3)
+    big = joint_test(-5.0 * S[0] + _noise(rng, var), var, S, [1, 2, 3], draws=20_000)
+    assert big.statistic == 0.0 and big.glr_p_value > 0.5
+    assert big.damage and big.decided_by_fit and big.fit_p_value < 1e-12
+    small = joint_test(-0.25 * S[0] + _noise(rng, var), var, S, [1, 2, 3], draws=20_000)
+    assert not small.damage and not small.decided_by_fit
+
+
+def test_goodness_of_fit_is_conservative_with_a_nuisance_and_a_model_form_prior() -> None:
+    """H0 drawn as stated (benign parameters inside their box, model-form coefficients from their Gaussian prior,
+    noise): the fit's p-value is uniform or larger (its dof count takes the prior's rows as unfitted, a
+    conservative count): P(p_fit <= u) <= u within binomial scatter at u = 0.05, 0.2, 0.5 (400 sweeps)."""
+    rng = np.random.default_rng(23)
+    var = rng.uniform(0.5, 2.0, N)
+    S = _signatures(rng, 2)
+    B = rng.standard_normal((2, N)) + 1j * rng.standard_normal((2, N))
+    V = 0.3 * (rng.standard_normal((6, N)) + 1j * rng.standard_normal((6, N)))
+    scale = np.full(6, 1.0)
+    benign = BenignModel(lambda t: t[0] * B[0] + t[1] * B[1], np.array([-1.0, -1.0]), np.array([1.0, 1.0]), ("a", "b"),
+                         0.0, 1e-6, form=ModelForm(V, scale, "test"))
+    n = 400
+    p = np.array([joint_test(rng.uniform(-0.8, 0.8, 2) @ B + rng.normal(0.0, scale) @ V + _noise(rng, var), var, S,
+                             [1, 2], benign, draws=5_000).fit_p_value for _ in range(n)])
+    for u in (0.05, 0.2, 0.5):
+        assert np.count_nonzero(p <= u) <= binom.ppf(0.9995, n, u), (u, np.count_nonzero(p <= u))
+    # and not uselessly so: the p-values are not all near 1 (a dof far too large would put them there)
+    assert np.count_nonzero(p <= 0.5) >= binom.ppf(0.0005, n, 0.25)
 
 
 def test_power_at_the_stated_detectable_loss() -> None:

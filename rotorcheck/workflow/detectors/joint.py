@@ -34,17 +34,23 @@ def learned_directions(baseline: Baseline) -> LearnedDirections | None:
 def joint_verdict(joint: JointResult, certified: Verdict) -> Verdict:
     """The sweep verdict of the joint test (its rule: :data:`rotorcheck.robust.joint.JOINT_RULE`); the
     certified fault points stay as where in frequency the data depart."""
+    benign = "noise" if not joint.theta_names else "benign change inside the configured ranges and noise"
+    glr = f"T = {joint.statistic:.4g} {'>' if joint.statistic > joint.threshold else '<='} {joint.threshold:.4g}"
+    fit = f"H0's fit chi2 = {joint.chi2_h0:.5g} on {joint.fit_dof} dof (p = {joint.fit_p_value:.2g})"
     if joint.damage:
         # where the damage is, is the diagnosis's (rotorcheck.ranking: the one ranking detect and locate report);
         # the test's own linearized best element stays in report.json as joint_best_element
-        benign = "noise" if not joint.theta_names else "benign change inside the configured ranges and noise"
-        why = (f"joint test: T = {joint.statistic:.4g} > {joint.threshold:.4g} (p = {joint.p_value:.2g} < "
-               f"{joint.false_alarm:g}); the change is not explained by {benign}")
+        if joint.decided_by_fit:
+            why = (f"joint test: {fit} (sweep p = {joint.p_value:.2g} < {joint.false_alarm:g}); no {benign} fits the "
+                   f"data, and no small loss of one element explains the rest ({glr}): a change larger than the "
+                   "first-order crack signatures, or of another kind")
+        else:
+            why = (f"joint test: {glr} (p = {joint.p_value:.2g} < {joint.false_alarm:g}); the change is not explained "
+                   f"by {benign}")
         return Verdict("damage", why, certified.n_points, certified.n_fault, certified.n_undecided,
                        certified.longest_run, certified.threshold)
-    benign = "noise" if not joint.theta_names else "benign change inside the configured ranges and noise"
-    why = (f"joint test: T = {joint.statistic:.4g} <= {joint.threshold:.4g} (p = {joint.p_value:.2g}); the change "
-           f"is explained by {benign} at false-alarm rate {joint.false_alarm:g}")
+    why = (f"joint test: {glr}, {fit} (sweep p = {joint.p_value:.2g}); the change is explained by {benign} at "
+           f"false-alarm rate {joint.false_alarm:g}")
     return Verdict("healthy", why, certified.n_points, certified.n_fault, certified.n_undecided,
                    certified.longest_run, certified.threshold)
 
