@@ -31,14 +31,13 @@ from rotorcheck.cli.common import (
     package_version,
 )
 from rotorcheck.errors import UserInputError
+from rotorcheck.fleet import command as fleet_command
 
 __all__ = ["EXIT_DAMAGE", "EXIT_INCONCLUSIVE", "EXIT_INPUT", "EXIT_OK", "app", "err", "main", "package_version", "run"]
 
 
 def _register_fleet() -> None:
     """`rotorcheck fleet` (issue 15): many machines over time (rotorcheck.fleet)."""
-    from rotorcheck.fleet import command as fleet_command
-
     fleet_command.register(app)
 
 
@@ -62,7 +61,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return _run(command, argv)
     finally:
-        from rotorcheck.fileio import release_claims
+        from rotorcheck.fileio import release_claims  # lazy: keeps `rotorcheck --help` start-up light
 
         release_claims()  # the outputs this command claimed (fileio.claim_outputs)
 

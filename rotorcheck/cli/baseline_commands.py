@@ -47,10 +47,10 @@ def fit_noise(
     force: ForceOpt = False,
 ) -> int:
     """Step 2: fit the noise bound V (m) and write it into <out>/baseline.h5."""
-    from rotorcheck import workflow
-    from rotorcheck.baseline import write_baseline
-    from rotorcheck.fileio import check_writable
-    from rotorcheck.resources import samples_dir
+    from rotorcheck import workflow  # lazy: the pipeline (scipy, pydantic, h5py) only when the command runs
+    from rotorcheck.baseline import write_baseline  # lazy: h5py only when the command runs
+    from rotorcheck.fileio import check_writable  # lazy: keeps `rotorcheck --help` start-up light
+    from rotorcheck.resources import samples_dir  # lazy: keeps `rotorcheck --help` start-up light
 
     sweep_path = bundled_or_given(sweep, demo, samples_dir() / "crack_rig" / "healthy_1000rpm.h5", "healthy sweep",
                                   "SWEEP")
@@ -103,9 +103,9 @@ def validate(
 ) -> int:
     """Step 3: bound the model error per frequency (gamma) so the uncertain model encloses the healthy data
     (a file of several runs, one per speed: every run, one validated set each)."""
-    from rotorcheck import workflow
-    from rotorcheck.baseline import write_baseline
-    from rotorcheck.fileio import check_output_place, claim_outputs
+    from rotorcheck import workflow  # lazy: the pipeline (scipy, pydantic, h5py) only when the command runs
+    from rotorcheck.baseline import write_baseline  # lazy: h5py only when the command runs
+    from rotorcheck.fileio import check_output_place, claim_outputs  # lazy: keeps `rotorcheck --help` start-up light
 
     formats = workflow.plot_formats(plot_format)
     workflow.check_frf_unit(frf_unit)

@@ -3,7 +3,10 @@ progress, the JSON printer, the top-level options and the output manifests."""
 
 from __future__ import annotations
 
+import contextlib
+import datetime as dt
 import sys
+import time
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -11,6 +14,7 @@ import typer
 import typer.core
 from rich.console import Console
 
+from rotorcheck import __version__
 from rotorcheck.errors import InputError, finite_positive
 from rotorcheck.progress import ConsoleSteps
 
@@ -31,7 +35,7 @@ def split_list(values: list[str] | str | None) -> list[str]:
 
 def _context() -> Any:
     """The running command's click context (usage line and help hint of its errors), if any."""
-    import click
+    import click  # lazy: click is not loaded when this module is imported
 
     return click.get_current_context(silent=True)
 
@@ -105,13 +109,15 @@ def progress(text: str) -> Any:
     """One long step without items to count: on a terminal a spinner with ``text`` and the elapsed time
     (rich); otherwise, when it took :data:`PLAIN_EVERY_S` or more, one line after it saying how long;
     nothing with ``-q``."""
-    import contextlib
-    import time
-
     if QUIET["on"]:
         return contextlib.nullcontext()
     if err.is_terminal:
-        from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
+        from rich.progress import (  # lazy: rich.progress only for a spinner on a terminal
+            Progress,
+            SpinnerColumn,
+            TextColumn,
+            TimeElapsedColumn,
+        )
 
         bar = Progress(SpinnerColumn("dots"), TextColumn("{task.description}"), TimeElapsedColumn(), console=err,
                        transient=True)
@@ -154,7 +160,7 @@ FrfUnitOpt = Annotated[str, typer.Option("--frf-unit", help="Receptance unit of 
 
 def emit_json(doc: dict[str, Any]) -> None:
     """One strict JSON document on stdout (non-finite numbers as the strings "inf"/"nan")."""
-    from rotorcheck.report.reports import render_json
+    from rotorcheck.report.reports import render_json  # lazy: keeps `rotorcheck --help` start-up light
 
     sys.stdout.write(render_json(doc))
     sys.stdout.flush()
@@ -166,13 +172,11 @@ def emit_json(doc: dict[str, Any]) -> None:
 
 def package_version() -> str:
     """The installed distribution's version (importlib.metadata), else ``rotorcheck.__version__``."""
-    from importlib.metadata import PackageNotFoundError, version
+    from importlib.metadata import PackageNotFoundError, version  # lazy: ~20 ms (email, zipfile), only for --version
 
     try:
         return version("rotorcheck")
     except PackageNotFoundError:  # imported from a checkout that is not installed
-        from rotorcheck import __version__
-
         return __version__
 
 
@@ -189,7 +193,7 @@ def _set_quiet(value: bool) -> None:
 
 def _print_samples_dir(value: bool) -> None:
     if value:
-        from rotorcheck.resources import samples_dir
+        from rotorcheck.resources import samples_dir  # lazy: keeps `rotorcheck --help` start-up light
 
         sys.stdout.write(f"{samples_dir()}\n")
         raise typer.Exit(EXIT_OK)
@@ -237,7 +241,7 @@ RunOpt = Annotated[str | None, typer.Option("--run", help="Run id inside the swe
 def record_run(command: str, written: list[Path], folders: list[Path], force: bool) -> None:
     """Record what this run of ``command`` wrote (the folders' manifests); a forced run then removes what an
     earlier run of the command wrote there and this one did not rewrite (e.g. plots after --no-plots)."""
-    from rotorcheck.fileio import record_outputs, remove_stale_outputs
+    from rotorcheck.fileio import record_outputs, remove_stale_outputs  # lazy: keeps `rotorcheck --help` start-up light
 
     record_outputs(written, command)
     if force:
@@ -248,6 +252,4 @@ def record_run(command: str, written: list[Path], folders: list[Path], force: bo
 
 
 def utc_now() -> str:
-    import datetime as dt
-
     return dt.datetime.now(dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")

@@ -66,9 +66,9 @@ def detect(
 ) -> int:
     """Steps 4-5: verdict (joint test or certified fault points) and the damage with its bound; a file of
     several runs: each run against the baseline's run at its speed, one verdict for the file."""
-    from rotorcheck import workflow
-    from rotorcheck.fileio import atomic_write_text, claim_outputs
-    from rotorcheck.report.reports import REPORT_FILES, render_json, write_reports
+    from rotorcheck import workflow  # lazy: the pipeline (scipy, pydantic, h5py) only when the command runs
+    from rotorcheck.fileio import atomic_write_text, claim_outputs  # lazy: keeps `rotorcheck --help` start-up light
+    from rotorcheck.report.reports import REPORT_FILES, render_json, write_reports  # lazy: keeps start-up light
 
     in_open_unit(confidence, "--confidence")
     in_open_unit(false_alarm, "--false-alarm")
@@ -118,7 +118,7 @@ def detect(
 
 
 def print_outcome(outcome: Any, report: DetectionReport, prefix: str = "") -> None:
-    from rotorcheck import workflow
+    from rotorcheck import workflow  # lazy: the pipeline (scipy, pydantic, h5py) only when the command runs
 
     v = outcome.verdict
     colour = {"damage": "bold red", "healthy": "bold green", "inconclusive": "bold yellow"}[v.verdict]
@@ -163,9 +163,9 @@ def locate(
     a certificate (the frequencies named) or given a certified interval of loss and crack depth; the
     consistent ones ranked. Writes <out>/location.json (and location.png); exit 1 when a damage is located,
     0 when the change needs none (no damage to locate), 2 on bad input."""
-    from rotorcheck import workflow
-    from rotorcheck.fileio import atomic_write_text, check_writable
-    from rotorcheck.report.reports import render_json
+    from rotorcheck import workflow  # lazy: the pipeline (scipy, pydantic, h5py) only when the command runs
+    from rotorcheck.fileio import atomic_write_text, check_writable  # lazy: keeps `rotorcheck --help` start-up light
+    from rotorcheck.report.reports import render_json  # lazy: keeps `rotorcheck --help` start-up light
 
     formats = workflow.plot_formats(plot_format)
     base_path = baseline if baseline is not None else out / "baseline.h5"
@@ -187,11 +187,11 @@ def locate(
     atomic_write_text(out / "location.json", render_json(doc))
     written = [out / "location.json"]
     if plots:
-        from rotorcheck.report.figures import save_figure
-        from rotorcheck.report.plots import location_figure
+        from rotorcheck.report.figures import save_figure  # lazy: matplotlib only when plotting
+        from rotorcheck.report.plots import location_figure  # lazy: matplotlib only when plotting
 
         written += save_figure(location_figure(cfg, res, f"{sweep.name}: {res.summary()}"), out / "location", formats)
-    from rotorcheck.report.html import render_location_html
+    from rotorcheck.report.html import render_location_html  # lazy: keeps `rotorcheck --help` start-up light
 
     atomic_write_text(out / "location.html", render_location_html(report, [str(p) for p in written[1:]], cfg.sha256()))
     written.append(out / "location.html")

@@ -30,7 +30,7 @@ from rotorcheck.cli.common import (
     progress,
     split_list,
 )
-from rotorcheck.errors import InputError, finite_positive, in_open_unit
+from rotorcheck.errors import InputError, check_rig_id, finite_positive, in_open_unit
 
 
 @app.command()
@@ -48,12 +48,12 @@ def model(
                           ] = "rpm",
 ) -> int:
     """Natural frequencies, damping, whirl and critical speeds; Campbell, mode-shape and rotor plots."""
-    from rotorcheck.resources import default_rig_path
-    from rotorcheck.workflow import model_report
+    from rotorcheck.resources import default_rig_path  # lazy: keeps `rotorcheck --help` start-up light
+    from rotorcheck.workflow import model_report  # lazy: the pipeline only when the command runs
 
     check_speed(speed)
     rig_path = bundled_or_given(rig, demo, default_rig_path("crack_rig"), "rig", "RIG")
-    from rotorcheck.workflow import plot_formats
+    from rotorcheck.workflow import plot_formats  # lazy: the pipeline only when the command runs
 
     with progress(f"solving the model of {rig_path}" + (" and plotting" if plots else "")):
         result = model_report(rig_path, speed_rpm=speed, out_dir=out if plots else None, force=force,
@@ -90,8 +90,8 @@ def crack(
     force: ForceOpt = False,
 ) -> int:
     """The cracked rotor: stiffness over a revolution, orbits, spectra at 1000 and 750 rpm (Fig. 56-58)."""
-    from rotorcheck.resources import configs_dir
-    from rotorcheck.workflow import crack_report, plot_formats
+    from rotorcheck.resources import configs_dir  # lazy: keeps `rotorcheck --help` start-up light
+    from rotorcheck.workflow import crack_report, plot_formats  # lazy: the pipeline only when the command runs
 
     finite_positive(unbalance, "--unbalance", allow_zero=True)
     rig_path = bundled_or_given(rig, demo, configs_dir() / "crack_rig_truth.yaml", "truth rig", "RIG")
@@ -114,8 +114,8 @@ def schema(
     force: ForceOpt = False,
 ) -> int:
     """JSON Schema of the rig YAML, for editors."""
-    from rotorcheck.config import json_schema
-    from rotorcheck.fileio import atomic_write_text, check_writable
+    from rotorcheck.config import json_schema  # lazy: pydantic (the rig schema) only when the command runs
+    from rotorcheck.fileio import atomic_write_text, check_writable  # lazy: keeps `rotorcheck --help` start-up light
 
     text = json.dumps(json_schema(), indent=2) + "\n"
     if out is None:
@@ -163,11 +163,11 @@ def detectability(
     """Before the crack: per shaft element, the smallest open-crack stiffness loss and breathing-crack depth
     the default detector finds with 90 % power (noise only, and with the rig's benign ranges), beside the
     likelihood-ratio limit. Writes <out>/detectability.json (and detectability.png)."""
-    from rotorcheck import workflow
-    from rotorcheck.baseline import read_baseline, stored_rig
-    from rotorcheck.fileio import atomic_write_text, check_writable
-    from rotorcheck.report.reports import render_json
-    from rotorcheck.resources import default_rig_path
+    from rotorcheck import workflow  # lazy: the pipeline (scipy, pydantic, h5py) only when the command runs
+    from rotorcheck.baseline import read_baseline, stored_rig  # lazy: h5py only when the command runs
+    from rotorcheck.fileio import atomic_write_text, check_writable  # lazy: keeps `rotorcheck --help` start-up light
+    from rotorcheck.report.reports import render_json  # lazy: keeps `rotorcheck --help` start-up light
+    from rotorcheck.resources import default_rig_path  # lazy: keeps `rotorcheck --help` start-up light
 
     finite_positive(noise_std, "--noise-std")
     check_speed(speed)
@@ -215,8 +215,8 @@ def detectability(
     atomic_write_text(out / "detectability.json", render_json(doc))
     written = [out / "detectability.json"]
     if plots:
-        from rotorcheck.report.figures import save_figure
-        from rotorcheck.report.plots import detectability_figure
+        from rotorcheck.report.figures import save_figure  # lazy: matplotlib only when plotting
+        from rotorcheck.report.plots import detectability_figure  # lazy: matplotlib only when plotting
 
         written += save_figure(detectability_figure(cfg, det), out / "detectability", formats)
     err.print(det.summary())
@@ -237,9 +237,8 @@ def import_ross_cmd(
     as_json: JsonOpt = False,
 ) -> int:
     """A ROSS rotor as a rotorcheck rig file, with what could not be carried over (stderr and the file's header)."""
-    from rotorcheck.errors import check_rig_id
-    from rotorcheck.fileio import atomic_write_text, check_writable
-    from rotorcheck.ross_import import import_ross
+    from rotorcheck.fileio import atomic_write_text, check_writable  # lazy: keeps `rotorcheck --help` start-up light
+    from rotorcheck.ross_import import import_ross  # lazy: pydantic (the rig schema) only when the command runs
 
     if rig_id is not None:
         check_rig_id(rig_id, None, "--rig-id")

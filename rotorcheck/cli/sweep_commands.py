@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -24,7 +25,7 @@ from rotorcheck.cli.common import (
     split_list,
     utc_now,
 )
-from rotorcheck.errors import InputError, finite_positive, in_open_unit
+from rotorcheck.errors import InputError, check_rig_id, finite_positive, in_open_unit
 
 
 def _warn_harmonics(run: dict[str, Any]) -> None:
@@ -40,8 +41,8 @@ def info(
     confidence: Annotated[float, typer.Option(help="Family-wise confidence of the noise bound.")] = 0.99,
 ) -> int:
     """Validate a sweep file and summarise it: runs, speeds, grid, channels, noise estimate."""
-    from rotorcheck.sweep.hdf5io import read_sweep, sweep_sha256
-    from rotorcheck.sweep.summary import summarize
+    from rotorcheck.sweep.hdf5io import read_sweep, sweep_sha256  # lazy: h5py only when the command runs
+    from rotorcheck.sweep.summary import summarize  # lazy: h5py only when the command runs
 
     in_open_unit(confidence, "--confidence")
     sw = read_sweep(sweep)
@@ -50,7 +51,7 @@ def info(
     doc["sha256"] = sweep_sha256(sweep)
     err.print(f"{sweep}: valid rotorcheck.sweep v{doc['schema_version']}, rig_id {sw.rig_id!r}, source {sw.source}, "
               f"{sw.generator}")
-    from rotorcheck.resources import configs_dir
+    from rotorcheck.resources import configs_dir  # lazy: keeps `rotorcheck --help` start-up light
 
     doc["rig_bundled"] = (configs_dir() / f"{sw.rig_id}.yaml").exists()
     if not doc["rig_bundled"]:
@@ -114,12 +115,11 @@ def convert(
     as_json: JsonOpt = False,
 ) -> int:
     """Convert a sweep between HDF5, UFF58, tidy CSV and wide CSV (FRF-only data need a noise statement)."""
-    from rotorcheck.errors import check_rig_id
-    from rotorcheck.sweep.convert import ConvertOptions
+    from rotorcheck.sweep.convert import ConvertOptions  # lazy: h5py, pyuff only when the command runs
 
     if rig_id is not None:
         check_rig_id(rig_id, None, "--rig-id")
-    from rotorcheck.sweep.convert import convert as convert_files
+    from rotorcheck.sweep.convert import convert as convert_files  # lazy: h5py, pyuff only when the command runs
 
     opts = ConvertOptions(speed_rpm=speed, noise_source=noise_source, noise_var=noise_var, rig_id=rig_id,
                           run_id=run_id, column_map=column_map, ascii=ascii_58, force=force)
@@ -144,7 +144,7 @@ def ingest(
     as_json: JsonOpt = False,
 ) -> int:
     """Stepped-sine time records (force or current, probes, keyphasor) -> a sweep file (docs/ingest.md)."""
-    from rotorcheck.ingest import ingest_files
+    from rotorcheck.ingest import ingest_files  # lazy: the readers (h5py, pydantic) only when the command runs
 
     if len(files) < 2:
         raise InputError(None, "RECORD... OUT.h5", "give at least one time record and the sweep file to write")
@@ -195,13 +195,15 @@ def simulate(
 ) -> int:
     """Simulate a stepped-sine sweep of a (truth) rig, healthy or with a named fault; several --actuator /
     --sensor give an x/y sweep (format version 2)."""
-    import dataclasses
-
-    from rotorcheck import workflow
-    from rotorcheck.fileio import check_writable
-    from rotorcheck.resources import configs_dir
-    from rotorcheck.sim.rig_sim import shaft_angle_from, simulate_rig, step_settings
-    from rotorcheck.sweep.hdf5io import write_sweep
+    from rotorcheck import workflow  # lazy: the pipeline (scipy, pydantic, h5py) only when the command runs
+    from rotorcheck.fileio import check_writable  # lazy: keeps `rotorcheck --help` start-up light
+    from rotorcheck.resources import configs_dir  # lazy: keeps `rotorcheck --help` start-up light
+    from rotorcheck.sim.rig_sim import (  # lazy: the simulator (FE model, h5py) only when the command runs
+        shaft_angle_from,
+        simulate_rig,
+        step_settings,
+    )
+    from rotorcheck.sweep.hdf5io import write_sweep  # lazy: h5py only when the command runs
 
     check_speed(speed)
     finite_positive(f_min, "--f-min")
@@ -246,8 +248,8 @@ def simulate(
     grid = np.linspace(f_min, f_max, points)
     with progress(f"simulating {points} points at {speed:g} rpm" + (f" with {fault}" if fault else "")):
         if actuator or sensor:
-            from rotorcheck.nominal import parse_port
-            from rotorcheck.sim.rig_sim import simulate_rig_patterns
+            from rotorcheck.nominal import parse_port  # lazy: pydantic (the rig schema) only when the command runs
+            from rotorcheck.sim.rig_sim import simulate_rig_patterns  # lazy: the simulator only when the command runs
 
             acts = ([parse_port(a, "--actuator") for a in split_list(actuator)] if actuator
                     else [cfg.io_ports("simulate").actuator])

@@ -14,15 +14,15 @@ from pathlib import Path
 from typing import Annotated, Any
 
 import typer
+from rich.console import Console
 
+from rotorcheck.errors import InputError
 from rotorcheck.progress import ConsoleSteps
 
 EXIT_OK, EXIT_ALARM = 0, 1
 
 
 def _err() -> Any:
-    from rich.console import Console
-
     return Console(stderr=True, highlight=False, soft_wrap=True)
 
 
@@ -82,10 +82,9 @@ def fleet(
     """A fleet over time: every new sweep against its machine's baseline (skipping those done, by sha256),
     damages located, one summary table (CSV, HDF5), an alert list, per-machine trends with the time to a
     limit, and index.html. Exit 1 when a machine is in alarm."""
-    from rotorcheck.errors import InputError
-    from rotorcheck.fleet.runner import FleetOptions, run_fleet
-    from rotorcheck.fleet.summary import render_alerts_text
-    from rotorcheck.fleet.tasks import Settings
+    from rotorcheck.fleet.runner import FleetOptions, run_fleet  # lazy: the runner (numpy) only when the command runs
+    from rotorcheck.fleet.summary import render_alerts_text  # lazy: keeps `rotorcheck --help` start-up light
+    from rotorcheck.fleet.tasks import Settings  # lazy: the tasks (numpy) only when the command runs
 
     err = _err()
     if serial and (dask or scheduler):
@@ -110,7 +109,7 @@ def fleet(
     if not res.up_to_date:
         err.print(f"wrote {res.out / 'summary.csv'}, summary.h5, alerts.json, trends.json, index.html")
     if as_json:
-        from rotorcheck.report.reports import render_json
+        from rotorcheck.report.reports import render_json  # lazy: keeps `rotorcheck --help` start-up light
 
         sys.stdout.write(render_json(res.to_dict()))
         sys.stdout.flush()
