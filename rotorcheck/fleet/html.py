@@ -11,9 +11,11 @@ import io
 from pathlib import Path
 from typing import Any
 
+import matplotlib.dates as mdates
+import numpy as np
 from matplotlib.figure import Figure
 
-from rotorcheck.fileio import atomic_write_text
+from rotorcheck.fileio import atomic_write_bytes, atomic_write_text
 from rotorcheck.fleet.trend import ASSUMPTIONS, Trend, datetime_of_days, days
 
 VERDICT_COLOURS = {"healthy": "tab:green", "damage": "tab:red", "inconclusive": "tab:orange", "error": "tab:gray"}
@@ -27,8 +29,6 @@ def trend_figure(machine: str, rows: list[dict[str, Any]], trend: Trend) -> Figu
     """Three panels over time: the low-frequency stiffness change Re D_u (N/m, 95 % error bars, coloured by
     verdict) with the fitted line, its band, the limit and the crossing; the fitted benign parameters with
     their intervals; the joint test's statistic over its threshold."""
-    import numpy as np
-
     fig = Figure(figsize=(9.0, 8.0), layout="constrained")
     ax1, ax2, ax3 = fig.subplots(3, 1, sharex=True, height_ratios=[3, 2, 1.4])
     t = np.array([days(r["time"]) for r in rows])
@@ -107,8 +107,6 @@ def trend_figure(machine: str, rows: list[dict[str, Any]], trend: Trend) -> Figu
     ax3.set_xlabel("sweep time (UTC)")
     ax3.set_title(f"{machine}: joint test (damage above 1)", fontsize=9)
     ax3.grid(alpha=0.3)
-    import matplotlib.dates as mdates
-
     locator = mdates.AutoDateLocator(minticks=4, maxticks=9)
     ax3.xaxis.set_major_locator(locator)
     ax3.xaxis.set_major_formatter(mdates.ConciseDateFormatter(locator))
@@ -200,8 +198,6 @@ def render_index(out: Path, rows_by_machine: dict[str, list[dict[str, Any]]], tr
 def write_index(out: Path, rows_by_machine: dict[str, list[dict[str, Any]]], trends: dict[str, Trend],
                 alert_entries: list[dict[str, Any]], meta: dict[str, Any]) -> list[Path]:
     """The trend PNGs (``trends/<machine>.png``) and ``index.html`` (embedding them), atomically."""
-    from rotorcheck.fileio import atomic_write_bytes
-
     pngs: dict[str, bytes] = {}
     written: list[Path] = []
     for m, rows in sorted(rows_by_machine.items()):

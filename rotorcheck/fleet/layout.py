@@ -110,7 +110,7 @@ def time_from_file(path: Path) -> str:
     t = time_from_name(path.name)
     if t is not None:
         return t
-    import h5py  # only for files whose name carries no time
+    import h5py  # lazy: h5py only for files whose name carries no time
 
     try:
         with h5py.File(path, "r") as h5:
@@ -186,7 +186,7 @@ def _rows_csv(path: Path) -> list[dict[str, str]]:
 
 
 def _rows_yaml(path: Path) -> list[dict[str, str]]:
-    from rotorcheck.safeload import load_yaml_file  # here: yaml only for a YAML manifest
+    from rotorcheck.safeload import load_yaml_file  # lazy: yaml only for a YAML manifest
 
     doc = load_yaml_file(path, MAX_MANIFEST_BYTES, "fleet manifest")
     rows = doc.get("sweeps") if isinstance(doc, dict) else None

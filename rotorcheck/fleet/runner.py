@@ -28,6 +28,7 @@ from typing import Any
 
 from rotorcheck.errors import InputError, check_choice, finite_positive, in_open_unit
 from rotorcheck.fileio import atomic_write_text
+from rotorcheck.fleet import summary
 from rotorcheck.fleet.index import HashIndex
 from rotorcheck.fleet.layout import Fleet, discover
 from rotorcheck.fleet.tasks import (
@@ -39,6 +40,7 @@ from rotorcheck.fleet.tasks import (
     read_row,
     run_task,
 )
+from rotorcheck.fleet.trend import machine_trend
 
 EXECUTORS = ("serial", "processes", "dask")
 LOCATE_MODES = ("latest", "all", "none")
@@ -106,7 +108,7 @@ def check_options(opts: FleetOptions) -> None:
     parse_limit(opts.limit)
     if opts.executor == "dask" or opts.scheduler:
         try:
-            import distributed  # noqa: F401
+            import distributed  # noqa: F401  # lazy: optional (the 'fleet' extra): only with --dask or --scheduler
         except ImportError:
             raise InputError(None, "--scheduler" if opts.scheduler else "--dask", INSTALL_HINT) from None
 
@@ -177,8 +179,8 @@ def _processes(tasks: list[SweepTask], workers: int, log: Callable[[str], None],
                ) -> list[dict[str, Any]]:
     """A process pool; a pool broken by a dead worker is replaced and the unfinished tasks run again
     (at most 3 pools)."""
-    from concurrent.futures import ProcessPoolExecutor, as_completed
-    from concurrent.futures.process import BrokenProcessPool
+    from concurrent.futures import ProcessPoolExecutor, as_completed  # lazy: only for the local process pool
+    from concurrent.futures.process import BrokenProcessPool  # lazy: only for the local process pool
 
     results: dict[str, dict[str, Any]] = {}
     todo = list(tasks)
@@ -207,9 +209,9 @@ def _dask(tasks: list[SweepTask], workers: int, scheduler: str | None, log: Call
           tick: Tick = _no_tick) -> list[dict[str, Any]]:
     """Dask distributed: a client of ``scheduler``, else of a LocalCluster (``workers`` processes, one thread
     each). A task whose worker died is rescheduled by Dask; a task that raised is retried twice."""
-    import logging
+    import logging  # lazy: logging only for a Dask LocalCluster's log level
 
-    from distributed import Client, LocalCluster, as_completed
+    from distributed import Client, LocalCluster, as_completed  # lazy: optional (the 'fleet' extra): only with Dask
 
     cluster = None
     if scheduler:
@@ -289,7 +291,7 @@ def _limits(fleet: Fleet, rows: dict[str, list[dict[str, Any]]], limit: tuple[fl
     value, unit = limit
     if unit == "N/m":
         return dict.fromkeys(rows, value), f"{value:.4g} N/m of the low-frequency Re D_u"
-    from rotorcheck import workflow
+    from rotorcheck import workflow  # lazy: the pipeline only for a limit in % of a rig's stiffness
 
     out: dict[str, float | None] = {}
     for m in fleet.machines:
@@ -360,8 +362,7 @@ def run_fleet(source: str | Path, opts: FleetOptions | None = None, log: Callabl
 def write_outputs(fleet: Fleet, rows: dict[str, list[dict[str, Any]]], opts: FleetOptions, out: Path
                   ) -> tuple[list[Path], list[dict[str, Any]], dict[str, Any]]:
     """Trends, alerts, the summary table, the trend plots and index.html."""
-    from rotorcheck.fleet import html, summary
-    from rotorcheck.fleet.trend import machine_trend
+    from rotorcheck.fleet import html  # lazy: matplotlib (the trend plots) only when writing the outputs
 
     limits, limit_text = _limits(fleet, rows, parse_limit(opts.limit))
     trends = {m: machine_trend(m, r, limits.get(m), opts.trend_confidence) for m, r in rows.items()}

@@ -115,8 +115,8 @@ def render_csv(rows: list[dict[str, Any]]) -> str:
 def write_hdf5(rows: list[dict[str, Any]], path: Path) -> None:
     """summary.h5: group ``/summary`` with one dataset per column (numbers float64 with NaN for none,
     text UTF-8), each with a ``units`` attribute; written atomically."""
-    import h5py
-    import numpy as np
+    import h5py  # lazy: h5py only to write summary.h5
+    import numpy as np  # lazy: numpy only for summary.h5 (this module loads without it)
 
     names, units, values = table(rows)
     with atomic_path(path) as tmp, h5py.File(tmp, "w", track_order=True) as h5:
@@ -137,7 +137,7 @@ def write_hdf5(rows: list[dict[str, Any]], path: Path) -> None:
 
 def read_hdf5(path: Path) -> dict[str, list[Any]]:
     """The columns of a summary.h5 (numbers as floats, text as str)."""
-    import h5py
+    import h5py  # lazy: h5py only to read summary.h5
 
     out: dict[str, list[Any]] = {}
     with h5py.File(path, "r") as h5:
@@ -177,7 +177,7 @@ def alerts(rows_by_machine: dict[str, list[dict[str, Any]]], trends: dict[str, A
             rules.append(("alarm", "damage-confirmed", judged[len(judged) - streak + confirm - 1]["time"]))
         fit = getattr(tr, "fit", None)
         if limit is not None and fit is not None:
-            from rotorcheck.fleet.trend import days
+            from rotorcheck.fleet.trend import days  # lazy: numpy (fleet.trend) only with a limit
 
             if fit.beyond(limit, days(last["time"])):
                 rules.append(("alarm", "limit-exceeded", last["time"]))
@@ -216,7 +216,7 @@ def _fmt(x: Any) -> str:
 def write_alerts(entries: list[dict[str, Any]], out: Path, rules: dict[str, str] | None = None) -> list[Path]:
     """alerts.json (the entries and the rules in words, :func:`rule_texts`) and alerts.txt
     (:func:`render_alerts_text`), atomically."""
-    from rotorcheck.report.reports import render_json
+    from rotorcheck.report.reports import render_json  # lazy: numpy (report.reports) only when writing JSON
 
     atomic_write_text(out / "alerts.json", render_json({"alerts": entries, "rules": rules or ALERT_RULES}))
     atomic_write_text(out / "alerts.txt", render_alerts_text(entries))
@@ -232,7 +232,7 @@ def write_summary(rows: list[dict[str, Any]], out: Path) -> list[Path]:
 
 def write_trends(trends: dict[str, Any], out: Path) -> Path:
     """trends.json: every machine's fit, slope interval, crossing and the assumptions."""
-    from rotorcheck.report.reports import render_json
+    from rotorcheck.report.reports import render_json  # lazy: numpy (report.reports) only when writing JSON
 
     atomic_write_text(out / "trends.json", render_json({m: t.to_dict() for m, t in sorted(trends.items())}))
     return out / "trends.json"

@@ -18,14 +18,18 @@ defaults as ``rotorcheck detect`` and ``rotorcheck locate``.
 from __future__ import annotations
 
 import json
+import math
 import os
 import shutil
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
-from rotorcheck.errors import UserInputError
+import numpy as np
+
+from rotorcheck.errors import InputError, UserInputError
 from rotorcheck.fileio import atomic_write_text, publish_dir, temp_dir_beside
+from rotorcheck.report.reports import render_json, write_reports
 from rotorcheck.report.schema import DetectionReport, LocationReport
 
 DONE = "DONE"
@@ -124,8 +128,6 @@ def _maybe_die(task: SweepTask, tmp: Path) -> None:
 def low_band(frequency_hz: Any, healthy_frf: Any, low_band_hz: float | None) -> Any:
     """Mask of the low band's points: below ``low_band_hz`` or, by default, below
     :data:`LOW_BAND_FRACTION` of the frequency where the healthy FRF is largest (at least 2 points)."""
-    import numpy as np
-
     f = np.asarray(frequency_hz, dtype=float)
     if low_band_hz is None:
         mag = np.abs(np.asarray(healthy_frf).reshape(f.size, -1)[:, 0])
@@ -141,8 +143,6 @@ def stiffness_figure(report: DetectionReport, mask: Any) -> dict[str, Any]:
     """The low-frequency stiffness change at the damage port: the mean of the anchored Re D_u over the low
     band's points (N/m, positive: a stiffness loss), its standard error from the points' scatter
     (sample std / sqrt(n), N/m) and the medians of the anchored bound on |D_u| there (N/m)."""
-    import numpy as np
-
     out: dict[str, Any] = {"du_low_re_n_per_m": None, "du_low_se_n_per_m": None, "du_low_points": 0,
                            "du_low_band_max_hz": None, "du_low_bound_min_abs_n_per_m": None,
                            "du_low_bound_max_abs_n_per_m": None}
@@ -163,8 +163,6 @@ def stiffness_figure(report: DetectionReport, mask: Any) -> dict[str, Any]:
 
 
 def _num(x: Any) -> float | None:
-    import math
-
     if x is None:
         return None
     v = float(x)
@@ -213,8 +211,7 @@ def _inputs(task: SweepTask) -> tuple[Any, Any, Any, Any]:
     """``(rig, rig file, baseline, run)`` of a task: the sweep's one run (a fleet sweep is one run: one speed per
     sweep, one row per sweep) with the baseline's run at its speed, checked (the library's
     :func:`rotorcheck.workflow.paired_runs`, as ``rotorcheck detect``)."""
-    from rotorcheck import workflow
-    from rotorcheck.errors import InputError
+    from rotorcheck import workflow  # lazy: the pipeline only in the task's worker
 
     cfg, rig_file, pairs = workflow.paired_runs(task.sweep, task.baseline, task.rig, sha256=task.sweep_sha256)
     if len(pairs) != 1:
@@ -226,8 +223,8 @@ def _inputs(task: SweepTask) -> tuple[Any, Any, Any, Any]:
 def _detect(task: SweepTask) -> tuple[dict[str, Any], DetectionReport | None]:
     """(row, report) of the sweep against its machine's baseline: the library's
     :func:`rotorcheck.workflow.detect_pairs`, as ``rotorcheck detect``."""
-    from rotorcheck import workflow
-    from rotorcheck.fe.blas import one_blas_thread
+    from rotorcheck import workflow  # lazy: the pipeline only in the task's worker
+    from rotorcheck.fe.blas import one_blas_thread  # lazy: threadpoolctl only in the task's worker
 
     with one_blas_thread():
         cfg, rig_file, base, mrun = _inputs(task)
@@ -248,8 +245,6 @@ def run_detect(task: SweepTask) -> dict[str, Any]:
         row = read_row(final)
         if row is not None and _is_current(row, task):
             return {"row": row, "executed": False}
-    from rotorcheck.report.reports import write_reports
-
     tmp = temp_dir_beside(final)
     try:
         _maybe_die(task, tmp)
@@ -277,9 +272,8 @@ def run_locate(task: SweepTask) -> dict[str, Any]:
     done = final / DONE
     if done.exists() and not task.force:
         return {"location": read_location(task.result_dir), "executed": False}
-    from rotorcheck import workflow
-    from rotorcheck.fe.blas import one_blas_thread
-    from rotorcheck.report.reports import render_json
+    from rotorcheck import workflow  # lazy: the pipeline only in the task's worker
+    from rotorcheck.fe.blas import one_blas_thread  # lazy: threadpoolctl only in the task's worker
 
     tmp = temp_dir_beside(final)
     try:

@@ -15,6 +15,7 @@ damage: a change that the rig's benign ranges explain (verdict healthy) is not e
 
 from __future__ import annotations
 
+import datetime as dt
 import math
 from dataclasses import dataclass
 from typing import Any
@@ -96,7 +97,7 @@ class LineFit:
 
 
 def _t_quantile(p: float, dof: int) -> float:
-    from scipy.stats import t as student_t
+    from scipy.stats import t as student_t  # lazy: scipy.stats (~0.3 s) only for Student's t
 
     return float(student_t.ppf(p, dof))
 
@@ -122,7 +123,7 @@ def fit_line(t: Any, y: Any, sigma: Any, confidence: float = 0.95, absolute_sigm
     beta = cov @ (XtW @ y)
     dof = n - 2
     if absolute_sigma:
-        from statistics import NormalDist
+        from statistics import NormalDist  # lazy: statistics only with absolute sigmas
 
         scale, q = 1.0, NormalDist().inv_cdf(0.5 + confidence / 2.0)
     else:
@@ -141,7 +142,7 @@ def fit_kink(t: Any, y: Any, taus: Any, confidence: float = 0.95, t_ref: float |
     ``RSS_min (1 + F / (n - 4))``, F the ``confidence`` quantile of F(1, n - 4) (the hull when the set is
     not one interval). The line's covariance (for its band and the crossing) is that at the best ``tau``,
     scaled by ``RSS_min / (n - 3)``, with Student's t on n - 3 degrees of freedom. Needs 5 points."""
-    from scipy.special import fdtri
+    from scipy.special import fdtri  # lazy: scipy only for a kink's fit
 
     t = np.asarray(t, dtype=float)
     y = np.asarray(y, dtype=float)
@@ -214,22 +215,18 @@ class Trend:
 
 def days(iso: str) -> float:
     """Days since 1970-01-01 of an ISO time ``YYYY-MM-DDTHH:MM:SSZ``."""
-    import datetime as dt
-
     d = dt.datetime.strptime(iso, "%Y-%m-%dT%H:%M:%SZ").replace(tzinfo=dt.timezone.utc)
     return d.timestamp() / 86400.0
 
 
 def datetime_of_days(x: float) -> Any:
     """The UTC time (aware ``datetime``) ``x`` days after 1970-01-01 (the inverse of :func:`days`)."""
-    import datetime as dt
-
     return dt.datetime.fromtimestamp(x * 86400.0, dt.timezone.utc)
 
 
 def iso_of_days(x: float | None) -> str | None:
     """The ISO time ``x`` days after 1970-01-01 (None stays None; far beyond year 9999 is None)."""
-    from rotorcheck.fleet.layout import iso_utc
+    from rotorcheck.fleet.layout import iso_utc  # lazy: fleet.layout (fileio, hashlib) only to format a time
 
     if x is None or not math.isfinite(x) or abs(x) > 2.9e6:
         return None
