@@ -32,6 +32,7 @@ with the coordinates ``frequency_hz`` (Hz), ``channel`` (the channel pairs as ``
 from __future__ import annotations
 
 import datetime as _dt
+import hashlib
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -325,8 +326,6 @@ def _item_bytes(value: object) -> bytes:
 
 def _digests(h5: h5py.Group) -> dict[str, str]:
     """sha256 of each attribute (``@name``) and dataset of one group (not its subgroups, not the digest)."""
-    import hashlib
-
     out = {f"@{k}": hashlib.sha256(_item_bytes(v)).hexdigest() for k, v in h5.attrs.items() if k != DIGEST_ATTR}
     for k, v in h5.items():
         if isinstance(v, h5py.Dataset):
@@ -335,15 +334,11 @@ def _digests(h5: h5py.Group) -> dict[str, str]:
 
 
 def _seal(h5: h5py.Group) -> None:
-    import json
-
     h5.attrs[DIGEST_ATTR] = json.dumps(_digests(h5))
 
 
 def _verify(h5: h5py.Group, p: Path, where: str) -> None:
     """Every item detection reads is as rotorcheck wrote it: exit 2 naming what does not match."""
-    import json
-
     raw = h5.attrs.get(DIGEST_ATTR)
     if raw is None:
         raise InputError(p, f"{where}/@{DIGEST_ATTR}", "no content digest: written by an older rotorcheck or "

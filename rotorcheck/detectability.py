@@ -29,9 +29,12 @@ force amplitude ``F`` (N). Both sweeps' noise counts (new and baseline).
 
 from __future__ import annotations
 
+import dataclasses
 import math
+import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from itertools import combinations
 from typing import Any
 
 import numpy as np
@@ -57,7 +60,7 @@ def z_upper(alpha: float) -> float:
     ``scipy.stats.norm.isf`` computes (the same bits; ``+ 0.0`` turns its -0 at 0.5 into 0)."""
     # lazy import, and scipy.special rather than scipy.stats: importing scipy.stats costs ~0.3 s of every
     # ``detect`` (issue 28); scipy.special is loaded with scipy.optimize anyway
-    from scipy.special import ndtri
+    from scipy.special import ndtri  # lazy: scipy.special only for this quantile (see above)
 
     return float(-ndtri(alpha)) + 0.0
 
@@ -183,8 +186,7 @@ def _map(job: Any, tasks: list[Any], workers: int | None, progress: Progress | N
     """``[job(t) for t in tasks]``, over ``workers`` forked processes where that helps (Linux; default:
     up to 2, one per core); in order, deterministic (every task is). ``progress`` hears of each task
     done (``labels[k]`` names task k)."""
-    import multiprocessing
-    import os
+    import multiprocessing  # lazy: multiprocessing only for the searches' process pool
 
     names = list(labels) if labels is not None else [f"task {k + 1}" for k in range(len(tasks))]
     n = min(len(tasks), workers if workers is not None else min(2, os.cpu_count() or 1))
@@ -327,8 +329,6 @@ def linearized(benign: BenignModel) -> BenignModel:
     solve per parameter, then ``b0 + J (theta - x0)``. On the crack rig its detectability figures are
     within 3 % of the re-solved model's (15 % on element 6): fast enough to rank sensor sets and to state
     in every detect report."""
-    import dataclasses
-
     p = len(benign.lo)
     x0 = np.clip(np.zeros(p), benign.lo, benign.hi)
     b0 = benign.predict(x0)
@@ -412,8 +412,6 @@ def rank_sensor_sets(
     there are at most ``exhaustive_limit`` of them ("exhaustive"), else greedy: add the port that most
     improves the worst element, one at a time ("greedy"). Elements no candidate can see are left out of
     the score (returned third). ``variance``: one FRF point of one sweep, m^2/N^2, the same on every pair."""
-    from itertools import combinations
-
     f = np.asarray(freq_hz, dtype=float)
     cand = list(candidates)
     if not cand or max_sensors < 1:

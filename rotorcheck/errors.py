@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable
 from pathlib import Path
 
@@ -39,8 +40,6 @@ def finite_positive(value: float | None, option: str, *, allow_zero: bool = Fals
     else an InputError naming ``option``."""
     if value is None:
         return None
-    import math
-
     ok = math.isfinite(value) and (value >= 0 if allow_zero else value > 0)
     if not ok or (maximum is not None and value > maximum):
         want = ">= 0" if allow_zero else "> 0"

@@ -10,6 +10,7 @@ flipping it, so no process-wide state changes.
 from __future__ import annotations
 
 import contextlib
+import datetime as dt
 import errno
 import hashlib
 import json
@@ -334,8 +335,6 @@ def claim_outputs(paths: Iterable[str | Path], force: bool, command: str, fresh:
     that run (a claim whose process is gone is taken over). Then ``fresh`` (the outputs that must not exist
     without ``force``) are checked again: one another run published after this run's first check is refused.
     :func:`release_claims` (the CLI calls it when the command ends) removes the claims."""
-    import datetime as dt
-
     outs = [Path(p) for p in paths]
     stamp = dt.datetime.now(dt.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
     doc = json.dumps({"command": command, "pid": os.getpid(), "started_utc": stamp}).encode()
@@ -443,7 +442,7 @@ def check_hdf5_global_heaps(
     they are walked here first, object by object, each within its collection and the free space filling
     the rest exactly. ``error(file, field, message)`` builds the exception. Returns the collections found:
     ``{file offset: {object index: size}}`` (for :func:`hdf5_vlen_problem`)."""
-    import mmap
+    import mmap  # lazy: mmap only to walk an HDF5 file's global heaps
 
     p = Path(path)
     heaps: dict[int, dict[int, int]] = {}
@@ -509,7 +508,7 @@ def hdf5_attr_problem(obj: Any, name: str) -> str:
     """What makes the attribute ``name`` of the h5py object ``obj`` unsafe to read, else "": only text and
     plain integers/floats with a sane layout are read (a corrupt datatype message, e.g. an integer whose
     offset and precision exceed its size, or a variable-length sequence, crashed libhdf5 with SIGSEGV)."""
-    import h5py
+    import h5py  # lazy: h5py only for HDF5 attributes (this base module loads without it)
 
     try:
         t = obj.attrs.get_id(name).get_type()

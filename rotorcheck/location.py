@@ -39,6 +39,9 @@ from typing import Any
 import numpy as np
 
 from rotorcheck.config import Crack, RigConfig
+from rotorcheck.faults.compliance import mayes_davies_compliances, open_crack_modulus_factor
+from rotorcheck.faults.crack import crack_stiffness, delta_i_ratio
+from rotorcheck.faults.harmonic_balance import HBSolver
 from rotorcheck.nominal import ChannelPair, port_label
 from rotorcheck.progress import Progress, report
 from rotorcheck.ranking import (
@@ -55,7 +58,9 @@ from rotorcheck.ranking import (
     section_length,
 )
 from rotorcheck.robust.affine import AffineModel, coupled_blocks
-from rotorcheck.robust.severity import SEVERITY_RULE
+from rotorcheck.robust.box_test import Points, point_receptances
+from rotorcheck.robust.severity import SEVERITY_RULE, severity_interval
+from rotorcheck.signatures import candidate_elements
 
 #: a located element: relative likelihood at least this (else the ranked candidates are the answer)
 LOCATED_LIKELIHOOD = 0.5
@@ -72,17 +77,12 @@ MAX_DEPTH = 0.5
 
 def open_loss(depth: float, radius: float, length: float, poisson: float) -> float:
     """Element stiffness loss ``1 - E'/E`` of an open crack ``depth`` (fraction of the diameter) deep."""
-    from rotorcheck.faults.compliance import open_crack_modulus_factor
-
     return 1.0 - open_crack_modulus_factor(2.0 * depth, radius, length, poisson)
 
 
 def breathing_loss(depth: float, radius: float, section_length: float, poisson: float) -> float:
     """Equivalent element loss of a breathing (Mayes-Davies) crack ``depth`` deep: its revolution average
     ``(dI_xi + dI_eta) / (4 I)`` (eq. 5.25 per plane, steering ``(1 - cos theta)/2`` averaging to 1/2)."""
-    from rotorcheck.faults.compliance import mayes_davies_compliances
-    from rotorcheck.faults.crack import delta_i_ratio
-
     f_xi, f_eta = mayes_davies_compliances(2.0 * depth)
     return 0.25 * (delta_i_ratio(f_xi, radius, section_length, poisson)
                    + delta_i_ratio(f_eta, radius, section_length, poisson))
@@ -92,7 +92,7 @@ def depth_of_loss(loss: float, relation: Any) -> float | None:
     """The depth (fraction of the diameter) whose loss under ``relation(depth)`` is ``loss`` (Brent's root
     bracketed in [1e-9, MAX_DEPTH] to 1e-10; the relation rises with depth); 0 for no loss, None beyond
     :data:`MAX_DEPTH`."""
-    from scipy.optimize import brentq
+    from scipy.optimize import brentq  # lazy: scipy.optimize only for a depth relation
 
     if not np.isfinite(loss) or loss <= 0.0:
         return 0.0
@@ -381,11 +381,7 @@ def _hb_relation(config: RigConfig, sysm: Any, model: AffineModel, element: int,
     plane; with the cross pairs an x/y sweep read a 5 % deep crack as a 42 % loss) the model's own harmonic-balance
     response to a Mayes-Davies crack of that depth (sidebands to 4 x the spin frequency);
     interpolated linearly, 0 at depth 0, kept non-decreasing; ``sysm`` the assembled ``config``."""
-    from scipy.optimize import minimize_scalar
-
-    from rotorcheck.faults.crack import crack_stiffness
-    from rotorcheck.faults.harmonic_balance import HBSolver
-    from rotorcheck.robust.box_test import point_receptances
+    from scipy.optimize import minimize_scalar  # lazy: scipy.optimize only for the harmonic-balance relation
 
     f = pts.w / (2.0 * np.pi)
     in_dofs = [int(np.flatnonzero(b)[0]) for b in pts.b]
@@ -458,10 +454,6 @@ def locate(config: RigConfig, box: Any, pairs: Sequence[ChannelPair], change: Sw
     (:func:`rotorcheck.ranking.section_length`). ``false_alarm``: the chance that the true element is
     excluded when its hypothesis holds and the model errs within its stated bounds (Sidak over the points
     used). ``progress`` hears each element ranked and certified."""
-    from rotorcheck.robust.box_test import Points
-    from rotorcheck.robust.severity import severity_interval
-    from rotorcheck.signatures import candidate_elements
-
     f = change.freq_hz
     nf, n_pairs = change.t_new.shape
     omega = change.omega

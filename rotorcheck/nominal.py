@@ -20,6 +20,7 @@ Structures (``uncertainty.structure`` in the rig file):
 
 from __future__ import annotations
 
+import re
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -187,8 +188,6 @@ def port_label(port: Port) -> str:
 def parse_port(text: str, option: str = "--port") -> Port:
     """A rotor port from text: ``8x``, ``s8.x`` (:func:`port_label`'s form) or ``8:y`` (station, direction);
     an InputError naming ``option`` otherwise."""
-    import re
-
     m = re.fullmatch(r"\s*s?(\d+)\s*[.:]?\s*([xyXY])\s*", text)
     if m is None:
         raise InputError(None, option, f"{text!r} is no station and direction (e.g. 8x, s6.y)")

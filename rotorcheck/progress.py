@@ -48,7 +48,7 @@ class ConsoleSteps:
     def __enter__(self) -> ConsoleSteps:
         self._start = self._last = time.monotonic()
         if not self.quiet and self.console.is_terminal:
-            from rich.progress import (
+            from rich.progress import (  # lazy: rich.progress only for a bar on a terminal
                 BarColumn,
                 MofNCompleteColumn,
                 Progress,

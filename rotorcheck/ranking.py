@@ -30,10 +30,13 @@ from typing import Any
 import numpy as np
 
 from rotorcheck.config import Crack, RigConfig
+from rotorcheck.faults.crack import crack_stiffness
+from rotorcheck.fe.assembly import build_system
 from rotorcheck.nominal import ChannelPair
 from rotorcheck.progress import Progress, report
 from rotorcheck.robust.affine import AffineModel, AffineParameter
 from rotorcheck.robust.joint import linearized_se
+from rotorcheck.robust.measured import io_model_error
 
 #: assumed bound on the model's error in the predicted change at a point, relative to that change: the
 #: nominal model's crack shapes agree with the truth rig's to a cosine of 0.987-0.990 (limits.md 1), an
@@ -102,7 +105,7 @@ class SweepChange:
 def natural_frequencies_hz(model: AffineModel) -> np.ndarray:
     """The undamped-equivalent natural frequencies |lambda| / 2 pi (Hz) of ``model`` at its parameters'
     zero (state space of M, D, K; each conjugate pair once)."""
-    from scipy.linalg import eig
+    from scipy.linalg import eig  # lazy: scipy.linalg only for the natural frequencies
 
     n = model.K.shape[0]
     Minv = np.linalg.inv(model.M)
@@ -138,8 +141,6 @@ def sweep_change(box: Any, pairs: Sequence[ChannelPair], freq_hz: np.ndarray, sp
     (:class:`rotorcheck.signatures.BenignBox`, its model at ``speed_rpm``), ``t_*``, ``var_*`` (f, P) one
     column per pair of ``pairs``, ``benign_envelope`` (P f,) m/N the largest benign change the ranges
     allow at each point; ``exclude`` (f,) bool points never used (on a shaft harmonic)."""
-    from rotorcheck.robust.measured import io_model_error
-
     f = np.asarray(freq_hz, dtype=float)
     nf, n_pairs = np.asarray(t_new).reshape(f.size, -1).shape
     t_new, var_new, t_h, var_h = (np.asarray(x).reshape(nf, n_pairs) for x in (t_new, var_new, t_healthy,
@@ -187,12 +188,8 @@ def _loss_shape(config: RigConfig, sys0: Any, element: int, speed_rpm: float, hy
     """``(A_K, A_D)``: the change of K (and of C where damping follows K affinely) per unit loss of
     ``element`` (N/m per 1), to be subtracted; A_D None where the damping is held (modal damping);
     ``sys0`` the assembled ``config``."""
-    from rotorcheck.fe.assembly import build_system
-
     _, C0, _, K0 = sys0.matrices(speed_rpm)
     if hypothesis == "breathing":
-        from rotorcheck.faults.crack import crack_stiffness
-
         ck = crack_stiffness(sys0, breathing_crack(config, element, 0.25))
         s_ref = 0.25 * (ck.delta_xi + ck.delta_eta)
         return ck.scatter(ck.mean(), sys0.n_dof) / s_ref, None
@@ -376,7 +373,7 @@ INTERVAL_RULE = ("the best ranked element's loss: every loss whose fit (benign p
 
 def _solve(fit: _Fit, lo: np.ndarray, hi: np.ndarray, starts: Sequence[np.ndarray]) -> tuple[np.ndarray, float]:
     """The best bounded least-squares solution over ``starts``: ``(x, chi2)``."""
-    from scipy.optimize import least_squares
+    from scipy.optimize import least_squares  # lazy: scipy.optimize only for the fits
 
     hi = np.where(hi > lo, hi, lo + 1e-12)  # least_squares needs lo < hi (a fixed gain or loss)
     best: tuple[np.ndarray, float] | None = None
@@ -421,7 +418,7 @@ def profile_interval(fit: _Fit, lo: np.ndarray, hi: np.ndarray, x: np.ndarray, d
     interval holds the losses whose refitted misfit (benign parameters, gain and scale free, the loss held)
     exceeds the best by at most ``chi2_1(level) * inflation^2``, ``inflation = max(1, sqrt(chi2 / dof))``.
     Each end is bracketed by steps that double from the linearised standard error, then bisected to ``tol``."""
-    from scipy.special import chdtri
+    from scipy.special import chdtri  # lazy: scipy.special only for the interval's quantile
 
     k = lo.size - 2  # the loss's index
     lo_s, hi_s = np.r_[lo, 1.0 - form], np.r_[hi, 1.0 + form]

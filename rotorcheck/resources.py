@@ -17,7 +17,7 @@ from rotorcheck.errors import InputError, check_rig_id
 
 def _bundled(name: str) -> Path:
     """The package-data folder ``rotorcheck/_bundled/<name>`` (an installed wheel is unpacked on disk)."""
-    from importlib.resources import files  # here, not at import: it costs ~15 ms (tempfile, zipfile)
+    from importlib.resources import files  # lazy: importlib.resources costs ~15 ms (tempfile, zipfile)
 
     folder = files("rotorcheck") / "_bundled" / name
     return folder if isinstance(folder, Path) else Path(str(folder))

@@ -19,7 +19,7 @@ import numpy as np
 
 from rotorcheck.config import RigConfig
 from rotorcheck.fe.assembly import build_system, config_key
-from rotorcheck.fe.system import MechanicalSystem
+from rotorcheck.fe.system import RPM_TO_RAD_S, MechanicalSystem
 from rotorcheck.modal_anchor import (
     POLE_SENSITIVITY_ERROR,
     RESIDUE_SENSITIVITY_ERROR,
@@ -435,9 +435,6 @@ def benign_box(config: RigConfig, speed_rpm: float, parameters: Sequence[BenignP
     is held at its healthy value, which on the crack rig moves a predicted benign change by less than 5 %
     of itself (3.1 % at most in the test's draws, 30-495 Hz), far inside the model-error allowance. A
     stiffness or mass that is not affine in its parameter raises ValueError naming it."""
-    from rotorcheck.fe.assembly import build_system
-    from rotorcheck.fe.system import RPM_TO_RAD_S
-
     params = tuple(parameters) if parameters is not None else benign_parameters(config)
     sys0 = build_system(config)
     M, C, G, K = sys0.matrices(speed_rpm)

@@ -157,6 +157,7 @@ def test_a_refinement_that_excludes_the_best_ranked_makes_way_for_the_next(base0
     named beside the answer, the best fit, element 4, which the headline says its certificate excludes."""
     import numpy as np
 
+    import rotorcheck.location as location
     import rotorcheck.robust.severity as severity
     from rotorcheck import workflow
     from rotorcheck.baseline import read_baseline
@@ -170,7 +171,7 @@ def test_a_refinement_that_excludes_the_best_ranked_makes_way_for_the_next(base0
             return severity.SeverityInterval("excluded", np.nan, np.nan, (np.nan, np.nan), (0,), 1, False)
         return severity.SeverityInterval("consistent", 0.1, 0.6, (0.2, 0.5), (), 1, True)
 
-    monkeypatch.setattr(severity, "severity_interval", scripted)
+    monkeypatch.setattr(location, "severity_interval", scripted)  # locate's certificate (imported at module level)
     base = read_baseline(base0 / "baseline.h5")
     cfg, _, runs = workflow.load_rig_and_runs(S / "open_crack_0rpm.h5", None, base0 / "baseline.h5")
     loc = workflow.locate_damage(cfg, base, runs[0], elements=(3, 4, 5), damage=True)

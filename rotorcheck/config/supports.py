@@ -28,7 +28,7 @@ class SpeedTable(Strict):
 
     def at(self, speed_rpm: float, extrapolate: str = "hold") -> float:
         """The coefficient at ``speed_rpm``; ``extrapolate``: ``"hold"`` or ``"linear"`` outside the table."""
-        import numpy as np
+        import numpy as np  # lazy: numpy only to interpolate a table (rotorcheck.config loads without numpy)
 
         x, y = self.speed_rpm, self.values
         if extrapolate == "linear" and len(x) > 1 and not (x[0] <= speed_rpm <= x[-1]):

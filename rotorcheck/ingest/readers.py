@@ -23,6 +23,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+import h5py
 import numpy as np
 
 from rotorcheck.errors import InputError
@@ -41,7 +42,7 @@ TIME_NAMES = ("time", "t", "time_s")
 def parquet_available() -> bool:
     """True when pyarrow can be imported (Parquet support is optional)."""
     try:
-        import pyarrow  # noqa: F401
+        import pyarrow  # noqa: F401  # lazy: an optional dependency, only to ask whether it is installed
     except ImportError:
         return False
     return True
@@ -157,8 +158,6 @@ def _from_time(path: str, time: Column, cols: dict[str, Column], closers: list[C
 
 
 def _mat(path: str, fs_given: float | None) -> list[TimeRecord]:
-    import h5py
-
     if h5py.is_hdf5(path):  # MATLAB v7.3
         f = h5py.File(path, "r")
         cols: dict[str, Column] = {}
@@ -171,7 +170,7 @@ def _mat(path: str, fs_given: float | None) -> list[TimeRecord]:
             elif 1 in ds.shape:
                 cols[name] = _Row(ds, transpose=ds.shape[1] == 1)
         return _mat_records(path, cols, scalars, fs_given, [f.close])
-    import scipy.io
+    import scipy.io  # lazy: scipy.io only for a MATLAB v5 file
 
     try:
         data = scipy.io.loadmat(path, squeeze_me=True)
@@ -203,7 +202,7 @@ def _mat_records(path: str, cols: dict[str, Column], scalars: dict[str, float], 
 
 
 def _tdms(path: str, fs_given: float | None, group: str | None) -> TimeRecord:
-    from nptdms import TdmsFile
+    from nptdms import TdmsFile  # lazy: npTDMS only for a TDMS file
 
     try:
         f = TdmsFile.open(path)
@@ -243,7 +242,7 @@ def _tdms(path: str, fs_given: float | None, group: str | None) -> TimeRecord:
 
 
 def _wav(path: str) -> TimeRecord:
-    import scipy.io.wavfile
+    import scipy.io.wavfile  # lazy: scipy.io only for a WAV file
 
     try:
         fs, data = scipy.io.wavfile.read(path, mmap=True)
@@ -335,7 +334,7 @@ def _tabular(path: str, cols: dict[str, Column], fs_given: float | None) -> list
 def _parquet(path: str, fs_given: float | None) -> list[TimeRecord]:
     if not parquet_available():
         raise InputError(path, "format", "Parquet needs pyarrow (pip install pyarrow)")
-    import pyarrow.parquet as pq
+    import pyarrow.parquet as pq  # lazy: an optional dependency, only for a Parquet file
 
     table = pq.read_table(path)
     cols: dict[str, Column] = {n: table.column(n).to_numpy() for n in table.column_names}
@@ -351,7 +350,7 @@ def _parquet(path: str, fs_given: float | None) -> list[TimeRecord]:
 
 
 def _uff(path: str) -> TimeRecord:
-    from rotorcheck.sweep.uff import _load_sets
+    from rotorcheck.sweep.uff import _load_sets  # lazy: pyuff only for a UFF58 file
 
     cols: dict[str, Column] = {}
     fs: float | None = None
@@ -376,8 +375,6 @@ def _uff(path: str) -> TimeRecord:
 
 
 def _hdf5(path: str, fs_given: float | None, group: str | None) -> TimeRecord:
-    import h5py
-
     try:
         f = h5py.File(path, "r")
     except OSError as exc:

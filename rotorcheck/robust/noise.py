@@ -159,7 +159,7 @@ def noise_bound_from_floor(output: np.ndarray, frequency_hz: np.ndarray,
         raise ValueError("output and frequency_hz lengths differ")
     if window % 2 == 0 or window <= order + 1 or window > fr.size:
         raise ValueError("window must be odd, larger than order + 1 and at most the point count")
-    from scipy.signal import savgol_coeffs  # scipy.signal costs ~0.3 s to import: only here
+    from scipy.signal import savgol_coeffs  # lazy: scipy.signal costs ~0.3 s to import: only here
 
     coeffs = savgol_coeffs(window, order)
     h0 = float(coeffs[window // 2])
@@ -207,7 +207,7 @@ def noise_bound_pooled(output_var: np.ndarray, confidence: float = 0.99, family:
     the points. Points whose variance exceeds ``s^2 chi2.ppf(p, nu)/nu`` (the same family-wise
     level) are listed in ``details["excess_scatter_index"]`` (flat indices).
     """
-    from scipy.stats import chi2
+    from scipy.stats import chi2  # lazy: scipy.stats only for this bound
 
     var, finite, n = _checked_variance(output_var)
     p = point_level(confidence, n, family)

@@ -57,7 +57,7 @@ def _witness(model: AffineModel, fac: BoxFactors, pts: Points, lo: np.ndarray, h
     """Parameter values in ``[lo, hi]`` explaining every point (every ratio <= 1): the box's centre, else a
     bounded least squares of the ratios from it (Jacobian: :func:`ratio_jacobian`), then one that weighs
     the largest ratios; None if none."""
-    from scipy.optimize import least_squares
+    from scipy.optimize import least_squares  # lazy: scipy.optimize only when a witness is searched
 
     free = hi > lo
     x0 = 0.5 * (lo + hi)

@@ -141,7 +141,7 @@ def validate(me: np.ndarray, W: np.ndarray | Sequence[np.ndarray],
     per: list[GammaResult] = []
     for Wk, Zk in zip(Ws, Zs, strict=True):
         if enclose == "data":
-            from rotorcheck.robust.mu.driver import required_gamma  # the LMI solvers load only when used
+            from rotorcheck.robust.mu.driver import required_gamma  # lazy: the LMI solvers (cvxpy) load only when used
 
             res = required_gamma(me, Wk, Zk, V, structure, fail_at=fail_at, backend=backend,
                                  time_limit=time_limit)
@@ -259,7 +259,7 @@ def detect(me: np.ndarray, W: np.ndarray, Zt_new: np.ndarray,
     """
     V = _v(noise_bound)
     gh = np.asarray(gamma_h, dtype=float).reshape(-1)
-    from rotorcheck.robust.mu.driver import required_gamma  # the LMI solvers load only when used
+    from rotorcheck.robust.mu.driver import required_gamma  # lazy: the LMI solvers (cvxpy) load only when used
 
     res = required_gamma(me, W, Zt_new, V, structure, fail_at=fail_at, backend=backend,
                          time_limit=time_limit)

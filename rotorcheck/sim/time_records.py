@@ -22,6 +22,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+import h5py
 import numpy as np
 
 from rotorcheck.fileio import atomic_path
@@ -218,15 +219,13 @@ def write_record(sim: SimulatedRecord | TimeRecord, path: str | os.PathLike[str]
 
 
 def _mat(path: str, cols: dict[str, np.ndarray], fs: float, t0: float) -> None:
-    import scipy.io
+    import scipy.io  # lazy: scipy.io only for a MATLAB v5 file
 
     with open(path, "wb") as fh:
         scipy.io.savemat(fh, {**cols, "sample_rate_hz": fs, "start_s": t0}, do_compression=False)
 
 
 def _mat73(path: str, cols: dict[str, np.ndarray], fs: float, t0: float) -> None:
-    import h5py
-
     with h5py.File(path, "w", userblock_size=512) as h5:
         for name, a in {**cols, "sample_rate_hz": np.array([fs]), "start_s": np.array([t0])}.items():
             ds = h5.create_dataset(name, data=np.asarray(a, dtype=np.float64)[:, None], chunks=None)
@@ -237,7 +236,7 @@ def _mat73(path: str, cols: dict[str, np.ndarray], fs: float, t0: float) -> None
 
 
 def _tdms(path: str, cols: dict[str, np.ndarray], fs: float, t0: float, chunk: int = 1 << 18) -> None:
-    from nptdms import ChannelObject, GroupObject, TdmsWriter
+    from nptdms import ChannelObject, GroupObject, TdmsWriter  # lazy: npTDMS only for a TDMS file
 
     n = len(next(iter(cols.values())))
     with TdmsWriter(path) as w:
@@ -250,7 +249,7 @@ def _tdms(path: str, cols: dict[str, np.ndarray], fs: float, t0: float, chunk: i
 
 
 def _wav(path: str, cols: dict[str, np.ndarray], fs: float, t0: float) -> None:
-    import scipy.io.wavfile
+    import scipy.io.wavfile  # lazy: scipy.io only for a WAV file
 
     if abs(fs - round(fs)) > 1e-9 or t0 != 0.0:
         raise ValueError("WAV needs an integer sample rate and a record starting at 0 s")
@@ -270,7 +269,7 @@ def _csv(path: str, cols: dict[str, np.ndarray], fs: float, t0: float, chunk: in
 
 
 def _uff(path: str, cols: dict[str, np.ndarray], fs: float, t0: float) -> None:
-    import pyuff
+    import pyuff  # lazy: pyuff only for a UFF58 file
 
     sets = []
     for k, (name, a) in enumerate(cols.items()):
@@ -287,8 +286,6 @@ def _uff(path: str, cols: dict[str, np.ndarray], fs: float, t0: float) -> None:
 
 
 def _hdf5(path: str, cols: dict[str, np.ndarray], fs: float, t0: float) -> None:
-    import h5py
-
     with h5py.File(path, "w") as h5:
         h5.attrs["sample_rate_hz"] = fs
         h5.attrs["start_s"] = t0
@@ -297,8 +294,8 @@ def _hdf5(path: str, cols: dict[str, np.ndarray], fs: float, t0: float) -> None:
 
 
 def _parquet(path: str, cols: dict[str, np.ndarray], fs: float, t0: float) -> None:
-    import pyarrow as pa
-    import pyarrow.parquet as pq
+    import pyarrow as pa  # lazy: an optional dependency, only for a Parquet file
+    import pyarrow.parquet as pq  # lazy: an optional dependency, only for a Parquet file
 
     table = pa.table(cols).replace_schema_metadata({"sample_rate_hz": repr(fs), "start_s": repr(t0)})
     pq.write_table(table, path)
@@ -315,7 +312,7 @@ def simulate_rig_record(config: Any, frequency_hz: Sequence[float] | np.ndarray,
     """A time recording of a rig config (usually a truth rig) with the plant, disturbances, noise and
     shaft angle of :func:`rotorcheck.sim.rig_sim.simulate_rig` (force at the actuator port, one probe
     at the sensor port)."""
-    from rotorcheck.sim.rig_sim import at_shaft_angle, rig_plant, step_settings
+    from rotorcheck.sim.rig_sim import at_shaft_angle, rig_plant, step_settings  # lazy: the FE model only for a rig
 
     f = np.asarray(frequency_hz, dtype=float)
     rp = at_shaft_angle(rig_plant(config, speed_rpm, fault, n_harmonics, float(f.max())), speed_rpm,

@@ -30,7 +30,13 @@ from typing import Any
 import h5py
 import numpy as np
 
-from rotorcheck.fileio import atomic_path, check_hdf5_global_heaps, hdf5_attr_problem, hdf5_vlen_problem
+from rotorcheck.fileio import (
+    atomic_path,
+    check_hdf5_global_heaps,
+    file_sha256,
+    hdf5_attr_problem,
+    hdf5_vlen_problem,
+)
 from rotorcheck.netcdf_view import Dimensions, attach
 from rotorcheck.sweep.format import (
     CHANNEL_FIELDS,
@@ -535,8 +541,6 @@ def _write_run_v2(g: h5py.Group, run: Run) -> None:
 
 def sweep_sha256(path: str | os.PathLike[str]) -> str:
     """SHA-256 hex digest of the file bytes."""
-    from rotorcheck.fileio import file_sha256
-
     return file_sha256(path)
 
 __all__ = ["DATASET_UNITS", "read_sweep", "sweep_sha256", "write_sweep"]

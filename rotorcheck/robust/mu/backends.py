@@ -242,7 +242,7 @@ class CvxpyLmi:
     """
 
     def __init__(self, kind: str, m: int, blocks: BlockSig, normalize: bool):
-        import cvxpy as cp
+        import cvxpy as cp  # lazy: cvxpy only for the LMI
 
         dim = 2 * m
         self.kind = kind
@@ -288,7 +288,7 @@ class CvxpyLmi:
     def solve(self, G0: np.ndarray, Gs: np.ndarray | None, terms: Sequence[Sequence[np.ndarray]],
               session: SolveSession) -> LmiOut:
         """One point: ``G0``, ``Gs`` (m, m), ``terms[block][basis element]`` (m, m)."""
-        import cvxpy as cp
+        import cvxpy as cp  # lazy: cvxpy only for the LMI
 
         self.G0.value = emb(G0)
         if self.kind == "maxs" and Gs is not None:
