@@ -16,7 +16,14 @@ from rotorcheck.fe.elements import TimoshenkoBeam, beam_shape_functions
 from rotorcheck.fe.modal import CampbellResult, campbell, modes
 from rotorcheck.fe.system import MechanicalSystem
 from rotorcheck.report.figures import wrap_to_width
-from rotorcheck.report.rotor_drawing import boxes_overlap, text_extent
+from rotorcheck.report.rotor_drawing import (
+    boxes_overlap,
+    draw_rig,
+    fit_rotor_labels,
+    rig_cracks,
+    settle_labels,
+    text_extent,
+)
 from rotorcheck.units import UNITS
 
 
@@ -412,8 +419,6 @@ def mode_shape_figure(
             ax.set_xlabel("axial position (m)", fontsize=8)
         ax.tick_params(labelsize=7)
     if config is not None:
-        from rotorcheck.report.rotor_drawing import draw_rig
-
         rax = fig.add_subplot(gs[0, :], sharex=axes[0])
         draw_rig(rax, config, fontsize=6.5)
     handles, labels = axes[0].get_legend_handles_labels()
@@ -422,8 +427,6 @@ def mode_shape_figure(
     fig.legend(handles, labels, loc="outside lower center", ncol=4, fontsize=8, frameon=False)
     fig.suptitle(wrap_to_width(head, 0.95 * fig.get_figwidth(), 10), fontsize=10)
     if config is not None:
-        from rotorcheck.report.rotor_drawing import fit_rotor_labels, settle_labels
-
         settle_labels(fig, lambda: fit_rotor_labels(rax))  # the layout is final: the drawing's labels placed for it
     return fig
 
@@ -437,8 +440,6 @@ def _feature_marks(system: MechanicalSystem, config: RigConfig | None) -> dict[s
         if kind in ("bearing", "disc") and st <= n:
             out[kind].append(float(z[st - 1]))
     if config is not None:
-        from rotorcheck.report.rotor_drawing import rig_cracks
-
         if config.ports is not None:
             for kind in ("sensor", "actuator"):
                 p = getattr(config.ports, kind)

@@ -18,6 +18,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from rotorcheck import __version__
+from rotorcheck.fileio import file_sha256
 from rotorcheck.report.content import (
     BENIGN_HEADER,
     benign_rows,
@@ -79,8 +81,6 @@ def _num(x: Any, fmt: str = ".4g") -> str:
 
 def sha256_or_none(path: str | Path) -> str | None:
     """sha256 of a file's bytes, or None when it cannot be read."""
-    from rotorcheck.fileio import file_sha256
-
     try:
         return file_sha256(path)
     except OSError:
@@ -119,10 +119,8 @@ def figures_html(plots: Sequence[str | Path]) -> str:
 
 def provenance(inputs: Sequence[tuple[str, str | None, str | None]]) -> str:
     """The inputs (what, path, sha256) and the software that made the report."""
-    from rotorcheck import __version__
-
     rows = [(what, path or "", sha or "") for what, path, sha in inputs]
-    import scipy
+    import scipy  # lazy: scipy only for its version (this module needs no scipy otherwise)
 
     soft = [("rotorcheck", __version__), ("python", platform.python_version()), ("numpy", np.__version__),
             ("scipy", scipy.__version__), ("platform", platform.platform())]

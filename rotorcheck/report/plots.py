@@ -17,9 +17,14 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from matplotlib import colormaps
+from matplotlib.cm import ScalarMappable
+from matplotlib.colors import Normalize
 from matplotlib.figure import Figure
 from matplotlib.ticker import MultipleLocator
 
+from rotorcheck.location import depth_text
+from rotorcheck.nominal import parse_port
 from rotorcheck.report.figures import PHASOR_NOTE, legend_outside
 from rotorcheck.report.rotor_drawing import draw_rotor, fit_rotor_labels, fit_texts, settle_labels
 from rotorcheck.units import PLOT_FRF_UNITS, UNITS
@@ -508,10 +513,6 @@ def detectability_figure(config: Any, det: Any) -> Figure:
     """The rotor drawing (elements shaded by their detectable breathing depth with benign ranges) over the
     smallest detectable breathing-crack depth (% of diameter) per element: with the benign ranges, noise
     only, and the likelihood-ratio limit."""
-    from matplotlib import colormaps
-
-    from rotorcheck.nominal import parse_port
-
     fig = Figure(figsize=(8.0, 6.0), layout="constrained")
     ax, bx = fig.subplots(2, 1, sharex=True, height_ratios=(1.0, 1.2))
     depth = {e.element: e.breathing_depth_min for e in det.elements}
@@ -539,9 +540,6 @@ def detectability_figure(config: Any, det: Any) -> Figure:
     bx.tick_params(labelsize=7)
     bx.grid(True, which="both", alpha=0.3)
     legend_outside(bx, fontsize=7)
-    from matplotlib.cm import ScalarMappable
-    from matplotlib.colors import Normalize
-
     bar = fig.colorbar(ScalarMappable(Normalize(0.0, 50.0), cmap), ax=ax, location="bottom", shrink=0.5,
                        aspect=40, pad=0.02)
     bar.set_label("element shading: breathing depth detectable with the benign ranges (% of diameter)", fontsize=7)
@@ -557,9 +555,6 @@ def location_figure(config: Any, location: Any, title: str = "") -> Figure:
     consistent: blue, the best ranked: red), stations, discs, bearings, actuator and sensor marked; below,
     the certified stiffness-loss interval of every candidate not excluded (and its estimate), with the
     depth interval (% of the diameter) of the three best ranked."""
-
-    from rotorcheck.location import depth_text
-
     fig = Figure(figsize=(9.5, 5.5), layout="constrained")
     ax, bx = fig.subplots(2, 1, sharex=True, height_ratios=(1.0, 1.4))
     z = np.asarray(config.stations, dtype=float)

@@ -30,6 +30,7 @@ from rotorcheck.report.content import (
     method_paragraphs,
     where_paragraphs,
 )
+from rotorcheck.report.html import render_detection_html
 from rotorcheck.report.schema import DetectionReport
 
 REPORT_FILES = ("report.json", "report.md", "fault_points.csv", "report.html")
@@ -169,8 +170,6 @@ def write_reports(report: DetectionReport, out_dir: str | Path, plots: list[str]
                   baseline_path: str | Path | None = None) -> list[Path]:
     """Render all four files (report.json, report.md, fault_points.csv, report.html with the figures
     embedded), then write each atomically. Returns the paths."""
-    from rotorcheck.report.html import render_detection_html
-
     out = Path(out_dir)
     texts = {
         "report.json": render_json(report.to_dict()),

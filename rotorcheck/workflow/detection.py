@@ -73,7 +73,7 @@ class Diagnosis:
 
     def plot(self, fault: np.ndarray | None = None, title: str = "Damage dynamics D_u") -> Figure:
         """D_u per frequency with its bound: the anchored estimate where there is one, else the nominal."""
-        from rotorcheck.report.plots import damage_dynamics_figure  # lazy import: matplotlib only when plotting
+        from rotorcheck.report.plots import damage_dynamics_figure  # lazy: matplotlib only when plotting
 
         if self.anchored is not None and self.anchored_set is not None:
             d, b = self.anchored, self.anchored_set

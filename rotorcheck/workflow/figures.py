@@ -73,7 +73,7 @@ def figure_context(rig: RigConfig, run: MeasuredRun, baseline_path: str | Path |
                    frf_unit: str = "m/N") -> FigureContext:
     """What a validation or detection figure shows: rig, speed (none for a lumped rig), the channel pair
     drawn (the rig's actuator -> sensor), the sweep file and the baseline file."""
-    from rotorcheck.report.plots import FigureContext  # lazy import: matplotlib only when plotting
+    from rotorcheck.report.plots import FigureContext  # lazy: matplotlib only when plotting
 
     check_frf_unit(frf_unit)
     pair = run.pairs[0] if run.pairs else primary_pair(rig)
@@ -89,7 +89,7 @@ def validation_plots(outcome: ValidationOutcome, out_dir: str | Path, at_hz: flo
                      formats: tuple[str, ...] = ("png",), baseline_path: str | Path | None = None,
                      frf_unit: str = "m/N") -> list[str]:
     """:func:`validation_figures` written to ``out_dir`` (``formats``); returns the written paths."""
-    from rotorcheck.report.figures import save_figures  # lazy import: matplotlib only when plotting
+    from rotorcheck.report.figures import save_figures  # lazy: matplotlib only when plotting
 
     return save_figures(validation_figures(outcome, at_hz, baseline_path, frf_unit), out_dir, formats)
 
@@ -98,7 +98,7 @@ def validation_figures(outcome: ValidationOutcome, at_hz: float | None = None,
                        baseline_path: str | Path | None = None, frf_unit: str = "m/N") -> dict[str, Any]:
     """Bode with the uncertainty band and the complex plane at one frequency (``at_hz``, default the point
     of the largest relative model error), by file stem (:data:`PLOT_STEMS_VALIDATE`)."""
-    from rotorcheck.report.plots import (  # lazy import: matplotlib only when plotting
+    from rotorcheck.report.plots import (  # lazy: matplotlib only when plotting
         bode_band_figure,
         complex_plane_figure,
     )
@@ -119,7 +119,7 @@ def detection_plots(outcome: DetectionOutcome, out_dir: str | Path, at_hz: float
                     formats: tuple[str, ...] = ("png",), baseline_path: str | Path | None = None,
                     frf_unit: str = "m/N", show_nominal_damage: bool = False) -> list[str]:
     """:func:`detection_figures` written to ``out_dir`` (``formats``); returns the written paths."""
-    from rotorcheck.report.figures import save_figures  # lazy import: matplotlib only when plotting
+    from rotorcheck.report.figures import save_figures  # lazy: matplotlib only when plotting
 
     return save_figures(detection_figures(outcome, at_hz, baseline_path, frf_unit, show_nominal_damage), out_dir,
                         formats)
@@ -134,7 +134,7 @@ def detection_figures(outcome: DetectionOutcome, at_hz: float | None = None,
     bound and the port's stiffness as reference. ``show_nominal_damage``: the damage figure also draws D_u
     with the nominal model's E22 (thin, grey; it carries the model error, not to be read) where the anchored
     estimate leads; hidden by default."""
-    from rotorcheck.report.plots import (  # lazy import: matplotlib only when plotting
+    from rotorcheck.report.plots import (  # lazy: matplotlib only when plotting
         bode_band_figure,
         complex_plane_figure,
         damage_dynamics_figure,

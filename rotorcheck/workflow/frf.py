@@ -53,7 +53,7 @@ class MeasuredFRF:
     def to_pandas(self) -> pd.DataFrame:
         """A tidy table: one row per frequency and channel pair (frequency_hz, channel, re, im, magnitude,
         phase_deg, var, dof), receptances in m/N."""
-        import pandas as pd  # lazy import: an optional dependency (with xarray: the 'dev' extra)
+        import pandas as pd  # lazy: pandas is an optional dependency (with xarray: the 'dev' extra)
 
         nf, npair = self.frf.shape
         return pd.DataFrame({
@@ -65,7 +65,7 @@ class MeasuredFRF:
     def to_xarray(self) -> xr.Dataset:
         """A Dataset with coordinates ``frequency`` (Hz) and ``channel`` (the pair labels) and the variables
         ``frf`` (m/N), ``frf_var`` (m^2/N^2), ``frf_dof``, units in each variable's attributes."""
-        import xarray as xr  # lazy import: an optional dependency (the 'dev' extra)
+        import xarray as xr  # lazy: xarray is an optional dependency (the 'dev' extra)
 
         coords = {"frequency": ("frequency", self.frequency_hz, {"units": "Hz"}), "channel": self.channels}
         dims = ("frequency", "channel")
@@ -79,7 +79,7 @@ class MeasuredFRF:
 
     def plot(self) -> Figure:
         """Bode magnitude and phase of every channel pair with a +-2 standard-deviation band on the magnitude."""
-        import matplotlib.pyplot as plt  # lazy import: matplotlib only when plotting
+        import matplotlib.pyplot as plt  # lazy: matplotlib only when plotting
 
         fig, (ax_m, ax_p) = plt.subplots(2, 1, sharex=True, figsize=(8, 6))
         for k, name in enumerate(self.channels):

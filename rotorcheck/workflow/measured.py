@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from scipy.special import chdtri
 
 from rotorcheck.baseline import Baseline
 from rotorcheck.config import RigConfig, load_config
@@ -363,8 +364,6 @@ def healthy_reference(runs: list[MeasuredRun], exclude: np.ndarray | None = None
     state of the machine: its resonances are smeared beyond its own variance, and the change to a new sweep is
     then neither benign change nor noise as predicted. Points ``exclude`` (f,) (shaft harmonics) and points
     without a finite variance are left out."""
-    from scipy.special import chdtri
-
     ests = [frf_estimate(r) for r in runs]
     k = len(ests)
     if k == 1:

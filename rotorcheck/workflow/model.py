@@ -28,7 +28,7 @@ def model_report(
     Returns ``{"summary": <cli.md model keys>, "files": [written paths]}``.
     """
     config = load_config(rig_path)  # bad input fails here, before any work or output
-    from rotorcheck.report.campbell import SPEED_UNITS  # lazy import: matplotlib only when plotting
+    from rotorcheck.report.campbell import SPEED_UNITS  # lazy: matplotlib only when plotting
 
     check_choice(speed_unit, SPEED_UNITS, "--speed-unit")
 
@@ -54,13 +54,13 @@ def _model_plots(config: RigConfig, system: Any, speed_rpm: float, out: Path, fo
     """Campbell diagram (1X and 2X criticals, operating speed ``speed_rpm``, speed axis in ``speed_unit``),
     the table's mode shapes at ``speed_rpm`` and the rotor drawing (rotor rigs)."""
 
-    from rotorcheck.report.campbell import (  # lazy import: matplotlib only when plotting
+    from rotorcheck.report.campbell import (  # lazy: matplotlib only when plotting
         campbell_figure,
         mode_shape_figure,
         order_criticals,
     )
-    from rotorcheck.report.figures import save_figure  # lazy import: matplotlib only when plotting
-    from rotorcheck.report.rotor_drawing import rotor_figure  # lazy import: matplotlib only when plotting
+    from rotorcheck.report.figures import save_figure  # lazy: matplotlib only when plotting
+    from rotorcheck.report.rotor_drawing import rotor_figure  # lazy: matplotlib only when plotting
 
     rotor = system.kind == "rotor"
     stems = [out / "campbell", out / "mode_shapes"] + ([out / "rotor"] if rotor else [])
@@ -123,8 +123,8 @@ def crack_report(
     crit = critical_speed_summary(system, crack, speeds_rpm[0], config.analysis.campbell_max_rpm)
     files: list[str] = []
     if out_dir is not None:
-        from rotorcheck.report.crack_plots import crack_figures  # lazy import: matplotlib only when plotting
-        from rotorcheck.report.figures import save_figure  # lazy import: matplotlib only when plotting
+        from rotorcheck.report.crack_plots import crack_figures  # lazy: matplotlib only when plotting
+        from rotorcheck.report.figures import save_figure  # lazy: matplotlib only when plotting
 
         figs = crack_figures(system, crack, unb, station=st, speeds_rpm=speeds_rpm, rig_id=config.rig_id,
                              harmonics=solved)

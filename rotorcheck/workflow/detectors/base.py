@@ -83,7 +83,7 @@ class Detection:
 
     def plot(self, title: str = "") -> Figure:
         """The decision figure: the deciding ratio per frequency against 1, fault points, the sweep test."""
-        from rotorcheck.report.plots import FigureContext, decision_figure  # lazy import: matplotlib only when plotting
+        from rotorcheck.report.plots import FigureContext, decision_figure  # lazy: matplotlib only when plotting
 
         joint = None if self.joint is None else {
             "statistic": self.joint.statistic, "threshold": self.joint.threshold, "p_value": self.joint.p_value,
