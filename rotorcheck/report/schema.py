@@ -9,14 +9,14 @@ Units: frequencies Hz, receptances m/N, damage dynamics N/m, noise bounds m, ang
 from __future__ import annotations
 
 from dataclasses import dataclass, fields
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, TypeAlias
 
 import numpy as np
 
 if TYPE_CHECKING:  # annotations only: the location model is not needed to build or render a report
     from rotorcheck.location import LocationResult
 
-__all__ = ["CONTRACT_KEYS", "DetectionReport", "LocationReport", "NoiseReport", "ValidationReport"]
+__all__ = ["CONTRACT_KEYS", "DetectionReport", "LocationReport", "NoiseReport", "ReportValue", "ValidationReport"]
 
 #: report.json keys other tools rely on (../shared/spec/cli.md)
 CONTRACT_KEYS = (
@@ -26,6 +26,12 @@ CONTRACT_KEYS = (
 )
 
 FloatArray = np.ndarray
+
+#: a value of a report document as ``to_dict`` gives it, before :func:`rotorcheck.report.reports.render_json` writes
+#: it: JSON's values (text, numbers, booleans, null, lists, objects), with numpy arrays and scalars where a field
+#: holds them (written as lists and numbers)
+ReportValue: TypeAlias = (str | int | float | bool | np.ndarray | np.generic | list["ReportValue"]
+                          | dict[str, "ReportValue"] | None)
 
 
 def _as_dict(obj: Any) -> dict[str, Any]:

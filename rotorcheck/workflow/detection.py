@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -17,7 +17,7 @@ from rotorcheck.location import LocationResult
 from rotorcheck.nominal import NominalModel, primary_pair
 from rotorcheck.progress import Progress
 from rotorcheck.report.content import conclusion
-from rotorcheck.report.schema import DetectionReport
+from rotorcheck.report.schema import DetectionReport, ReportValue
 from rotorcheck.robust import identify
 from rotorcheck.robust.identify import DamageSet
 from rotorcheck.robust.joint import JointResult
@@ -193,7 +193,7 @@ class DetectionOutcome:
         joint test)."""
         return self.found.fault_beyond_benign
 
-    def report(self) -> dict[str, Any]:
+    def report(self) -> dict[str, ReportValue]:
         """The report.json document (cli.md keys plus context): :meth:`typed_report` as a dict."""
         return self.typed_report().to_dict()
 
