@@ -260,3 +260,27 @@ def test_a_benign_model_at_some_points_is_the_test_with_the_others_left_out() ->
     b = joint_test(r, var, crack[None, :], [4], bm, draws=2000, exclude=out)
     assert a.statistic == pytest.approx(b.statistic, rel=1e-6)
     assert a.theta == pytest.approx(b.theta, rel=1e-6)
+
+
+def test_the_verdict_says_which_part_of_the_rule_decided() -> None:
+    """The sweep verdict (workflow.detectors.joint.joint_verdict) of a change the GLR finds names T against its
+    threshold; of one only the fit refutes, H0's chi2 on its dof and that no small loss of one element explains it;
+    a healthy one gives both figures."""
+    from rotorcheck.robust.validation import Verdict
+    from rotorcheck.workflow.detectors.joint import joint_verdict
+
+    rng = np.random.default_rng(24)
+    var = np.ones(N)
+    S = _signatures(rng, 2)
+    points = Verdict("healthy", "", N, 0, 0, 0, 1)
+    by_glr = joint_test(1.5 * S[0] + _noise(rng, var), var, S, [1, 2], draws=20_000)
+    by_fit = joint_test(-5.0 * S[0] + _noise(rng, var), var, S, [1, 2], draws=20_000)
+    healthy = joint_test(_noise(rng, var), var, S, [1, 2], draws=20_000)
+    assert by_glr.damage and not by_glr.decided_by_fit and by_fit.decided_by_fit and not healthy.damage
+    v = joint_verdict(by_glr, points)
+    assert v.verdict == "damage" and f"T = {by_glr.statistic:.4g} > {by_glr.threshold:.4g}" in v.reason
+    v = joint_verdict(by_fit, points)
+    assert v.verdict == "damage" and f"chi2 = {by_fit.chi2_h0:.5g} on {by_fit.fit_dof} dof" in v.reason
+    assert "no small loss of one element explains the rest" in v.reason
+    v = joint_verdict(healthy, points)
+    assert v.verdict == "healthy" and "<=" in v.reason and f"on {healthy.fit_dof} dof" in v.reason
