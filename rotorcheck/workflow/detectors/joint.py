@@ -41,9 +41,9 @@ def joint_verdict(joint: JointResult, certified: Verdict) -> Verdict:
         # where the damage is, is the diagnosis's (rotorcheck.ranking: the one ranking detect and locate report);
         # the test's own linearized best element stays in report.json as joint_best_element
         if joint.decided_by_fit:
-            why = (f"joint test: {fit} (sweep p = {joint.p_value:.2g} < {joint.false_alarm:g}); no {benign} fits the "
-                   f"data, and no small loss of one element explains the rest ({glr}): a change larger than the "
-                   "first-order crack signatures, or of another kind")
+            why = (f"joint test: {fit} (sweep p = {joint.p_value:.2g} < {joint.false_alarm:g}); the change is not "
+                   f"explained by {benign}, and no small loss of one element explains the rest ({glr}): a change "
+                   "larger than the first-order crack signatures, or of another kind")
         else:
             why = (f"joint test: {glr} (p = {joint.p_value:.2g} < {joint.false_alarm:g}); the change is not explained "
                    f"by {benign}")
