@@ -7,9 +7,9 @@ cracks in element 4 (stiffness loss) at 0 rpm. Also the coverage of the fitted Y
 the healthy sweeps. Seeded; prints a Markdown table, one row per variant and K.
 
 ``python -m bench.healthy_sweeps [--counts 1,3,10] [--healthy 20 --cracks 10] [--variants truth,dampers]
-[--losses 0.02,0.05] [--no-learn-drift] [--around-baseline]`` (``--no-learn-drift``: every K through the default
-``validate``; ``--around-baseline``: new sweeps drift around the baseline's state, the ranges read as the change
-between two sweeps)
+[--losses 0.02,0.05] [--no-learn-drift] [--around-baseline] [--speed 1000]`` (``--no-learn-drift``: every K through
+the default ``validate``; ``--around-baseline``: new sweeps drift around the baseline's state, the ranges read as the
+change between two sweeps; ``--speed``: every sweep at that speed, default 0 rpm)
 """
 
 from __future__ import annotations
@@ -27,8 +27,9 @@ from rotorcheck import workflow
 
 
 def run(name: str, count: int, n_healthy: int, n_cracks: int, losses: tuple[float, ...],
-        learn: bool = True, around_baseline: bool = False) -> dict[str, str]:
-    """``{column: value}`` for one variant and training-set size (0 rpm); ``learn``: ``--learn-drift`` from 3
+        learn: bool = True, around_baseline: bool = False, speed: float = 0.0) -> dict[str, str]:
+    """``{column: value}`` for one variant and training-set size at ``speed`` rpm (0: at rest; at another speed
+    the cracks are open cracks too, and the seeds differ from 0 rpm's); ``learn``: ``--learn-drift`` from 3
     sweeps on (else the default ``validate`` of every sweep); ``around_baseline``: the new sweeps drift inside
     the ranges around the baseline's own state (the ranges read as the change between two sweeps), else around
     the nominal state."""
@@ -36,7 +37,10 @@ def run(name: str, count: int, n_healthy: int, n_cracks: int, losses: tuple[floa
     truth = truth_variant(name, nom)
     rng = np.random.default_rng([count, 2901])
     train_values = [_inside(rng) if count > 1 else {} for _ in range(count)]
-    train = [sweep_run(truth, nom, 0.0, 1.0, 35_000_000 + 100 * count + k, benign=v)
+    if speed != 0.0:  # validate takes the training sweeps of one speed (within its tolerance): held at the nominal
+        train_values = [{n: v for n, v in values.items() if n != "speed"} for values in train_values]
+    shift = 10_000 * int(speed)  # 0 at rest: the seeds of the 0 rpm figures
+    train = [sweep_run(truth, nom, speed, 1.0, 35_000_000 + shift + 100 * count + k, benign=v)
              for k, v in enumerate(train_values)]
     outcome = workflow.validate(nom, train, workflow.fit_noise(train[0]), enclose="measured",
                                 learn_drift=learn and count >= 3)
@@ -55,7 +59,7 @@ def run(name: str, count: int, n_healthy: int, n_cracks: int, losses: tuple[floa
     alarms = covered = 0
     for i in range(n_healthy):
         values = draw()
-        out = workflow.detect(nom, base, sweep_run(truth, nom, 0.0, 1.0, 36_000_000 + i, benign=values))
+        out = workflow.detect(nom, base, sweep_run(truth, nom, speed, 1.0, 36_000_000 + shift + i, benign=values))
         alarms += out.verdict.verdict == "damage"
         j = out.joint
         k = j.theta_names.index("youngs_modulus")
@@ -65,8 +69,9 @@ def run(name: str, count: int, n_healthy: int, n_cracks: int, losses: tuple[floa
     row = {"false alarms": f"{alarms}/{n_healthy}", "E interval covers": f"{covered}/{n_healthy}"}
     for loss in losses:
         cfg = _open_crack(truth, 1.0 - loss)
-        found = sum(workflow.detect(nom, base, sweep_run(cfg, nom, 0.0, 1.0, 37_000_000 + int(loss * 1e4) * 100 + i,
-                                                        "open_crack", benign=draw())).verdict.verdict
+        found = sum(workflow.detect(nom, base, sweep_run(cfg, nom, speed, 1.0,
+                                                         37_000_000 + shift + int(loss * 1e4) * 100 + i,
+                                                         "open_crack", benign=draw())).verdict.verdict
                     == "damage" for i in range(n_cracks))
         row[f"{100 * loss:g} % loss found"] = f"{found}/{n_cracks}"
     return row
@@ -81,13 +86,14 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--losses", default="0.02,0.05")
     ap.add_argument("--no-learn-drift", action="store_true", help="every K through the default validate")
     ap.add_argument("--around-baseline", action="store_true", help="new sweeps drift around the baseline's state")
+    ap.add_argument("--speed", type=float, default=0.0, help="rpm of every sweep (default 0: at rest)")
     a = ap.parse_args(argv)
     losses = tuple(float(x) for x in a.losses.split(","))
     rows = []
     for name in a.variants.split(","):
         for count in (int(c) for c in a.counts.split(",")):
             t = time.perf_counter()
-            r = run(name, count, a.healthy, a.cracks, losses, not a.no_learn_drift, a.around_baseline)
+            r = run(name, count, a.healthy, a.cracks, losses, not a.no_learn_drift, a.around_baseline, a.speed)
             print(f"{name} K={count}: {r} ({time.perf_counter() - t:.0f} s)", file=sys.stderr, flush=True)
             rows.append((name, count, r))
     cols = list(rows[0][2])
