@@ -163,8 +163,9 @@ def method_paragraphs(report: DetectionReport, ranges: Callable[[list[float]], s
     fit = ("" if report.joint_fit_chi2 is None else
            f"; H0's goodness of fit chi2 = {report.joint_fit_chi2:.5g} on {report.joint_fit_dof} dof (p = "
            f"{fmt_p(report.joint_fit_p_value)}), the GLR's own p = {fmt_p(report.joint_glr_p_value)}")
-    out.append(f"Joint test: T = {report.joint_statistic:.4g}, threshold {report.joint_threshold:.4g} at false-alarm "
-               f"rate {report.false_alarm:g} (p = {fmt_p(report.joint_p_value)}{fit}); model-error fraction kappa = "
+    out.append(f"Joint test: T = {report.joint_statistic:.4g}, threshold {report.joint_threshold:.4g} (the GLR's share "
+               f"of the false-alarm rate {report.false_alarm:g}; the rule above) (p = {fmt_p(report.joint_p_value)}"
+               f"{fit}); model-error fraction kappa = "
                f"{report.benign_model_error:g}"
                + (f"; {learned} benign directions learned from healthy sweeps." if learned else
                   "; no benign directions learned from healthy sweeps."))

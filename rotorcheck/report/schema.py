@@ -112,7 +112,7 @@ class DetectionReport:
     conclusion: str | None = None  # the plain conclusion every rendering opens with (report.content.conclusion)
     # the joint test (verdict_rule names it when it decided)
     joint_statistic: float | None = None  # T = max_e T_e (chi-square units)
-    joint_threshold: float | None = None  # T at which p = false_alarm
+    joint_threshold: float | None = None  # T at which the GLR's own p = its share of false_alarm (robust.joint)
     joint_p_value: float | None = None  # the sweep's: min(GLR p / (1 - share), fit p / share, 1) (robust.joint)
     joint_glr_p_value: float | None = None  # the GLR's own P(max_e T_e >= T | H0)
     joint_fit_chi2: float | None = None  # H0's goodness of fit: chi2 of the best benign fit (chi-square units)

@@ -43,14 +43,14 @@ from rotorcheck.lazy import lazy_module
 optimize = lazy_module("scipy.optimize")  # loaded when a benign nuisance is fitted (not for noise only)
 special = lazy_module("scipy.special")  # the goodness of fit's chi-square tail
 
-#: how the joint verdict is made (report.json ``verdict_rule``)
-JOINT_RULE = ("joint GLR over all points and channels with H0's goodness of fit: damage iff P(max_e T_e >= T | H0) < "
-              "0.9 false_alarm or P(chi2 >= chi2_H0 | H0) < 0.1 false_alarm (Bonferroni); H0 = benign parameters "
-              "inside their ranges (model re-solved) + learned benign directions + the model's error in predicting "
-              "them + noise of both sweeps; T_e = chi2(H0) - chi2(H0 + stiffness loss a >= 0 in element e)")
-
 #: share of the false-alarm rate spent on H0's goodness of fit (the rest on the GLR; module docstring)
 GOF_SHARE = 0.1
+#: how the joint verdict is made (report.json ``verdict_rule``)
+JOINT_RULE = ("joint GLR over all points and channels with H0's goodness of fit: damage iff P(max_e T_e >= T | H0) < "
+              f"{1.0 - GOF_SHARE:g} false_alarm or P(chi2 >= chi2_H0 | H0) < {GOF_SHARE:g} false_alarm (Bonferroni); "
+              "H0 = benign parameters inside their ranges (model re-solved) + learned benign directions + the model's "
+              "error in predicting them + noise of both sweeps; T_e = chi2(H0) - chi2(H0 + stiffness loss a >= 0 in "
+              "element e)")
 POWER_Z = 1.2815515655446004  # standard normal 0.9 quantile: 90 % detection probability
 MC_DRAWS = 200_000
 MC_SEED = 20261124
