@@ -116,6 +116,11 @@ def depth_interval(lower: float, upper: float, relation: Any) -> tuple[float | N
     return (float(MAX_DEPTH) if lo is None else lo), hi
 
 
+def _basis_text(basis: str) -> str:
+    """What an estimate's interval rests on, as the headline says it."""
+    return "from the measured pole shifts" if basis == "pole shifts" else "under the model's crack signature"
+
+
 @dataclass(frozen=True)
 class CandidateResult:
     """One candidate element's certificate (severities as the element's stiffness loss, fraction)."""
@@ -130,11 +135,12 @@ class CandidateResult:
     excluding_frequencies_hz: tuple[float, ...]
     witness_interval: tuple[float, float] = (float("nan"), float("nan"))  # losses that explain every point
     witnessed: bool = False  # witnesses at both ends: the interval is attained (within the step)
-    loss_estimate: float | None = None  # the best fit's loss (:mod:`rotorcheck.ranking`)
+    loss_estimate: float | None = None  # the size estimate (:attr:`rotorcheck.ranking.ElementFit.size_estimate`)
     chi2: float | None = None  # the best fit's whitened residual sum at the fit points
     likelihood: float | None = None  # relative likelihood among the ranked candidates (None: excluded)
     estimate_interval: tuple[float, float] | None = None  # the best fit's profile interval (ranking.INTERVAL_RULE)
     estimate_depth_interval: tuple[float | None, float | None] | None = None  # its depths (fraction of diameter)
+    estimate_basis: str = ""  # what the estimate's interval rests on: "pole shifts" | "FRF fit" (ranking)
 
     @property
     def modulus_factor_interval(self) -> tuple[float, float]:
@@ -156,7 +162,7 @@ class CandidateResult:
                 **({} if self.estimate_interval is None else
                    {"loss_estimate_interval": [num(x) for x in self.estimate_interval],
                     "depth_estimate_interval": [num(x) for x in self.estimate_depth_interval or (None, None)],
-                    "estimate_interval_level": INTERVAL_LEVEL})}
+                    "estimate_interval_level": INTERVAL_LEVEL, "estimate_basis": self.estimate_basis})}
 
 
 @dataclass
@@ -282,9 +288,9 @@ class LocationResult:
         if b.status == "excluded":
             est = b.estimate_interval
             size = (f", stiffness loss about {100 * (b.loss_estimate or 0.0):.1f} % (best fit"
-                    + (f"; {INTERVAL_LEVEL:.0%} interval {100 * est[0]:.1f}-{100 * est[1]:.1f} % under the model's "
-                       "crack signature" if est is not None else "") + "; no certified interval: its certificate "
-                    "excludes it)")
+                    + (f"; {INTERVAL_LEVEL:.0%} interval {100 * est[0]:.1f}-{100 * est[1]:.1f} % "
+                       + _basis_text(b.estimate_basis) if est is not None else "")
+                    + "; no certified interval: its certificate excludes it)")
         elif self.certified and certified:
             mf = b.modulus_factor_interval
             size = f", stiffness loss {certified} (modulus factor {mf[0]:.3f}-{mf[1]:.3f}"
@@ -292,7 +298,7 @@ class LocationResult:
         elif b.estimate_interval is not None:  # detect: the estimate first, then what is certified
             lo_e, hi_e = b.estimate_interval
             size = (f", stiffness loss about {100 * (b.loss_estimate or 0.0):.1f} % ({INTERVAL_LEVEL:.0%} interval "
-                    f"{100 * lo_e:.1f}-{100 * hi_e:.1f} % under the model's crack signature"
+                    f"{100 * lo_e:.1f}-{100 * hi_e:.1f} % {_basis_text(b.estimate_basis)}"
                     + (f"; {certified}, rotorcheck locate narrows it)" if certified else
                        "; certified intervals: rotorcheck locate)"))
         else:
@@ -533,7 +539,7 @@ def locate(config: RigConfig, box: Any, pairs: Sequence[ChannelPair], change: Sw
         if r is not None and consistent and rel is not None:
             depth: tuple[float | None, float | None] = depth_interval(r.lower, r.upper, rel)
         elif r is None and rel is not None:
-            depth = depth_interval(fit.loss, fit.loss, rel)
+            depth = depth_interval(fit.size_estimate, fit.size_estimate, rel)
         else:
             depth = (None, None)
         ranked = e in order and damage_found
@@ -545,8 +551,8 @@ def locate(config: RigConfig, box: Any, pairs: Sequence[ChannelPair], change: Sw
             (float("nan"), float("nan")) if r is None else (r.lower, r.upper), depth,
             tuple(dict.fromkeys(float(f[ks[k]]) for k in r.excluding)) if r is not None and not consistent else (),
             (float("nan"), float("nan")) if r is None else r.witness_interval, False if r is None else r.witnessed,
-            fit.loss, fit.chi2, fit.likelihood / total if ranked and total > 0 else None, fit.loss_interval,
-            est_depth))
+            fit.size_estimate, fit.chi2, fit.likelihood / total if ranked and total > 0 else None, fit.loss_interval,
+            est_depth, fit.size_basis))
     if hypothesis == "breathing" and order and damage_found and certify:
         notes.append(f"depths of the {min(refine, len(order))} best ranked: the loss that best reproduces the model's "
                      "harmonic-balance response to a breathing crack of each depth (its sidebands included: at 50 % "

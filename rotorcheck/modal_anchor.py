@@ -191,6 +191,8 @@ class ModalAnchor:
     fe_out: np.ndarray  # (f, P) m/N: the FE modes not fitted, summed (:meth:`out_of_band` of ``fe``)
     misfit: float
     heard: np.ndarray  # (P,) bool: pairs the model says respond (x force -> y probe at rest: no); others change 0
+    seen: np.ndarray | None = None  # (k, P) bool: the fitted modes each pair hears (None: every one)
+    weighted: bool = False  # the pairs weighed by their noise in the fit (one plane per pair), else by their size
 
     def change(self, d_lnpole: np.ndarray, d_res: np.ndarray, d_out: np.ndarray) -> np.ndarray:
         """(f, P) m/N: the FRF change when each fitted pole moves by the relative ``d_lnpole`` (k,), each
@@ -292,7 +294,8 @@ def fit_anchor(system: MechanicalSystem, speed_rpm: float, dofs: Sequence[tuple[
         if not np.any(moved & ~pinned):
             if misfit > MAX_MISFIT:
                 return None
-            return ModalAnchor(w, lam, R * heard, lam0, r0 * heard, fe, group, fe_out, misfit, heard)
+            return ModalAnchor(w, lam, R * heard, lam0, r0 * heard, fe, group, fe_out, misfit, heard, seen,
+                               noise is not None)
         # a mode the data do not pin (a y mode seen by an x probe) would wander off: its pole stays the model's,
         # its residue the data's
         pinned |= moved
@@ -327,6 +330,39 @@ def _fit_split(lam0: np.ndarray, fe_out: np.ndarray, w: np.ndarray, T: np.ndarra
     return best
 
 
+def _pair_scale(target: np.ndarray, noise: np.ndarray | None) -> np.ndarray:
+    """(P,): each pair's unit in a fit: its largest value (pairs weigh alike), or with ``noise`` (f, P) m^2/N^2 its
+    rms noise (pairs weigh by their signal to noise)."""
+    scale = np.maximum(np.max(np.abs(target), axis=0), 1e-300)
+    if noise is not None:
+        rms = np.sqrt(np.mean(noise, axis=0))
+        scale = np.where(rms > 0, rms, scale)
+    return np.asarray(scale)
+
+
+def _project(lam: np.ndarray, w: np.ndarray, target: np.ndarray, scale: np.ndarray, use: np.ndarray
+             ) -> tuple[np.ndarray, np.ndarray]:
+    """The linear part of a modal fit with poles ``lam`` (k,): ``(coef, residual)``, the residues (real then
+    imaginary rows) and a constant and a 1 / w^2 term per pair (columns) fitted by least squares to ``target``
+    (f, P) / ``scale`` (P,), each pair with the modes ``use`` (k, P) bool says it hears; the residual [Re; Im]
+    flattened."""
+    m = lam.size
+    jw = 1j * w[:, None]
+    a = 1.0 / (jw - lam) + 1.0 / (jw - lam.conj())
+    b = 1j / (jw - lam) - 1j / (jw - lam.conj())
+    basis = np.column_stack([a, b, np.ones_like(w), 1.0 / w**2])
+    A = np.vstack([basis.real, basis.imag])
+    Y = np.vstack([(target / scale).real, (target / scale).imag])
+    if np.all(use):
+        coef = np.linalg.lstsq(A, Y, rcond=None)[0]
+    else:  # pair by pair, with the modes it hears
+        coef = np.zeros((A.shape[1], Y.shape[1]))
+        for q in range(Y.shape[1]):
+            cols = np.r_[np.flatnonzero(use[:, q]), np.flatnonzero(use[:, q]) + m, 2 * m, 2 * m + 1]
+            coef[cols, q] = np.linalg.lstsq(A[:, cols], Y[:, q], rcond=None)[0]
+    return coef, (Y - A @ coef).ravel()
+
+
 def _fit(lam0: np.ndarray, fe_out: np.ndarray, w: np.ndarray, T: np.ndarray, pinned: np.ndarray,
          start: np.ndarray | None = None, seen: np.ndarray | None = None, noise: np.ndarray | None = None
          ) -> tuple[np.ndarray, np.ndarray, float, np.ndarray]:
@@ -342,11 +378,7 @@ def _fit(lam0: np.ndarray, fe_out: np.ndarray, w: np.ndarray, T: np.ndarray, pin
     free = ~pinned
     target = T - fe_out
     use = np.ones((m, T.shape[1]), dtype=bool) if seen is None else np.asarray(seen, dtype=bool)
-    every = bool(np.all(use))
-    scale = np.maximum(np.max(np.abs(target), axis=0), 1e-300)  # each pair to unit size: pairs weigh alike
-    if noise is not None:
-        rms = np.sqrt(np.mean(noise, axis=0))
-        scale = np.where(rms > 0, rms, scale)  # each pair by its noise: pairs weigh by their signal to noise
+    scale = _pair_scale(target, noise)
 
     def poles(x: np.ndarray) -> np.ndarray:
         lam = lam0.copy()
@@ -356,20 +388,8 @@ def _fit(lam0: np.ndarray, fe_out: np.ndarray, w: np.ndarray, T: np.ndarray, pin
 
     def solve(x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         lam = poles(x)
-        jw = 1j * w[:, None]
-        a = 1.0 / (jw - lam) + 1.0 / (jw - lam.conj())
-        b = 1j / (jw - lam) - 1j / (jw - lam.conj())
-        basis = np.column_stack([a, b, np.ones_like(w), 1.0 / w**2])
-        A = np.vstack([basis.real, basis.imag])
-        Y = np.vstack([(target / scale).real, (target / scale).imag])
-        if every:
-            coef = np.linalg.lstsq(A, Y, rcond=None)[0]
-        else:  # pair by pair, with the modes it hears
-            coef = np.zeros((A.shape[1], Y.shape[1]))
-            for q in range(Y.shape[1]):
-                cols = np.r_[np.flatnonzero(use[:, q]), np.flatnonzero(use[:, q]) + m, 2 * m, 2 * m + 1]
-                coef[cols, q] = np.linalg.lstsq(A[:, cols], Y[:, q], rcond=None)[0]
-        return lam, coef, (Y - A @ coef).ravel()
+        coef, left = _project(lam, w, target, scale, use)
+        return lam, coef, left
 
     lf = lam0[free]
     size = np.abs(lf)
@@ -401,6 +421,82 @@ def _fit(lam0: np.ndarray, fe_out: np.ndarray, w: np.ndarray, T: np.ndarray, pin
         left2 = max(0.0, left2 - float(np.sum(share * kept)))
     misfit = float(np.sqrt(left2)) / size_T if size_T > 0 else 0.0
     return lam, R, misfit, moved
+
+
+@dataclass(frozen=True)
+class PoleRefit:
+    """Another sweep's poles of an anchor's modes (:func:`refit_poles`): ``poles`` (k,) rad/s, ``shift`` (k,) the
+    relative change of ``|lambda|^2`` from the anchor's (a stiffness moves it linearly to first order) and its
+    standard error ``se_shift`` (both sweeps' fits), the fit's ``misfit`` (as :attr:`ModalAnchor.misfit`) and
+    ``moved`` (k,) the poles at a bound of the fit (not pinned by the data)."""
+
+    poles: np.ndarray
+    shift: np.ndarray
+    se_shift: np.ndarray
+    misfit: float
+    moved: np.ndarray
+
+    @property
+    def ok(self) -> bool:
+        """The fit describes the sweep: misfit at most :data:`MAX_MISFIT` and no pole at a bound."""
+        return bool(self.misfit <= MAX_MISFIT and not np.any(self.moved) and np.all(np.isfinite(self.se_shift)))
+
+
+def _shift_se(lam: np.ndarray, w: np.ndarray, target: np.ndarray, noise: np.ndarray | None, use: np.ndarray
+              ) -> np.ndarray:
+    """(k,): the standard error of each fitted pole's ``|lambda|^2`` relative to itself, from the fit's Jacobian
+    (central differences in the poles' real and imaginary parts, the residues projected out) and the residual's
+    variance per degree of freedom (at least the noise's, 1/2 per real part, where ``noise`` scales the pairs)."""
+    scale = _pair_scale(target, noise)
+    k = lam.size
+    x0 = np.r_[lam.real, lam.imag]
+    r0 = _project(lam, w, target, scale, use)[1]
+    h = 1e-6 * np.r_[np.abs(lam), np.abs(lam)]
+    J = np.empty((r0.size, 2 * k))
+    for i in range(2 * k):
+        xp, xm = x0.copy(), x0.copy()
+        xp[i] += h[i]
+        xm[i] -= h[i]
+        rp = _project(xp[:k] + 1j * xp[k:], w, target, scale, use)[1]
+        rm = _project(xm[:k] + 1j * xm[k:], w, target, scale, use)[1]
+        J[:, i] = (rp - rm) / (2.0 * h[i])
+    n_lin = 2 * int(use.sum()) + 2 * target.shape[1]
+    dof = max(r0.size - n_lin - 2 * k, 1)
+    s2 = max(float(r0 @ r0) / dof, 0.5 if noise is not None else 0.0)
+    cov = s2 * np.linalg.pinv(J.T @ J)
+    out = np.empty(k)
+    for r in range(k):  # d(|lambda|^2) / |lambda|^2 = 2 (Re dRe + Im dIm) / |lambda|^2
+        g = np.zeros(2 * k)
+        g[r], g[k + r] = 2.0 * lam[r].real / abs(lam[r]) ** 2, 2.0 * lam[r].imag / abs(lam[r]) ** 2
+        out[r] = float(np.sqrt(max(g @ cov @ g, 0.0)))
+    return out
+
+
+def refit_poles(anchor: ModalAnchor, frf: np.ndarray, var: np.ndarray | None, healthy_frf: np.ndarray,
+                healthy_var: np.ndarray | None, start: np.ndarray | None = None) -> PoleRefit:
+    """The poles of the anchor's modes in another sweep ``frf`` (f, P) m/N (variance ``var``), fitted as the anchor
+    was (:func:`fit_anchor`: residues and residual terms linear, the model's other modes fixed) from ``start`` (k,)
+    rad/s (default the anchor's poles; each pole bounded within :data:`MAX_POLE_MOVE` of its start), with the
+    standard error of each shift from both fits (``healthy_frf``, ``healthy_var``: the sweep the anchor was fitted
+    to)."""
+    w = anchor.omega
+    P = anchor.heard.size
+    T = np.asarray(frf, dtype=complex).reshape(w.size, P) * anchor.heard
+    Th = np.asarray(healthy_frf, dtype=complex).reshape(w.size, P) * anchor.heard
+    use = (np.ones((anchor.poles.size, P), dtype=bool) if anchor.seen is None else anchor.seen)
+
+    def noise_of(v: np.ndarray | None) -> np.ndarray | None:
+        if v is None or not anchor.weighted:
+            return None
+        return np.asarray(v, dtype=float).reshape(w.size, P) * anchor.heard
+
+    noise, noise_h = noise_of(var), noise_of(healthy_var)
+    lam0 = anchor.poles if start is None else np.asarray(start, dtype=complex)
+    lam, _, misfit, moved = _fit_split(lam0, anchor.fe_out, w, T, np.zeros(lam0.size, dtype=bool), use, noise)
+    shift = np.abs(lam) ** 2 / np.abs(anchor.poles) ** 2 - 1.0
+    se = np.hypot(_shift_se(lam, w, T - anchor.fe_out, noise, use),
+                  _shift_se(anchor.poles, w, Th - anchor.fe_out, noise_h, use))
+    return PoleRefit(lam, shift, se, misfit, moved)
 
 
 @dataclass(frozen=True)

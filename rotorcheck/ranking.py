@@ -32,11 +32,13 @@ import numpy as np
 from rotorcheck.config import Crack, RigConfig
 from rotorcheck.faults.crack import crack_stiffness
 from rotorcheck.fe.assembly import build_system
+from rotorcheck.modal_anchor import ModalAnchor
 from rotorcheck.nominal import ChannelPair
 from rotorcheck.progress import Progress, report
 from rotorcheck.robust.affine import AffineModel, AffineParameter
 from rotorcheck.robust.joint import linearized_se
 from rotorcheck.robust.measured import io_model_error
+from rotorcheck.sizing import POLE_SIZE_RULE, size_from_poles
 
 #: assumed bound on the model's error in the predicted change at a point, relative to that change: the
 #: nominal model's crack shapes agree with the truth rig's to a cosine of 0.987-0.990 (limits.md 1), an
@@ -92,6 +94,7 @@ class SweepChange:
     B: np.ndarray
     Cm: np.ndarray
     gain: tuple[float, float]
+    anchor: ModalAnchor | None = None  # the healthy sweep's modal fit (standstill): sizes by the pole shifts
 
     @property
     def omega(self) -> np.ndarray:
@@ -136,11 +139,13 @@ def receptances(model: AffineModel, omega: np.ndarray, theta: np.ndarray, B: np.
 
 def sweep_change(box: Any, pairs: Sequence[ChannelPair], freq_hz: np.ndarray, speed_rpm: float, t_new: np.ndarray,
                  var_new: np.ndarray, t_healthy: np.ndarray, var_healthy: np.ndarray, benign_envelope: np.ndarray,
-                 exclude: np.ndarray | None = None) -> SweepChange:
+                 exclude: np.ndarray | None = None, anchor: ModalAnchor | None = None) -> SweepChange:
     """The :class:`SweepChange` of a new sweep: ``box`` the benign parameters
     (:class:`rotorcheck.signatures.BenignBox`, its model at ``speed_rpm``), ``t_*``, ``var_*`` (f, P) one
     column per pair of ``pairs``, ``benign_envelope`` (P f,) m/N the largest benign change the ranges
-    allow at each point; ``exclude`` (f,) bool points never used (on a shaft harmonic)."""
+    allow at each point; ``exclude`` (f,) bool points never used (on a shaft harmonic); ``anchor`` the healthy
+    sweep's modal fit (:mod:`rotorcheck.modal_anchor`; at standstill the best ranked loss is sized by the pole
+    shifts, :mod:`rotorcheck.sizing`)."""
     f = np.asarray(freq_hz, dtype=float)
     nf, n_pairs = np.asarray(t_new).reshape(f.size, -1).shape
     t_new, var_new, t_h, var_h = (np.asarray(x).reshape(nf, n_pairs) for x in (t_new, var_new, t_healthy,
@@ -159,7 +164,8 @@ def sweep_change(box: Any, pairs: Sequence[ChannelPair], freq_hz: np.ndarray, sp
     if exclude is not None:
         trusted &= ~np.asarray(exclude, dtype=bool).reshape(nf, 1)
     return SweepChange(f, float(speed_rpm), hypothesis, t_new, var_new, t_h, var_h, a, err, g_zero, trusted,
-                       change2, B, Cm, (float(box.gain[0]), float(box.gain[1])))
+                       change2, B, Cm, (float(box.gain[0]), float(box.gain[1])),
+                       anchor if hypothesis == "open" else None)
 
 
 def section_length(config: RigConfig, element: int, given: float | None = None) -> float:
@@ -316,8 +322,15 @@ class ElementFit:
     likelihood: float
     theta: tuple[float, ...]
     gain: float
-    loss_interval: tuple[float, float] | None = None  # profile likelihood at INTERVAL_LEVEL (None: not computed)
+    loss_interval: tuple[float, float] | None = None  # at INTERVAL_LEVEL (None: not computed), by ``size_basis``
     inflation: float = 1.0  # the interval's widening: sqrt(chi2 / dof) of the best fit when above 1
+    size: float | None = None  # the loss the interval is about: the pole shifts' estimate, else ``loss``
+    size_basis: str = ""  # "pole shifts" (:mod:`rotorcheck.sizing`) | "FRF fit" (:func:`profile_interval`) | ""
+
+    @property
+    def size_estimate(self) -> float:
+        """The size estimate (fraction): the pole shifts' where they size it, else the best fit's loss."""
+        return self.loss if self.size is None else self.size
 
 
 @dataclass
@@ -351,8 +364,11 @@ class Ranking:
                 "elements": [{"element": f.element, "loss_estimate": f.loss, "chi2": f.chi2,
                               "relative_likelihood": f.likelihood,
                               **({} if f.loss_interval is None else
-                                 {"loss_estimate_interval": list(f.loss_interval), "interval_level": INTERVAL_LEVEL,
-                                  "interval_inflation": f.inflation})} for f in self.fits]}
+                                 {"size_estimate": f.size_estimate, "loss_estimate_interval": list(f.loss_interval),
+                                  "interval_level": INTERVAL_LEVEL, "interval_inflation": f.inflation,
+                                  "interval_basis": f.size_basis,
+                                  "interval_rule": POLE_SIZE_RULE if f.size_basis == "pole shifts" else INTERVAL_RULE})}
+                             for f in self.fits]}
 
 
 #: how the ranking is made (report.json)
@@ -505,8 +521,16 @@ def rank_elements(config: RigConfig, box: Any, change: SweepChange, elements: Se
     fits.sort(key=lambda f: (-f.likelihood, f.chi2, f.element))
     dof = n_res - (lo_b.size + 2)
     for j, f in enumerate(fits[:intervals]):
+        sized = None
+        if change.anchor is not None:
+            sized = size_from_poles(models[f.element], change.anchor, change.t_new, change.var_new, change.t_h,
+                                    change.var_h, f.loss, INTERVAL_LEVEL)
+        if sized is not None:
+            fits[j] = dataclasses.replace(f, loss_interval=sized.interval, inflation=sized.inflation,
+                                          size=sized.estimate, size_basis="pole shifts")
+            continue
         fit, lo, hi = fitted[f.element]
         x = np.r_[f.theta, f.loss, f.gain]
         interval, inflation = profile_interval(fit, lo, hi, x, dof)
-        fits[j] = dataclasses.replace(f, loss_interval=interval, inflation=inflation)
+        fits[j] = dataclasses.replace(f, loss_interval=interval, inflation=inflation, size_basis="FRF fit")
     return Ranking(change.hypothesis, fits, chi2_benign, n_res, int(idx.size), RANKING_RULE)

@@ -28,6 +28,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("rotorcheck.sim",),  # simulators: above fe, faults and sweep
     ("rotorcheck.nominal",),
     ("rotorcheck.modal_anchor",),  # the healthy FRF's fitted modes moved by the model's sensitivities (issue 29)
+    ("rotorcheck.sizing",),  # an element's loss from the measured pole shifts (issue 30's estimate interval)
     ("rotorcheck.signatures",),  # crack and benign change shapes by re-solving the model
     ("rotorcheck.rig",),  # a rig's assembled model at one speed as one object
     ("rotorcheck.updating",),  # model updating on the benign parameters

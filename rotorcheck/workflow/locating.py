@@ -18,7 +18,7 @@ from rotorcheck.nominal import ChannelPair, model_pairs, port_label
 from rotorcheck.progress import Progress
 from rotorcheck.ranking import Ranking, SweepChange, sweep_change
 from rotorcheck.sensor_advice import SensorAdvice, advise_sensors, hypotheses_of
-from rotorcheck.signatures import BenignBox, benign_box
+from rotorcheck.signatures import BenignBox, benign_box, modal_anchor
 from rotorcheck.variability import benign_at
 from rotorcheck.workflow.benign import benign_model
 from rotorcheck.workflow.detectors import DetectorSettings, make_detector
@@ -57,7 +57,9 @@ def location_inputs(rig: RigConfig, run: MeasuredRun, healthy_frf: np.ndarray, h
                       healthy_var=vh)
     env = np.zeros(f.size * n_pairs) if bm is None else np.asarray(bm.envelope, dtype=float)
     harmonics = run_harmonics([run], (speed,))
-    change = sweep_change(box, pairs, f, speed, est.frf, est.var, th, vh, env, harmonics.flagged)
+    anchor = (modal_anchor(rig, f, speed, th, pairs if n_pairs > 1 else None, vh)
+              if speed == 0.0 and run.speed_rpm == 0.0 else None)  # standstill: sized by the pole shifts
+    change = sweep_change(box, pairs, f, speed, est.frf, est.var, th, vh, env, harmonics.flagged, anchor)
     warning = harmonics.warning("the points the location uses") if harmonics.n_flagged else ""
     return LocationInputs(rig, box, pairs, change, warning)
 
@@ -84,7 +86,7 @@ def locate_run(rig: RigConfig, run: MeasuredRun, healthy_frf: np.ndarray, health
         one = inp.change
         cols = ("t_new", "var_new", "t_h", "var_h", "a", "err", "g_zero", "trusted", "change2", "B", "Cm")
         first = {k: getattr(one, k)[:, :1] for k in cols}
-        single = dataclasses.replace(one, **first)
+        single = dataclasses.replace(one, **first, anchor=None)
         res.single_channel = locate(rig, inp.box.for_pair(inp.pairs[0]), inp.pairs[:1], single, false_alarm, elements,
                                     crack_section_length=section_length, certify=certify, damage=damage, **options)
     if res.kind == "not locatable":
