@@ -51,7 +51,7 @@ def _cracked(truth: RigConfig, kind: str, element: int, severity: float) -> RigC
         faults["loc"] = Crack(element=element, model="open", modulus_factor=1.0 - severity)
     else:
         faults["loc"] = truth.faults["breathing_crack"].model_copy(  # type: ignore[union-attr]
-            update={"element": element, "depth_ratio": 2.0 * severity})
+            update={"element": element, "depth": severity})
     return truth.model_copy(update={"faults": faults})
 
 

@@ -58,7 +58,7 @@ def case_runs(kind: str, element: int, severity: float, xy: bool, seed: int, ben
         fault = "loc"
     elif kind == "breathing":
         faults["loc"] = truth.faults["breathing_crack"].model_copy(update={"element": element,  # type: ignore[union-attr]
-                                                                          "depth_ratio": 2.0 * severity})
+                                                                          "depth": severity})
         fault = "loc"
     cracked = truth.model_copy(update={"faults": faults})
     values = {k: v for k, v in (benign or {}).items() if not (k == "speed" and rpm == 0.0)}
