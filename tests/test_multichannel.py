@@ -355,3 +355,22 @@ def test_damage_per_direction_certified_bound_holds_the_truth_where_the_noise_is
             assert np.all(b.re_inner[ok, k, 1] <= b.re_outer[ok, k, 1] * (1 + 1e-9) + 1e-9)
         widths.append(float(np.median(b.re_outer[ok, 0, 1] - b.re_outer[ok, 0, 0])))
     assert 3.0 < widths[1] / widths[0] < 5.5, widths
+
+
+def test_in_plane_signature_zeroes_exactly_the_cross_plane_pairs() -> None:
+    """A turning shaft's GLR direction (workflow.benign.in_plane): the x force -> y probe and y -> x pairs' part of
+    every crack signature is 0, the in-plane pairs' part is the signature itself, pair after pair."""
+    from rotorcheck.workflow.benign import in_plane
+
+    def pair(out: str, inp: str) -> ChannelPair:
+        return ChannelPair(Port(station=6, direction=out), Port(station=8, direction=inp), f"6{out}/8{inp}")  # type: ignore[arg-type]
+
+    pairs = [pair("x", "x"), pair("x", "y"), pair("y", "x"), pair("y", "y")]
+    nf = 5
+    rng = np.random.default_rng(2)
+    S = rng.standard_normal((3, 4 * nf)) + 1j * rng.standard_normal((3, 4 * nf))
+    out = in_plane(S, pairs, nf)
+    for k, keep in enumerate((True, False, False, True)):
+        part = slice(k * nf, (k + 1) * nf)
+        assert np.array_equal(out[:, part], S[:, part] if keep else np.zeros((3, nf)))
+    assert not np.shares_memory(out, S)

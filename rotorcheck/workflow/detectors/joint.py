@@ -16,7 +16,7 @@ from rotorcheck.baseline import Baseline
 from rotorcheck.config import RigConfig
 from rotorcheck.robust.joint import JOINT_RULE, JointResult, LearnedDirections
 from rotorcheck.robust.validation import Verdict
-from rotorcheck.workflow.benign import certify_beyond_benign, joint_detection
+from rotorcheck.workflow.benign import anchored_pairs, certify_beyond_benign, joint_detection
 from rotorcheck.workflow.detectors.base import Detection, DetectorSettings
 from rotorcheck.workflow.detectors.certified import CertifiedDetector
 from rotorcheck.workflow.measured import MeasuredRun
@@ -84,9 +84,14 @@ class JointDetector:
         kappa = None if b.benign_kappa is None else float(b.benign_kappa)
         th, var = np.asarray(b.healthy_frf), np.asarray(b.healthy_frf_var)
         out = None if found.harmonics is None else found.harmonics.flagged
+        modal = b.benign_kappa is None
+        if modal and b.benign_correction is None and learned_directions(b) is None:  # pairs the modal fit describes
+            run, th, var, note = anchored_pairs(rig, run, th, var, b.speed_rpm)
+            if note:
+                found.notes.append(note)
         # a baseline that learned drift (--learn-drift) learned it on the model re-solved: tested so
         joint = joint_detection(rig, th, var, run, kappa, learned_directions(b), self.settings.false_alarm,
-                                b.speed_rpm, b.benign_correction, exclude=out, modal=b.benign_kappa is None)
+                                b.speed_rpm, b.benign_correction, exclude=out, modal=modal)
         found.detector, found.rule, found.joint = self.name, JOINT_RULE, joint
         found.verdict = joint_verdict(joint, found.verdict)
         found.statistic, found.threshold, found.p_value = joint.statistic, joint.threshold, joint.p_value
