@@ -12,7 +12,7 @@ import numpy as np
 
 from rotorcheck.config import RigConfig
 from rotorcheck.errors import InputError
-from rotorcheck.nominal import ChannelPair, port_label
+from rotorcheck.nominal import ChannelPair
 from rotorcheck.robust.joint import BenignModel, JointResult, LearnedDirections, joint_test, learn_directions
 from rotorcheck.robust.real_box import BoxCertificate, certify_points, merge_certificates
 from rotorcheck.robust.validation import STATUS_EXCLUDED
@@ -26,7 +26,7 @@ from rotorcheck.signatures import (
     stacked,
 )
 from rotorcheck.variability import benign_at, benign_parameters
-from rotorcheck.workflow.measured import MeasuredRun, frf_estimate, per_pair
+from rotorcheck.workflow.measured import MeasuredRun, frf_estimate, per_pair, with_pairs
 
 
 def benign_table(joint: JointResult, rig: RigConfig) -> list[dict[str, Any]]:
@@ -152,10 +152,9 @@ def anchored_pairs(rig: RigConfig, run: MeasuredRun, Th: np.ndarray, var_h: np.n
     in-plane pairs on their anchor. The cross pairs stay in the per-point test."""
     f = run.frequency_hz
     speed = run.speed_rpm if speed_rpm is None else speed_rpm
-    if run.n_pairs <= 1 or speed == 0.0 or not run.pairs:
+    P = run.n_pairs
+    if P <= 1 or speed == 0.0 or not run.pairs:
         return run, Th, var_h, ""
-    est = frf_estimate(run)
-    P = est.frf.shape[1]
     th, vh = per_pair(Th, f, P, run), per_pair(var_h, f, P, run)
     if modal_anchor(rig, f, speed, th, run.pairs, vh) is not None:
         return run, Th, var_h, ""
@@ -163,18 +162,15 @@ def anchored_pairs(rig: RigConfig, run: MeasuredRun, Th: np.ndarray, var_h: np.n
     # of everything kept holds (a station beside a bearing hears too little to pin the modes)
     inplane = [k for k, p in enumerate(run.pairs) if p.input.direction == p.output.direction]
     keep: list[int] = []
-    for station in dict.fromkeys(port_label(run.pairs[k].output)[:-2] for k in inplane):
-        trial = keep + [k for k in inplane if port_label(run.pairs[k].output)[:-2] == station]
+    for station in dict.fromkeys(run.pairs[k].output.station for k in inplane):
+        trial = keep + [k for k in inplane if run.pairs[k].output.station == station]
         if modal_anchor(rig, f, speed, th[:, trial], [run.pairs[k] for k in trial], vh[:, trial]) is not None:
             keep = trial
     if not keep or len(keep) == P:
         return run, Th, var_h, ""
-    pairs = [run.pairs[k] for k in keep]
-    sub = dataclasses.replace(run, pairs=tuple(pairs), frf_pairs=np.asarray(run.frf_pairs)[:, keep],
-                              var_pairs=np.asarray(run.var_pairs)[:, keep],
-                              dof_pairs=None if run.dof_pairs is None else np.asarray(run.dof_pairs)[:, keep])
-    note = (f"joint test on the {len(keep)} in-plane channel pairs of {P} ({', '.join(p.name for p in pairs)}): at "
-            f"{speed:g} rpm the healthy sweep's modal fit does not describe the cross-plane pairs, and the model's "
+    sub = with_pairs(run, keep)
+    note = (f"joint test on the {len(keep)} in-plane channel pairs of {P} ({', '.join(p.name for p in sub.pairs)}): "
+            f"at {speed:g} rpm the healthy sweep's modal fit does not describe the cross-plane pairs, and the model's "
             "own benign prediction errs coherently there; the cross pairs enter the per-point test")
     return sub, th[:, keep], vh[:, keep], note
 

@@ -24,9 +24,10 @@ from rotorcheck.robust.joint import JointResult
 from rotorcheck.robust.measured import AnchoredDamageBound, MeasuredDetection, anchored_damage_bound, io_model_error
 from rotorcheck.robust.real_box import BoxCertificate
 from rotorcheck.robust.validation import DetectionResult, Verdict
-from rotorcheck.workflow.benign import anchored_pairs, benign_table
+from rotorcheck.workflow.benign import benign_table
 from rotorcheck.workflow.detectors import Detection, DetectorSettings, make_detector
 from rotorcheck.workflow.detectors.base import HARMONICS_KEPT_OUT
+from rotorcheck.workflow.detectors.joint import joint_pairs
 from rotorcheck.workflow.directional import DirectionalDamage, damage_per_direction
 from rotorcheck.workflow.locating import locate_damage
 from rotorcheck.workflow.measured import (
@@ -466,9 +467,7 @@ def sweep_detectability(rig: RigConfig, baseline: Baseline, run: MeasuredRun, jo
     test allowed is linearized at the healthy state (on the crack rig within 3 % of the re-solved model's
     figures, 15 % on element 6); learned benign directions are not included."""
     f = run.frequency_hz
-    th_all, vh_all = np.asarray(baseline.healthy_frf), np.asarray(baseline.healthy_frf_var)
-    if np.asarray(joint.remaining).size != f.size * run.n_pairs:  # the joint test used the in-plane pairs only
-        run, th_all, vh_all, _ = anchored_pairs(rig, run, th_all, vh_all, baseline.speed_rpm)
+    run, th_all, vh_all, _ = joint_pairs(rig, baseline, run)  # the pairs the joint test read
     est = frf_estimate(run)
     P = est.frf.shape[1]
     th = per_pair(th_all, f, P, run)

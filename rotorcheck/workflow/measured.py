@@ -411,12 +411,17 @@ def aligned_pairs(run: MeasuredRun, keys: list[list[str]] | None) -> MeasuredRun
     have = pair_keys(run)
     if keys is None or have == keys or sorted(have) != sorted(keys) or run.n_pairs < 2:
         return run
-    order = [have.index(k) for k in keys]
+    # the rig's own pair stays first in both (it is placed first on reading), so W, Zt, output_var hold
+    return with_pairs(run, [have.index(k) for k in keys])
+
+
+def with_pairs(run: MeasuredRun, order: list[int]) -> MeasuredRun:
+    """``run`` with the channel pairs of indices ``order``, in that order (their FRFs, variances and degrees of
+    freedom); W, Zt and output_var stay the rig's own pair's phasors."""
 
     def cols(a: np.ndarray | None) -> np.ndarray | None:
         return None if a is None else np.asarray(a)[:, order]
 
-    # the rig's own pair stays first in both (it is placed first on reading), so W, Zt, output_var hold
     return dataclasses.replace(run, pairs=tuple(run.pairs[k] for k in order), frf_pairs=cols(run.frf_pairs),
                                var_pairs=cols(run.var_pairs), dof_pairs=cols(run.dof_pairs))
 

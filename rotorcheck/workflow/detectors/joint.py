@@ -31,6 +31,18 @@ def learned_directions(baseline: Baseline) -> LearnedDirections | None:
     return LearnedDirections(U, np.asarray(baseline.benign_direction_bound), np.zeros(0), int(baseline.n_healthy))
 
 
+def joint_pairs(rig: RigConfig, baseline: Baseline, run: MeasuredRun
+                ) -> tuple[MeasuredRun, np.ndarray, np.ndarray, str]:
+    """What the joint test reads of ``run`` and ``baseline``: ``(run, healthy FRF, its variance, note)``, the channel
+    pairs restricted to those the healthy sweep's modal fit describes where the baseline predicts benign change on
+    it (:func:`rotorcheck.workflow.benign.anchored_pairs`; a baseline with learned drift or a learned correction
+    keeps every pair, as learned); ``rig`` the rig as the baseline updated it."""
+    th, var = np.asarray(baseline.healthy_frf), np.asarray(baseline.healthy_frf_var)
+    if baseline.benign_kappa is None and baseline.benign_correction is None and learned_directions(baseline) is None:
+        return anchored_pairs(rig, run, th, var, baseline.speed_rpm)
+    return run, th, var, ""
+
+
 def joint_verdict(joint: JointResult, certified: Verdict) -> Verdict:
     """The sweep verdict of the joint test (its rule: :data:`rotorcheck.robust.joint.JOINT_RULE`); the
     certified fault points stay as where in frequency the data depart."""
@@ -82,16 +94,13 @@ class JointDetector:
             raise RuntimeError("prepare() the detector first")
         found = self.points.detect(run)
         kappa = None if b.benign_kappa is None else float(b.benign_kappa)
-        th, var = np.asarray(b.healthy_frf), np.asarray(b.healthy_frf_var)
         out = None if found.harmonics is None else found.harmonics.flagged
-        modal = b.benign_kappa is None
-        if modal and b.benign_correction is None and learned_directions(b) is None:  # pairs the modal fit describes
-            run, th, var, note = anchored_pairs(rig, run, th, var, b.speed_rpm)
-            if note:
-                found.notes.append(note)
+        run, th, var, note = joint_pairs(rig, b, run)
+        if note:
+            found.notes.append(note)
         # a baseline that learned drift (--learn-drift) learned it on the model re-solved: tested so
         joint = joint_detection(rig, th, var, run, kappa, learned_directions(b), self.settings.false_alarm,
-                                b.speed_rpm, b.benign_correction, exclude=out, modal=modal)
+                                b.speed_rpm, b.benign_correction, exclude=out, modal=b.benign_kappa is None)
         found.detector, found.rule, found.joint = self.name, JOINT_RULE, joint
         found.verdict = joint_verdict(joint, found.verdict)
         found.statistic, found.threshold, found.p_value = joint.statistic, joint.threshold, joint.p_value
