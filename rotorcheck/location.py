@@ -61,6 +61,7 @@ from rotorcheck.robust.affine import AffineModel, coupled_blocks
 from rotorcheck.robust.box_test import Points, point_receptances
 from rotorcheck.robust.severity import SEVERITY_RULE, severity_interval
 from rotorcheck.signatures import candidate_elements
+from rotorcheck.sizing import POLE_SHIFTS
 
 #: a located element: relative likelihood at least this (else the ranked candidates are the answer)
 LOCATED_LIKELIHOOD = 0.5
@@ -118,7 +119,7 @@ def depth_interval(lower: float, upper: float, relation: Any) -> tuple[float | N
 
 def _basis_text(basis: str) -> str:
     """What an estimate's interval rests on, as the headline says it."""
-    return "from the measured pole shifts" if basis == "pole shifts" else "under the model's crack signature"
+    return "from the measured pole shifts" if basis == POLE_SHIFTS else "under the model's crack signature"
 
 
 @dataclass(frozen=True)

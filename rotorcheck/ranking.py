@@ -38,7 +38,7 @@ from rotorcheck.progress import Progress, report
 from rotorcheck.robust.affine import AffineModel, AffineParameter
 from rotorcheck.robust.joint import linearized_se
 from rotorcheck.robust.measured import io_model_error
-from rotorcheck.sizing import POLE_SIZE_RULE, size_from_poles
+from rotorcheck.sizing import POLE_SHIFTS, POLE_SIZE_RULE, model_poles, size_from_poles
 
 #: assumed bound on the model's error in the predicted change at a point, relative to that change: the
 #: nominal model's crack shapes agree with the truth rig's to a cosine of 0.987-0.990 (limits.md 1), an
@@ -64,6 +64,8 @@ N_FIT_TOP, N_FIT_SPREAD = 32, 32
 LOSS_SCAN = (0.0, 0.03, 0.07, 0.12, 0.2, 0.3, 0.42, 0.55, 0.68, 0.8)
 #: least-squares evaluations per start
 MAX_NFEV = 25
+#: what an estimate's interval rests on when the poles do not size it (:attr:`ElementFit.size_basis`)
+FRF_FIT = "FRF fit"
 #: the estimate's interval: confidence of the profile-likelihood interval of the best ranked elements' loss,
 #: and the width (fraction) to which its ends are found
 INTERVAL_LEVEL, INTERVAL_TOL = 0.95, 0.005
@@ -108,14 +110,7 @@ class SweepChange:
 def natural_frequencies_hz(model: AffineModel) -> np.ndarray:
     """The undamped-equivalent natural frequencies |lambda| / 2 pi (Hz) of ``model`` at its parameters'
     zero (state space of M, D, K; each conjugate pair once)."""
-    from scipy.linalg import eig  # lazy: scipy.linalg only for the natural frequencies
-
-    n = model.K.shape[0]
-    Minv = np.linalg.inv(model.M)
-    A = np.block([[np.zeros((n, n)), np.eye(n)], [-Minv @ model.K, -Minv @ model.D]])
-    lam = eig(A, right=False)
-    lam = lam[lam.imag > 0]
-    return np.sort(np.abs(lam)) / (2.0 * np.pi)
+    return np.sort(np.abs(model_poles(model, np.zeros(len(model.parameters))))) / (2.0 * np.pi)
 
 
 def _near_sideband(model: AffineModel, freq_hz: np.ndarray, speed_rpm: float) -> np.ndarray:
@@ -325,7 +320,14 @@ class ElementFit:
     loss_interval: tuple[float, float] | None = None  # at INTERVAL_LEVEL (None: not computed), by ``size_basis``
     inflation: float = 1.0  # the interval's widening: sqrt(chi2 / dof) of the best fit when above 1
     size: float | None = None  # the loss the interval is about: the pole shifts' estimate, else ``loss``
-    size_basis: str = ""  # "pole shifts" (:mod:`rotorcheck.sizing`) | "FRF fit" (:func:`profile_interval`) | ""
+
+    @property
+    def size_basis(self) -> str:
+        """What the interval rests on: :data:`~rotorcheck.sizing.POLE_SHIFTS` (sized by :mod:`rotorcheck.sizing`),
+        :data:`FRF_FIT` (:func:`profile_interval`), or '' (no interval)."""
+        if self.loss_interval is None:
+            return ""
+        return FRF_FIT if self.size is None else POLE_SHIFTS
 
     @property
     def size_estimate(self) -> float:
@@ -367,7 +369,7 @@ class Ranking:
                                  {"size_estimate": f.size_estimate, "loss_estimate_interval": list(f.loss_interval),
                                   "interval_level": INTERVAL_LEVEL, "interval_inflation": f.inflation,
                                   "interval_basis": f.size_basis,
-                                  "interval_rule": POLE_SIZE_RULE if f.size_basis == "pole shifts" else INTERVAL_RULE})}
+                                  "interval_rule": INTERVAL_RULE if f.size is None else POLE_SIZE_RULE})}
                              for f in self.fits]}
 
 
@@ -527,10 +529,10 @@ def rank_elements(config: RigConfig, box: Any, change: SweepChange, elements: Se
                                     change.var_h, f.loss, INTERVAL_LEVEL)
         if sized is not None:
             fits[j] = dataclasses.replace(f, loss_interval=sized.interval, inflation=sized.inflation,
-                                          size=sized.estimate, size_basis="pole shifts")
+                                          size=sized.estimate)
             continue
         fit, lo, hi = fitted[f.element]
         x = np.r_[f.theta, f.loss, f.gain]
         interval, inflation = profile_interval(fit, lo, hi, x, dof)
-        fits[j] = dataclasses.replace(f, loss_interval=interval, inflation=inflation, size_basis="FRF fit")
+        fits[j] = dataclasses.replace(f, loss_interval=interval, inflation=inflation)
     return Ranking(change.hypothesis, fits, chi2_benign, n_res, int(idx.size), RANKING_RULE)

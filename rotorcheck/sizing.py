@@ -57,6 +57,8 @@ REFIT_MOVE = 0.03
 
 #: losses (fraction) whose predicted poles start the new sweep's fit when the first estimate's do not fit it
 START_LOSSES = (0.0, 0.05, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8)
+#: what an estimate's interval rests on when this module sized it (report.json ``interval_basis``)
+POLE_SHIFTS = "pole shifts"
 #: how the size and its interval are made (report.json)
 POLE_SIZE_RULE = ("the loss whose pole shifts (the model's eigenvalues re-solved at each loss, benign parameters in "
                   "their box, first order) best match the measured shifts of the fitted modes between the healthy and "
@@ -86,15 +88,7 @@ class PoleShiftSize:
 
 def model_poles(model: AffineModel, theta: np.ndarray) -> np.ndarray:
     """The poles (rad/s, positive imaginary part) of ``model`` at ``theta`` (state space of M, D, K)."""
-    K, D, M = model.K.copy(), model.D.copy(), model.M.copy()
-    for t, prm in zip(np.asarray(theta, dtype=float), model.parameters):
-        for kind, A in prm.terms:
-            if kind == "K":
-                K = K + t * A
-            elif kind == "D":
-                D = D + t * A
-            else:
-                M = M + t * A
+    M, D, K = model.matrices_at(theta)
     n = K.shape[0]
     Minv = np.linalg.inv(M)
     S = np.block([[np.zeros((n, n)), np.eye(n)], [-Minv @ K, -Minv @ D]])

@@ -207,6 +207,15 @@ class AffineModel:
     def _s(kind: str, w: float) -> complex:
         return {"K": 1.0 + 0j, "D": 1j * w, "M": -(w**2) + 0j}[kind]
 
+    def matrices_at(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(M, D, K)`` (n, n) at ``theta``: each parameter's terms added to the matrix of its kind (kg, N s/m,
+        N/m)."""
+        mats = {"M": self.M.copy(), "D": self.D.copy(), "K": self.K.copy()}
+        for t, prm in zip(np.asarray(theta, dtype=float), self.parameters):
+            for kind, A in prm.terms:
+                mats[kind] = mats[kind] + t * A
+        return mats["M"], mats["D"], mats["K"]
+
     def dynamic_stiffness(self, w: float, theta: np.ndarray) -> np.ndarray:
         """``Z(w, theta)`` (n, n) complex, N/m; ``w`` in rad/s."""
         Z = self.K - w**2 * self.M + 1j * w * self.D
