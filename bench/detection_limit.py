@@ -82,14 +82,20 @@ def sweep_run(truth: RigConfig, nominal: RigConfig, speed: float, noise: float, 
 
 
 def _baseline(runs: list[workflow.MeasuredRun], nominal: RigConfig) -> tuple[np.ndarray, np.ndarray, Any]:
-    h = workflow.healthy_estimate(runs)
-    return h.frf[:, 0], h.var[:, 0], workflow.learn_benign(nominal, runs)
+    """``(healthy FRF, its variance, (the rig as the baseline reads it, kappa))``: one sweep as it is; several
+    through ``validate`` (``--learn-drift`` from 3 on)."""
+    if len(runs) == 1:
+        h = workflow.healthy_estimate(runs)
+        return h.frf[:, 0], h.var[:, 0], (nominal, None)
+    b = workflow.validate(nominal, runs, workflow.fit_noise(runs[0]), learn_drift=len(runs) >= 3).baseline
+    return (np.asarray(b.healthy_frf)[:, 0], np.asarray(b.healthy_frf_var)[:, 0],
+            (workflow.baseline_rig(nominal, b), b.benign_kappa))
 
 
 def _called(nominal: RigConfig, base: tuple[np.ndarray, np.ndarray, Any], run: workflow.MeasuredRun,
             speed: float) -> Any:
-    Th, vh, lrn = base
-    return workflow.joint_detection(nominal, Th, vh, run, lrn.kappa, lrn.learned, 0.01, speed, lrn.correction)
+    Th, vh, (rig, kappa) = base
+    return workflow.joint_detection(rig, Th, vh, run, kappa, None, 0.01, speed)
 
 
 def _rate(n: int, trial: Callable[[int], Any]) -> float:

@@ -117,7 +117,9 @@ class DriftModel:
     """What the joint test allows as benign change: the model-error factor ``kappa`` (None: the default),
     benign directions learned from several healthy sweeps (q, f) m/N with the bound on each coefficient, the
     data's correction of the model's benign change (p, f) m/N per unit parameter, the parameter values
-    ``validate --update`` fitted, and how much of each benign direction the model predicts."""
+    ``validate --update`` fitted, how much of each benign direction the model predicts, and the ranges' shift
+    and widening each side per benign parameter that ``validate --learn-drift`` learned on the modal anchor
+    (:mod:`rotorcheck.workflow.drift`; relative changes)."""
 
     kappa: float | None = None
     directions: np.ndarray | None = None
@@ -125,6 +127,17 @@ class DriftModel:
     correction: np.ndarray | None = None
     updated_parameters: dict[str, float] | None = None
     model_share: dict[str, list[float]] | None = None
+    range_shift: dict[str, float] | None = None
+    range_widen: dict[str, float] | None = None
+
+    @property
+    def on_anchor(self) -> bool:
+        """The joint test predicts benign change on the healthy sweep's modal anchor (the default, and drift learned
+        by the ranges); False for a baseline whose drift was learned on the model re-solved (kappa, directions or a
+        correction without learned ranges: files of earlier versions)."""
+        if self.range_shift is not None:
+            return True
+        return self.kappa is None and self.directions is None and self.correction is None
 
 
 def _field(part: str, name: str, doc: str) -> property:
@@ -208,7 +221,8 @@ _DATASETS = (("frequency_hz", "bound", "frequency_hz"), ("gamma", "bound", "gamm
              ("benign_correction", "drift", "correction"))
 #: typed fields kept as JSON text in ``x_<name>`` attributes (the layout of schema_version 1)
 _JSON_ATTRS = (("channel_pairs", "healthy", "channel_pairs"), ("updated_parameters", "drift", "updated_parameters"),
-               ("benign_model_share", "drift", "model_share"))
+               ("benign_model_share", "drift", "model_share"), ("benign_range_shift", "drift", "range_shift"),
+               ("benign_range_widen", "drift", "range_widen"))
 #: typed text fields kept in ``x_<name>`` attributes
 _TEXT_ATTRS = (("rig_path", "provenance", "rig_path"), ("noise_fitted_on_sweep", "provenance", "noise_fitted_on_sweep"))
 
@@ -527,6 +541,18 @@ def _json_attr(h5: h5py.Group, p: Path, where: str, name: str, check: type) -> A
     return value
 
 
+def _number_dict(h5: h5py.Group, p: Path, where: str, name: str) -> dict[str, float] | None:
+    """A ``{name: finite number}`` field kept as JSON text in ``x_<name>`` (None when absent)."""
+    value = _json_attr(h5, p, where, name, dict)
+    if value is None:
+        return None
+    bad = [k for k, v in value.items() if isinstance(v, bool) or not isinstance(v, (int, float))
+           or not np.isfinite(v)]
+    if bad:
+        raise InputError(p, f"{where}/@x_{name}", f"{bad[0]!r} must be a finite number")
+    return {str(k): float(v) for k, v in value.items()}
+
+
 def _read_from(h5: h5py.Group, p: Path, where: str) -> Baseline:
     """One validated set from a group of the baseline file (``where``: its path, for messages). Every
     attribute and dataset is type-checked before it is used."""
@@ -570,11 +596,12 @@ def _read_from(h5: h5py.Group, p: Path, where: str) -> Baseline:
     healthy = HealthyData(data("healthy_frf"), data("healthy_frf_var"), data("healthy_frf_dof"), data("input_phasor"),
                           data("output_phasor"), count("shaft_orders_removed", 0), count("n_healthy", 1),
                           None if pairs is None else [[str(x) for x in pr] for pr in pairs])
-    updated = _json_attr(h5, p, where, "updated_parameters", dict)
     drift = DriftModel(number("benign_kappa") if "benign_kappa" in h5.attrs else None,
                        data("benign_directions"), data("benign_direction_bound"), data("benign_correction"),
-                       None if updated is None else {str(k): float(v) for k, v in updated.items()},
-                       _json_attr(h5, p, where, "benign_model_share", dict))
+                       _number_dict(h5, p, where, "updated_parameters"),
+                       _json_attr(h5, p, where, "benign_model_share", dict),
+                       _number_dict(h5, p, where, "benign_range_shift"),
+                       _number_dict(h5, p, where, "benign_range_widen"))
     bound = None
     if stage == "validated":
         for name in ("frequency_hz", "gamma", "model_frf"):

@@ -10,7 +10,8 @@ speed, ...): the detector must not call such a change damage. The YAML section i
   + x; the speed in rpm, an absolute bearing-damping range in N s/m, a path parameter whose nominal
   is 0);
 - :func:`with_benign`: the rig with chosen values x applied (a new, frozen config), plus the parts
-  that are not config changes (speed offset, sensor and actuator gain factors).
+  that are not config changes (speed offset, sensor and actuator gain factors);
+- :func:`recentred_rig`: the rig with its ranges moved and widened (drift learned from several sweeps).
 
 Ranges are relative to the config the section belongs to (the nominal rig); ``with_benign`` does
 not re-derive them.
@@ -25,9 +26,9 @@ from typing import Any
 
 from pydantic import BaseModel
 
-from rotorcheck.config import Leaf, ResolvedBenign, RigConfig, SpeedTable, leaf_text, resolve_benign
+from rotorcheck.config import BenignRange, Leaf, ResolvedBenign, RigConfig, SpeedTable, leaf_text, resolve_benign
 
-__all__ = ["BenignParameter", "benign_at", "benign_parameters", "with_benign"]
+__all__ = ["BenignParameter", "benign_at", "benign_parameters", "pair_ranges", "recentred_rig", "with_benign"]
 
 
 @dataclass(frozen=True)
@@ -159,3 +160,33 @@ def with_benign(config: RigConfig, values: Mapping[str, float]) -> tuple[RigConf
                     raise ValueError(f"{r.name}: offset {x:g} would make {leaf_text(leaf)} < 0")
                 new = _set(new, leaf, _shift(x))
     return new, speed_offset, sensor, actuator
+
+
+def recentred_rig(rig: RigConfig, shift: dict[str, float], widen: dict[str, float]) -> RigConfig:
+    """``rig`` with each named benign factor's range ``[lo, hi]`` moved to ``[lo + shift - widen, hi + shift + widen]``
+    (relative changes; written as ``range_percent``). The speed tolerance and offsets (``absolute`` ranges of an
+    offset kind, which must hold the nominal value) keep their declared ranges."""
+    if not shift and not widen:
+        return rig
+    params = benign_parameters(rig)
+    entries: list[BenignRange] = []
+    for r, p in zip(rig.variability, params):
+        s, w = float(shift.get(p.name, 0.0)), float(widen.get(p.name, 0.0))
+        if (s == 0.0 and w == 0.0) or p.is_speed or p.kind != "factor":
+            entries.append(r)
+            continue
+        lo, hi = max(p.lo + s - w, -0.99), p.hi + s + w
+        data = r.model_dump(exclude_none=True)
+        for key in ("percent", "range_percent", "absolute", "temperature_c", "reference_c", "de_dt"):
+            data.pop(key, None)
+        data["range_percent"] = (100.0 * lo, 100.0 * hi)
+        entries.append(BenignRange.model_validate(data))
+    return rig.model_copy(update={"variability": entries})
+
+
+def pair_ranges(rig: RigConfig, speed_rpm: float) -> RigConfig:
+    """``rig`` with every benign factor's range ``[lo, hi]`` replaced by ``[lo - hi, hi - lo]``: the change between
+    two states inside the declared ranges (what one healthy sweep may differ from another by)."""
+    params = benign_at(rig, speed_rpm)
+    return recentred_rig(rig, {p.name: -(p.lo + p.hi) / 2.0 for p in params},
+                         {p.name: (p.hi - p.lo) / 2.0 for p in params})

@@ -86,9 +86,11 @@ def validate(
     run: RunOpt = None,
     at: Annotated[float | None, typer.Option("--at", help="Frequency (Hz) of the complex-plane plot.")] = None,
     plots: Annotated[bool, typer.Option(help="Write the validation plots.")] = True,
-    learn_drift: Annotated[bool, typer.Option(
-        "--learn-drift", help="Learn from the healthy sweeps (>= 3, drifted across the ranges) how the machine "
-                              "drifts: a correction of the model's benign change, directions, kappa.")] = False,
+    learn_drift: Annotated[bool | None, typer.Option(
+        "--learn-drift/--no-learn-drift", help="Learn from the healthy sweeps (>= 3, drifted across the ranges) where "
+        "the machine drifts: the ranges move to the centre of the sweeps' fitted states (widened by its 95 % "
+        "interval); kappa from the sweeps left out. Default: learned when 3 or more sweeps differ beyond their "
+        "noise.", show_default=False)] = None,
     update: Annotated[bool, typer.Option(
         "--update", help="Fit the rig's variability parameters to the healthy FRF (model updating) and predict "
                          "benign change around the updated model.")] = False,

@@ -217,31 +217,6 @@ def whitening(var_total: np.ndarray) -> np.ndarray:
     return np.concatenate([w, w])
 
 
-def learn_directions(deviations: Sequence[np.ndarray], var_total: np.ndarray, margin: float = 1.5,
-                     noise_factor: float = 4.0) -> LearnedDirections | None:
-    """Benign directions from healthy sweeps' deviations (each (n,) complex, m/N, e.g. sweep minus
-    the healthy mean), whitened by ``var_total``. A component is kept when its squared singular value
-    exceeds ``noise_factor`` times the noise's expected largest one ((sqrt(2n) + sqrt(K))^2, real
-    dims); coefficients bounded by ``margin`` times the largest seen. None when nothing exceeds noise."""
-    D = np.array(deviations, dtype=complex)  # (K, n)
-    if D.shape[0] < 2:
-        return None
-    w = np.sqrt(2.0 / np.asarray(var_total, dtype=float))
-    X = D * w  # whitened complex, each complex entry has E|x|^2 = 2 (real parts unit variance)
-    # complex SVD over sweeps: rows are sweeps
-    _, s, Vh = np.linalg.svd(X, full_matrices=False)
-    n, K = X.shape[1], X.shape[0]
-    floor = noise_factor * (np.sqrt(2 * n) + np.sqrt(2 * K)) ** 2 / 2.0
-    keep = s**2 > floor
-    if not np.any(keep):
-        return None
-    V = Vh[keep]  # (q, n), unit norm in whitened complex space
-    U = V / w  # back to m/N: whitened U has unit norm
-    coef = X @ V.conj().T  # (K, q)
-    c_max = margin * np.maximum(np.max(np.abs(coef.real), axis=0), np.max(np.abs(coef.imag), axis=0))
-    return LearnedDirections(U=U, c_max=np.maximum(c_max, 1.0), singular_values=s, n_sweeps=K)
-
-
 #: standard normal draws kept per (seed, columns): the largest array drawn so far (issue 28: one joint test
 #: after another, the detectability searches' ten, draw the same numbers from the same seed)
 _NORMALS: dict[tuple[int, int], np.ndarray] = {}

@@ -9,7 +9,8 @@ One module per pipeline step (frequencies in Hz, receptances in m/N, D_u in N/m)
   channel pairs, FRF estimates.
 - :mod:`~rotorcheck.workflow.noise`: step 2, the noise bound.
 - :mod:`~rotorcheck.workflow.validation`: step 3, gamma_h and the baseline.
-- :mod:`~rotorcheck.workflow.benign`: the benign-change model, the joint test and learning drift.
+- :mod:`~rotorcheck.workflow.benign`: the benign-change model and the joint test.
+- :mod:`~rotorcheck.workflow.drift`: learning where the machine drifts from several healthy sweeps.
 - :mod:`~rotorcheck.workflow.directional`: damage dynamics in x and y from several channel pairs.
 - :mod:`~rotorcheck.workflow.detection`: steps 4-5, fault points, verdict, damage dynamics.
 - :mod:`~rotorcheck.workflow.locating`: where and how big (candidate elements).
@@ -19,15 +20,12 @@ One module per pipeline step (frequencies in Hz, receptances in m/N, D_u in N/m)
 
 from rotorcheck.errors import InputError
 from rotorcheck.workflow.benign import (
-    KAPPA_GRID,
     KAPPA_MODAL,
     KAPPA_NOMINAL,
-    BenignLearning,
     benign_model,
     benign_table,
     certify_beyond_benign,
     joint_detection,
-    learn_benign,
 )
 from rotorcheck.workflow.checking import FILE_RULE, SweepCheck, check_sweep, detect_pairs, paired_runs
 from rotorcheck.workflow.detection import (
@@ -44,6 +42,7 @@ from rotorcheck.workflow.detectors import DETECTORS, RULES, Detection, Detector,
 from rotorcheck.workflow.detectors.enclosure import VERDICT_RULE
 from rotorcheck.workflow.detectors.joint import joint_verdict
 from rotorcheck.workflow.directional import DirectionalDamage, damage_per_direction
+from rotorcheck.workflow.drift import DRIFT_RULE, DriftLearning, learn_drift_ranges
 from rotorcheck.workflow.figures import (
     PLOT_STEMS_DETECT,
     PLOT_STEMS_VALIDATE,
@@ -78,6 +77,7 @@ from rotorcheck.workflow.noise import NOISE_METHODS, fit_noise, noise_baseline, 
 from rotorcheck.workflow.outputs import PLOT_FORMATS, plot_formats, plot_paths
 from rotorcheck.workflow.prediction import DETECTABILITY_POINTS, detectability_for_rig, sensor_ranking_for_rig
 from rotorcheck.workflow.rigs import (
+    baseline_rig,
     baseline_updates,
     check_elements,
     load_rig,
@@ -99,10 +99,10 @@ from rotorcheck.workflow.validation import (
 __all__ = [
     "DETECTABILITY_POINTS",
     "DETECTORS",
+    "DRIFT_RULE",
     "ENCLOSE_MODES",
     "FILE_RULE",
     "GRID_TOLERANCE_HZ",
-    "KAPPA_GRID",
     "KAPPA_MODAL",
     "KAPPA_NOMINAL",
     "NOISE_METHODS",
@@ -111,12 +111,12 @@ __all__ = [
     "PLOT_STEMS_VALIDATE",
     "RULES",
     "VERDICT_RULE",
-    "BenignLearning",
     "Detection",
     "DetectionOutcome",
     "Detector",
     "DetectorSettings",
     "DirectionalDamage",
+    "DriftLearning",
     "InputError",
     "MeasuredRun",
     "SweepCheck",
@@ -125,6 +125,7 @@ __all__ = [
     "anchored_summary",
     "baseline_for_speed",
     "baseline_pairs",
+    "baseline_rig",
     "baseline_updates",
     "benign_model",
     "benign_table",
@@ -149,7 +150,7 @@ __all__ = [
     "joint_detection",
     "joint_summary",
     "joint_verdict",
-    "learn_benign",
+    "learn_drift_ranges",
     "learning_summary",
     "load_rig",
     "load_rig_and_run",

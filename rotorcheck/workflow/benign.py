@@ -1,11 +1,11 @@
-"""The benign-change model (re-solved at the rig's variability parameters), the joint test over every point,
-the per-point certificate beyond benign change, and learning drift from several healthy sweeps."""
+"""The benign-change model (re-solved at the rig's variability parameters), the joint test over every point and
+the per-point certificate beyond benign change (learning drift from several healthy sweeps:
+:mod:`rotorcheck.workflow.drift`)."""
 
 from __future__ import annotations
 
 import dataclasses
 from collections.abc import Sequence
-from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -13,7 +13,7 @@ import numpy as np
 from rotorcheck.config import RigConfig
 from rotorcheck.errors import InputError
 from rotorcheck.nominal import ChannelPair
-from rotorcheck.robust.joint import BenignModel, JointResult, LearnedDirections, joint_test, learn_directions
+from rotorcheck.robust.joint import BenignModel, JointResult, LearnedDirections, joint_test
 from rotorcheck.robust.real_box import BoxCertificate, certify_points, merge_certificates
 from rotorcheck.robust.validation import STATUS_EXCLUDED
 from rotorcheck.signatures import (
@@ -63,9 +63,6 @@ KAPPA_NOMINAL = 2.0
 #: kappa covers only what those leave. Chosen on bench/truth_variants.py's five truths (0 rpm, one probe, one
 #: healthy sweep, drift inside the ranges); see bench/results_independent_physics.md
 KAPPA_MODAL = 0.1
-#: kappa values tried, smallest first, when several healthy sweeps test it (never below the nominal:
-#: see :func:`learn_benign`)
-KAPPA_GRID = (KAPPA_NOMINAL, 3.0)
 
 
 def default_kappa(modal: bool) -> float:
@@ -182,7 +179,8 @@ def joint_detection(rig: RigConfig, Th: np.ndarray, var_h: np.ndarray, run: Meas
     """The joint test (:mod:`rotorcheck.robust.joint`) of ``run`` against the healthy FRF ``Th`` (f,) or
     (f, P), one column per channel pair, with the variance of its mean ``var_h`` (same shape), m^2/N^2;
     every point of every pair enters one statistic, but those of ``exclude`` (f,) bool (points on a shaft
-    harmonic: no weight in the benign fit or the statistic). ``correction``: see :func:`learn_benign`."""
+    harmonic: no weight in the benign fit or the statistic). ``correction``: (p, f) m/N per unit
+    parameter, the correction of the benign change a baseline of an earlier version learned."""
 
     f = run.frequency_hz
     speed = run.speed_rpm if speed_rpm is None else speed_rpm
@@ -244,127 +242,3 @@ def certify_beyond_benign(rig: RigConfig, Th: np.ndarray, var_h: np.ndarray, run
         cert = dataclasses.replace(cert, status=np.where(out, STATUS_EXCLUDED, cert.status).astype("<U11"),
                                    complex_unexplained=cert.complex_unexplained & ~out)
     return cert, notes
-
-
-@dataclass
-class BenignLearning:
-    """What several healthy sweeps teach about benign change (:func:`learn_benign`)."""
-
-    kappa: float | None  # relative error of the benign prediction carried in H0 (None: the anchor's default)
-    correction: np.ndarray | None = None  # (p, f) m/N per unit parameter: data's correction of the model
-    learned: LearnedDirections | None = None  # what the parameters cannot explain
-    theta: np.ndarray | None = None  # (K, p) the training sweeps' fitted parameters
-    # per benign parameter: how much of the data's response to it the model predicts (the part of the
-    # model's sensitivity along the learned one, |<s_model, s_data>| / ||s_data||^2, whitened) and the
-    # cosine between them
-    model_share: dict[str, tuple[float, float]] = field(default_factory=dict)
-    explained: float | None = None  # share of the sweeps' spread the parameters (model + correction) explain
-
-
-def _regress(theta: np.ndarray, left: np.ndarray, ridge: float = 1e-3) -> np.ndarray:
-    """``C`` (p, f) minimizing sum_k ||left_k - theta_k C||^2, each parameter scaled to unit RMS first
-    (parameters come in % and rpm) with a ridge ``ridge`` on the scaled Gram matrix."""
-    scale = np.sqrt(np.mean(theta**2, axis=0))
-    scale = np.where(scale > 0, scale, 1.0)
-    t = theta / scale
-    G = t.T @ t
-    lam = ridge * max(float(np.trace(G)) / max(G.shape[0], 1), 1e-300)
-    return np.linalg.solve(G + lam * np.eye(G.shape[0]), t.T @ left) / scale[:, None]
-
-
-def learn_benign(rig: RigConfig, runs: list[MeasuredRun], false_alarm: float = 0.01, iterations: int = 3,
-                 exclude: np.ndarray | None = None) -> BenignLearning:
-    """From several healthy sweeps (a warm-up, several days: drifted across the ranges):
-
-    1. each sweep's benign parameters ``theta_k`` fitted against the mean, and what the model leaves,
-       ``e_k``; the model's benign change is corrected by the regression ``e ~ theta C`` (the data's own
-       response to each named parameter, so the ranges keep their meaning), refitted ``iterations`` times;
-    2. benign directions in what remains (:func:`rotorcheck.robust.joint.learn_directions`);
-    3. kappa: the smallest of :data:`KAPPA_GRID` under which no sweep, left out and tested against the
-       others (correction and directions learned without it), is called damage (the largest if none);
-       the grid starts at :data:`KAPPA_NOMINAL`: sweeps drawn inside the ranges do not show their
-       corners (on the crack rig, with an earlier allowance, 8 training sweeps gave 1.0 and 4 of 10
-       benign corners were then called damage).
-
-    All of it on the model re-solved (``modal=False``), and a baseline that learned drift is tested so (the modal
-    anchor of a mean of drifted sweeps, no single state of the machine, predicted less well: with 3 training sweeps
-    on the truth rig and kappa from 0.1 up, 3-4 of 15 drifted healthy sweeps were called damage). One sweep:
-    kappa None (the default of the anchor in use), nothing learned; two: directions only (no leave-one-out).
-    Points of ``exclude`` (f,) bool (on a shaft harmonic) teach nothing: no weight in the fits, zero in what
-    is learned from."""
-
-    if len(runs) < 2:
-        return BenignLearning(None)
-
-    speed = runs[0].speed_rpm
-    ests = [frf_estimate(r) for r in runs]
-    frfs = [e.frf for e in ests]  # (f, P) each
-    mean = np.mean(frfs, axis=0)
-    var_mean = np.sum([e.var for e in ests], axis=0) / len(ests) ** 2
-    var_one = np.mean([e.var for e in ests], axis=0)
-    var_flat = stacked(var_one)
-    used = np.ones(var_flat.size, dtype=bool) if exclude is None else ~np.tile(np.asarray(exclude, dtype=bool),
-                                                                                 var_flat.size // frfs[0].shape[0])
-
-    def fits(C: np.ndarray | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        js = [joint_detection(rig, mean, var_mean, r, 0.0, None, false_alarm, speed, C, exclude, modal=False)
-              for r in runs]
-        th = np.array([j.theta for j in js], dtype=float)
-        left = np.array([j.unexplained for j in js]) * used
-        raw = left + (th @ C if C is not None else 0.0) * used  # what the uncorrected model leaves
-        return th, left, raw
-
-    C: np.ndarray | None = None
-    th, left, raw = fits(None)
-    # the speed tolerance is corrected by nothing: its effect (gyroscopics) is small beside the others
-    # and its training values are barely identifiable, so a regression on it learns noise (leaving the
-    # gain out of the correction too was tried: bearing me -2 % at 0 rpm then called damage 5 of 10)
-
-    params = benign_at(rig, speed)
-    keep = np.array([not p.is_speed for p in params], dtype=bool)
-
-    def regress(t: np.ndarray, e: np.ndarray) -> np.ndarray:
-        out = np.zeros((t.shape[1], e.shape[1]), dtype=complex)
-        out[keep] = _regress(t[:, keep], e)
-        return out
-
-    if th.shape[1] and len(runs) > int(np.count_nonzero(keep)):
-        for _ in range(iterations):
-            C = regress(th, raw)
-            th, left, raw = fits(C)
-    learned = learn_directions(list(left), 2.0 * var_flat)
-    wgt = 1.0 / var_flat  # whitening of a difference of two sweeps (real parts): 2 / (2 var)
-    share: dict[str, tuple[float, float]] = {}
-    if C is not None:
-        bm = benign_model(rig, runs[0].frequency_hz, speed, mean, 0.0,
-                           pairs=runs[0].pairs if runs[0].n_pairs > 1 else None, modal=False)
-        assert bm is not None, "a correction was learned, so the rig has benign parameters"
-        zero = np.zeros(len(params))
-        for j, prm in enumerate(params):
-            if not keep[j]:
-                continue
-            x = zero.copy()
-            x[j] = h = float(np.asarray(bm.step)[j])
-            s_m = (bm.predict(x) - bm.predict(zero)) / h
-            s_d = s_m + C[j]
-            inner = np.sum(wgt * s_m.conj() * s_d)
-            nd, nm = np.sum(wgt * np.abs(s_d) ** 2), np.sum(wgt * np.abs(s_m) ** 2)
-            share[prm.name] = (float(abs(inner) / nd), float(abs(inner) / np.sqrt(nd * nm)))
-    spread = np.array([stacked(x - mean) for x in frfs]) * used
-    explained = 1.0 - float(np.sum(wgt * np.abs(left) ** 2) / np.sum(wgt * np.abs(spread) ** 2))
-    if len(runs) < 3:
-        return BenignLearning(KAPPA_NOMINAL, C, learned, th, share, explained)  # learned on the model re-solved
-
-    def left_out_called_damage(i: int, kappa: float) -> bool:
-        rest = [j for j in range(len(runs)) if j != i]
-        c = np.mean([frfs[j] for j in rest], axis=0)
-        v = np.sum([ests[j].var for j in rest], axis=0) / len(rest) ** 2
-        Ci = regress(th[rest], raw[rest]) if C is not None else None
-        lrn = learn_directions([left[j] for j in rest], 2.0 * var_flat)
-        return bool(joint_detection(rig, c, v, runs[i], kappa, lrn, false_alarm, speed, Ci, exclude,
-                                    modal=False).damage)
-
-    kappa = next((k for k in KAPPA_GRID if not any(left_out_called_damage(i, k) for i in range(len(runs)))),
-                 KAPPA_GRID[-1])
-    return BenignLearning(kappa, C, learned, th, share, explained)
-

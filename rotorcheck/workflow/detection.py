@@ -41,7 +41,7 @@ from rotorcheck.workflow.measured import (
     pair_keys,
     per_pair,
 )
-from rotorcheck.workflow.rigs import baseline_updates, damage_port_name, nominal_for, speed_tolerance, updated_rig
+from rotorcheck.workflow.rigs import baseline_rig, damage_port_name, nominal_for, speed_tolerance
 
 if TYPE_CHECKING:  # matplotlib only for .plot()
     from matplotlib.figure import Figure
@@ -437,7 +437,7 @@ def diagnose(rig: RigConfig, baseline: Baseline, run: MeasuredRun, found: Detect
     sweep_det = None
     joint = found.joint
     if joint is not None and joint.elements:
-        sweep_det = sweep_detectability(updated_rig(rig, baseline_updates(baseline)), baseline, run, joint)
+        sweep_det = sweep_detectability(baseline_rig(rig, baseline), baseline, run, joint)
     damage_xy = None
     if identifiable and baseline.enclose == "measured" and run.n_pairs > 1:
         damage_xy = damage_per_direction(rig, run, np.asarray(baseline.healthy_frf),

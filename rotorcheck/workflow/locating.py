@@ -23,7 +23,7 @@ from rotorcheck.variability import benign_at
 from rotorcheck.workflow.benign import benign_model
 from rotorcheck.workflow.detectors import DetectorSettings, make_detector
 from rotorcheck.workflow.measured import MeasuredRun, frf_estimate, healthy_frf_of, per_pair, run_harmonics
-from rotorcheck.workflow.rigs import baseline_updates, check_elements, updated_rig
+from rotorcheck.workflow.rigs import baseline_rig, check_elements
 
 
 @dataclass(frozen=True)
@@ -138,6 +138,6 @@ def locate_damage(rig: RigConfig, baseline: Baseline, run: MeasuredRun, false_al
                          f"(this one: {baseline.enclose!r})")
     if damage is None:
         damage = detector_says_damage(rig, baseline, run, false_alarm)
-    return locate_run(updated_rig(rig, baseline_updates(baseline)), run, np.asarray(baseline.healthy_frf),
+    return locate_run(baseline_rig(rig, baseline), run, np.asarray(baseline.healthy_frf),
                       np.asarray(baseline.healthy_frf_var), baseline.speed_rpm, false_alarm, elements,
                       section_length, both, certify, damage, ranking, progress, **options)

@@ -22,7 +22,7 @@ from rotorcheck.nominal import ChannelPair, model_pairs, parse_port
 from rotorcheck.progress import Progress
 from rotorcheck.signatures import io_frf
 from rotorcheck.workflow.benign import benign_model
-from rotorcheck.workflow.rigs import check_elements
+from rotorcheck.workflow.rigs import baseline_rig, check_elements
 
 DETECTABILITY_POINTS = 262  # grid of a prediction from stated noise without analysis.n_points
 
@@ -117,7 +117,8 @@ def detectability_for_rig(
         th = th.reshape(f.size, -1)
         kappa = None if baseline.benign_kappa is None else float(baseline.benign_kappa)
         vh = None if baseline.healthy_frf_var is None else np.asarray(baseline.healthy_frf_var).reshape(f.size, -1)
-        bm = benign_model(config, f, speed, th[:, 0], kappa, modal=baseline.benign_kappa is None,
+        config = baseline_rig(config, baseline)
+        bm = benign_model(config, f, speed, th[:, 0], kappa, modal=baseline.drift.on_anchor,
                           healthy_var=None if vh is None else vh[:, 0])
         return detectability(config, f, speed, var_n.reshape(f.size, -1), var_b.reshape(f.size, -1), pairs,
                              th, false_alarm, bm, elements, None, noise, workers, progress=progress)

@@ -14,7 +14,7 @@ from rotorcheck.faults.compliance import with_crack_depth
 from rotorcheck.nominal import NominalModel, nominal_model
 from rotorcheck.resources import default_rig_path
 from rotorcheck.signatures import candidate_elements
-from rotorcheck.variability import benign_parameters, with_benign
+from rotorcheck.variability import benign_parameters, recentred_rig, with_benign
 
 
 def load_rig(path: str | Path) -> RigConfig:
@@ -61,6 +61,13 @@ def updated_rig(rig: RigConfig, values: dict[str, float] | None) -> RigConfig:
 def baseline_updates(baseline: Baseline) -> dict[str, float] | None:
     """The updated parameter values stored in a baseline, if any."""
     return baseline.drift.updated_parameters
+
+
+def baseline_rig(rig: RigConfig, baseline: Baseline) -> RigConfig:
+    """The rig as a baseline reads it: the parameter values ``validate --update`` fitted applied, and the benign
+    ranges moved and widened as ``validate --learn-drift`` learned them (:mod:`rotorcheck.workflow.drift`)."""
+    d = baseline.drift
+    return recentred_rig(updated_rig(rig, d.updated_parameters), d.range_shift or {}, d.range_widen or {})
 
 
 def damage_port_name(rig: RigConfig) -> str:

@@ -18,7 +18,8 @@ from rotorcheck.robust.noise import NoiseBound
 from rotorcheck.robust.validation import STATUS_EXCLUDED, ValidationResult
 from rotorcheck.signal.harmonics import ShaftHarmonics
 from rotorcheck.updating import Update, update_parameters
-from rotorcheck.workflow.benign import BenignLearning, learn_benign
+from rotorcheck.variability import benign_parameters
+from rotorcheck.workflow.drift import DriftLearning, learn_drift_ranges
 from rotorcheck.workflow.measured import (
     MeasuredRun,
     aligned_pairs,
@@ -43,7 +44,7 @@ class ValidationOutcome:
     runs: list[MeasuredRun]
     rig: RigConfig
     update: Update | None = None  # validate --update
-    learning: BenignLearning | None = None  # validate --learn-drift
+    learning: DriftLearning | None = None  # validate --learn-drift
     harmonics: ShaftHarmonics | None = None  # points on a shaft harmonic: status 'excluded', in no claim
     healthy_note: str = ""  # how several healthy sweeps made the healthy FRF (workflow.measured.healthy_reference)
     healthy_run: int | None = None  # the run whose FRF is the healthy FRF alone (None: the mean of the runs)
@@ -97,7 +98,7 @@ def validate(
     enclose: str = "measured",
     fail_at: tuple[int, ...] = (),
     update: bool = False,
-    learn_drift: bool = False,
+    learn_drift: bool | None = None,
 ) -> ValidationOutcome:
     """Step 3: gamma_h(w) enclosing every healthy run, and the measured healthy FRF with its noise.
 
@@ -105,12 +106,19 @@ def validate(
     data), 'system' or 'data' (see :data:`ENCLOSE_MODES`). ``update``: fit the rig's variability
     parameters to the healthy FRF (:mod:`rotorcheck.updating`); the joint test then predicts benign
     change around the updated model (stored in the baseline as ``updated_parameters``).
-    ``learn_drift``: learn from the healthy sweeps (>= 3, drifted across the ranges) how the machine
-    drifts (:func:`learn_benign`); off by default: on the crack rig it did not detect better than one
-    sweep with the nominal model (bench.detection_limit, part B).
+    ``learn_drift``: learn from the healthy sweeps (>= 3, drifted across the ranges) where the most central one
+    sits among the machine's states, and test new sweeps with the ranges moved to the sweeps' centre
+    (:mod:`rotorcheck.workflow.drift`); None (default): learned when there are 3 or more sweeps and they differ
+    beyond their noise; False: several drifted sweeps keep the ranges about the most central one (the ranges
+    read as the change between two sweeps).
     """
 
     check_choice(enclose, ENCLOSE_MODES, "--enclose")
+    if learn_drift and len(runs) < 3:
+        raise InputError(None, "--learn-drift", f"needs at least 3 healthy sweeps (got {len(runs)})")
+    if learn_drift and enclose != "measured":
+        raise InputError(None, "--learn-drift", f"learns the drift the joint test allows: only with --enclose measured "
+                         f"(got {enclose})")
     runs = [runs[0]] + [aligned_pairs(r, pair_keys(runs[0])) for r in runs[1:]]  # same pairs, rows reordered
     first = runs[0]
     for r in runs[1:]:
@@ -144,8 +152,7 @@ def validate(
     res.exclude(harmonics.flagged)
     keep = ~harmonics.flagged
     # several healthy sweeps: their mean when they are repeats of one state, else the most central one alone
-    # (learning drift fits every sweep's own state and keeps the mean)
-    ref = None if learn_drift else healthy_reference(runs, harmonics.flagged)
+    ref = None if len(runs) == 1 else healthy_reference(runs, harmonics.flagged)
     healthy = healthy_estimate(runs) if ref is None else ref.estimate
     one = runs[0] if ref is None or ref.reference is None else runs[ref.reference]
     upd = None
@@ -155,13 +162,11 @@ def validate(
             raise InputError(None, "--update", "the rig has no variability section: nothing to update")
         upd = update_parameters(rig, first.frequency_hz[keep], first.speed_rpm, healthy.frf[keep, 0])
     model_rig = updated_rig(rig, None if upd is None else upd.as_dict())
-    if learn_drift and len(runs) < 3:
-        raise InputError(None, "--learn-drift", f"needs at least 3 healthy sweeps (got {len(runs)})")
     learning = None
-    if enclose == "measured":
-        learning = (learn_benign(model_rig, runs, exclude=harmonics.flagged) if learn_drift
-                    else BenignLearning(None))
-    learned = learning.learned if learning is not None else None
+    kept = None if ref is None else ref.reference  # None: one sweep, or repeats of one state (no drift)
+    if (learn_drift is not False and len(runs) >= 3 and kept is not None and enclose == "measured"
+            and benign_parameters(model_rig)):
+        learning = learn_drift_ranges(model_rig, runs, kept, exclude=harmonics.flagged)
     for r in runs[1:]:
         if pair_keys(r) != pair_keys(first):
             raise InputError(r.path, "/channels", f"channel pairs differ from {first.path}'s (healthy sweeps must "
@@ -175,27 +180,16 @@ def validate(
         HealthyData(healthy.frf, healthy.var, healthy.dof, one.W[:, None], one.Zt[:, None],
                     first.harmonics_removed, len(runs) if ref is None or ref.reference is None else 1,
                     pair_keys(first)),
-        DriftModel(learning.kappa if learning is not None else None, None if learned is None else learned.U,
-                   None if learned is None else learned.c_max,
-                   learning.correction if learning is not None else None, None if upd is None else upd.as_dict(),
-                   {k: list(v) for k, v in learning.model_share.items()}
-                   if learning is not None and learning.model_share else None))
+        DriftModel(None if learning is None else learning.kappa, updated_parameters=None if upd is None
+                   else upd.as_dict(), range_shift=None if learning is None else learning.shift_by_name,
+                   range_widen=None if learning is None else learning.widen_by_name))
     return ValidationOutcome(base, res, model, runs, rig, upd, learning, harmonics,
                              "" if ref is None else ref.note, None if ref is None else ref.reference)
 
 
 def learning_summary(outcome: ValidationOutcome) -> str:
-    """Lines: how much of each benign direction the model predicts and how much the data show."""
-    lrn = outcome.learning
-    if lrn is None or lrn.theta is None:
-        return ""
-    lines = [f"benign drift learned from {len(outcome.runs)} healthy sweeps: the named parameters (model + "
-             f"learned correction) explain in sample {100 * (lrn.explained or 0.0):.1f} % of their spread "
-             f"(whitened); kappa = {'default' if lrn.kappa is None else f'{lrn.kappa:g}'}; "
-             f"{0 if lrn.learned is None else lrn.learned.U.shape[0]} further directions"]
-    for name, (sh, cos) in lrn.model_share.items():
-        lines.append(f"  {name}: the model predicts {100 * sh:.0f} % of the data's response (cosine {cos:.2f})")
-    return "\n".join(lines)
+    """Lines: where the learned drift moved the ranges, and the model-error factor the sweeps allowed."""
+    return "" if outcome.learning is None else outcome.learning.summary()
 
 
 def update_summary(outcome: ValidationOutcome) -> str:

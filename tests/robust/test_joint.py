@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy.stats import binom, chi2, norm
 
-from rotorcheck.robust.joint import GOF_SHARE, BenignModel, ModelForm, change_scale, joint_test, learn_directions
+from rotorcheck.robust.joint import GOF_SHARE, BenignModel, ModelForm, change_scale, joint_test
 
 N = 60
 
@@ -191,19 +191,6 @@ def test_a_change_the_benign_model_does_not_predict_is_no_excuse_for_itself() ->
     assert t[0] > 3.0 and t[1] / t[0] > 2.5 and t[2] / t[1] > 2.5
     res = joint_test(0.5 * B + 2.0 * S[0] + e, var, S, [1], benign)
     np.testing.assert_allclose(res.model_error, 2.5 * change_scale(res.theta[0] * B), rtol=1e-12)
-
-
-def test_learned_directions_recover_a_planted_subspace() -> None:
-    rng = np.random.default_rng(11)
-    var = np.full(200, 1.0)
-    U0 = np.linalg.qr(rng.standard_normal((200, 2)) + 1j * rng.standard_normal((200, 2)))[0]
-    devs = [U0 @ (rng.standard_normal(2) * [400.0, 150.0]) + _noise(rng, 2 * var) for _ in range(10)]
-    learned = learn_directions(devs, 2 * var)
-    assert learned is not None and learned.U.shape[0] == 2
-    V = learned.U * np.sqrt(2.0 / (2 * var))  # whitened, unit norm
-    cosines = np.linalg.svd(V.conj() @ U0, compute_uv=False)
-    assert np.all(cosines > 0.99)
-    assert learn_directions([_noise(rng, 2 * var) for _ in range(10)], 2 * var) is None
 
 
 def test_change_scale_is_a_windowed_maximum() -> None:

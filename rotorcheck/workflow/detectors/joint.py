@@ -20,7 +20,7 @@ from rotorcheck.workflow.benign import anchored_pairs, certify_beyond_benign, jo
 from rotorcheck.workflow.detectors.base import Detection, DetectorSettings
 from rotorcheck.workflow.detectors.certified import CertifiedDetector
 from rotorcheck.workflow.measured import MeasuredRun
-from rotorcheck.workflow.rigs import baseline_updates, updated_rig
+from rotorcheck.workflow.rigs import baseline_rig
 
 
 def learned_directions(baseline: Baseline) -> LearnedDirections | None:
@@ -35,10 +35,10 @@ def joint_pairs(rig: RigConfig, baseline: Baseline, run: MeasuredRun
                 ) -> tuple[MeasuredRun, np.ndarray, np.ndarray, str]:
     """What the joint test reads of ``run`` and ``baseline``: ``(run, healthy FRF, its variance, note)``, the channel
     pairs restricted to those the healthy sweep's modal fit describes where the baseline predicts benign change on
-    it (:func:`rotorcheck.workflow.benign.anchored_pairs`; a baseline with learned drift or a learned correction
-    keeps every pair, as learned); ``rig`` the rig as the baseline updated it."""
+    it (:func:`rotorcheck.workflow.benign.anchored_pairs`; a baseline whose drift was learned on the model re-solved
+    keeps every pair, as learned); ``rig`` the rig as the baseline reads it."""
     th, var = np.asarray(baseline.healthy_frf), np.asarray(baseline.healthy_frf_var)
-    if baseline.benign_kappa is None and baseline.benign_correction is None and learned_directions(baseline) is None:
+    if baseline.drift.on_anchor:
         return anchored_pairs(rig, run, th, var, baseline.speed_rpm)
     return run, th, var, ""
 
@@ -84,7 +84,7 @@ class JointDetector:
     def prepare(self, rig: RigConfig, baseline: Baseline) -> None:
         """The rig as updated by the baseline (``validate --update``) and the per-point test."""
         self.points.prepare(rig, baseline)
-        self.model_rig = updated_rig(rig, baseline_updates(baseline))
+        self.model_rig = baseline_rig(rig, baseline)
         self.baseline = baseline
 
     def detect(self, run: MeasuredRun) -> Detection:
@@ -98,9 +98,9 @@ class JointDetector:
         run, th, var, note = joint_pairs(rig, b, run)
         if note:
             found.notes.append(note)
-        # a baseline that learned drift (--learn-drift) learned it on the model re-solved: tested so
+        # a baseline of an earlier version that learned drift on the model re-solved is tested so
         joint = joint_detection(rig, th, var, run, kappa, learned_directions(b), self.settings.false_alarm,
-                                b.speed_rpm, b.benign_correction, exclude=out, modal=b.benign_kappa is None)
+                                b.speed_rpm, b.benign_correction, exclude=out, modal=b.drift.on_anchor)
         found.detector, found.rule, found.joint = self.name, JOINT_RULE, joint
         found.verdict = joint_verdict(joint, found.verdict)
         found.statistic, found.threshold, found.p_value = joint.statistic, joint.threshold, joint.p_value
