@@ -16,6 +16,7 @@ from rotorcheck.baseline import Baseline
 from rotorcheck.config import RigConfig
 from rotorcheck.robust.joint import JOINT_RULE, JointResult, LearnedDirections
 from rotorcheck.robust.validation import Verdict
+from rotorcheck.variability import benign_parameters
 from rotorcheck.workflow.benign import anchored_pairs, certify_beyond_benign, joint_detection
 from rotorcheck.workflow.detectors.base import Detection, DetectorSettings
 from rotorcheck.workflow.detectors.certified import CertifiedDetector
@@ -41,6 +42,16 @@ def joint_pairs(rig: RigConfig, baseline: Baseline, run: MeasuredRun
     if baseline.drift.on_anchor:
         return anchored_pairs(rig, run, th, var, baseline.speed_rpm)
     return run, th, var, ""
+
+
+def learned_ranges_note(rig: RigConfig, baseline: Baseline) -> str:
+    """What the joint test allowed when the baseline learned drift (``validate --learn-drift``): the ranges as moved,
+    relative to the kept healthy sweep."""
+    moved = baseline.drift.range_shift or {}
+    parts = [f"{p.name} [{100 * p.lo:+.3g}, {100 * p.hi:+.3g}] %" for p in benign_parameters(rig)
+             if p.name in moved and p.kind == "factor"]
+    return (f"benign ranges as learned from {len(baseline.sweep_sha256 or [])} healthy sweeps, relative to the kept "
+            f"one (moved to the sweeps' centre, widened by its 95 % interval): {', '.join(parts)}")
 
 
 def joint_verdict(joint: JointResult, certified: Verdict) -> Verdict:
@@ -98,6 +109,8 @@ class JointDetector:
         run, th, var, note = joint_pairs(rig, b, run)
         if note:
             found.notes.append(note)
+        if b.drift.range_shift is not None:
+            found.notes.append(learned_ranges_note(rig, b))
         # a baseline of an earlier version that learned drift on the model re-solved is tested so
         joint = joint_detection(rig, th, var, run, kappa, learned_directions(b), self.settings.false_alarm,
                                 b.speed_rpm, b.benign_correction, exclude=out, modal=b.drift.on_anchor)
