@@ -32,8 +32,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.stats import binom
-from scipy.stats import t as student_t
+from scipy.special import bdtrc, stdtrit
 
 from rotorcheck.config import RigConfig
 from rotorcheck.variability import benign_at, pair_ranges, recentred_rig
@@ -107,7 +106,7 @@ def allowed_alarms(n: int, false_alarm: float, level: float = ALARM_LEVEL) -> in
     """The most alarms of ``n`` healthy sweeps tested at ``false_alarm`` that noise explains: the largest m with
     ``P(Binomial(n, false_alarm) >= m) > level`` (0 when n is 0)."""
     m = 0
-    while m < n and float(binom.sf(m, n, false_alarm)) > level:  # sf(m) = P(X >= m + 1)
+    while m < n and float(bdtrc(m, n, false_alarm)) > level * (1.0 + 1e-9):  # bdtrc(m) = P(X >= m + 1)
         m += 1
     return m
 
@@ -119,7 +118,7 @@ def _mean_interval(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     c = theta.mean(axis=0)
     if k < 2:
         return c, c
-    half = float(student_t.ppf(0.5 + CENTRE_CONFIDENCE / 2.0, k - 1)) * theta.std(axis=0, ddof=1) / np.sqrt(k)
+    half = float(stdtrit(k - 1, 0.5 + CENTRE_CONFIDENCE / 2.0)) * theta.std(axis=0, ddof=1) / np.sqrt(k)
     return c - half, c + half
 
 
