@@ -7,9 +7,10 @@ cracks in element 4 (stiffness loss) at 0 rpm. Also the coverage of the fitted Y
 the healthy sweeps. Seeded; prints a Markdown table, one row per variant and K.
 
 ``python -m bench.healthy_sweeps [--counts 1,3,10] [--healthy 20 --cracks 10] [--variants truth,dampers]
-[--losses 0.02,0.05] [--no-learn-drift] [--around-baseline] [--speed 1000]`` (``--no-learn-drift``: every K through
-the default ``validate``; ``--around-baseline``: new sweeps drift around the baseline's state, the ranges read as the
-change between two sweeps; ``--speed``: every sweep at that speed, default 0 rpm)
+[--losses 0.02,0.05] [--no-learn-drift] [--around-baseline] [--speed 1000] [--one-random]`` (``--no-learn-drift``:
+every K with the ranges about the kept sweep; ``--one-random``: K = 1 at a random state with the ranges doubled;
+``--around-baseline``: new sweeps drift around the baseline's state, the ranges read as the change between two
+sweeps; ``--speed``: every sweep at that speed, default 0 rpm)
 """
 
 from __future__ import annotations
@@ -24,19 +25,25 @@ from bench.detection_limit import _inside, sweep_run
 from bench.detection_power import _open_crack
 from bench.truth_variants import VARIANTS, nominal, truth_variant
 from rotorcheck import workflow
+from rotorcheck.variability import pair_ranges
 
 
 def run(name: str, count: int, n_healthy: int, n_cracks: int, losses: tuple[float, ...],
-        learn: bool = True, around_baseline: bool = False, speed: float = 0.0) -> dict[str, str]:
+        learn: bool = True, around_baseline: bool = False, speed: float = 0.0, one_random: bool = False
+        ) -> dict[str, str]:
     """``{column: value}`` for one variant and training-set size at ``speed`` rpm (0: at rest; at another speed
     the cracks are open cracks too, and the seeds differ from 0 rpm's); ``learn``: ``--learn-drift`` from 3
     sweeps on (else the default ``validate`` of every sweep); ``around_baseline``: the new sweeps drift inside
     the ranges around the baseline's own state (the ranges read as the change between two sweeps), else around
-    the nominal state."""
+    the nominal state; ``one_random``: one training sweep at a random state inside the ranges too (not the nominal
+    one), the product's rig then stating the change between two states (``variability.pair_ranges``: where the one
+    sweep sits is unknown)."""
     nom = nominal()
     truth = truth_variant(name, nom)
     rng = np.random.default_rng([count, 2901])
-    train_values = [_inside(rng) if count > 1 else {} for _ in range(count)]
+    train_values = [_inside(rng) if count > 1 or one_random else {} for _ in range(count)]
+    if count == 1 and one_random:
+        nom = pair_ranges(nom, speed)
     if speed != 0.0:  # validate takes the training sweeps of one speed (within its tolerance): held at the nominal
         train_values = [{n: v for n, v in values.items() if n != "speed"} for values in train_values]
     shift = 10_000 * int(speed)  # 0 at rest: the seeds of the 0 rpm figures
@@ -87,13 +94,15 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--no-learn-drift", action="store_true", help="every K through the default validate")
     ap.add_argument("--around-baseline", action="store_true", help="new sweeps drift around the baseline's state")
     ap.add_argument("--speed", type=float, default=0.0, help="rpm of every sweep (default 0: at rest)")
+    ap.add_argument("--one-random", action="store_true", help="K = 1: the sweep at a random state, the ranges doubled")
     a = ap.parse_args(argv)
     losses = tuple(float(x) for x in a.losses.split(","))
     rows = []
     for name in a.variants.split(","):
         for count in (int(c) for c in a.counts.split(",")):
             t = time.perf_counter()
-            r = run(name, count, a.healthy, a.cracks, losses, not a.no_learn_drift, a.around_baseline, a.speed)
+            r = run(name, count, a.healthy, a.cracks, losses, not a.no_learn_drift, a.around_baseline, a.speed,
+                    a.one_random)
             print(f"{name} K={count}: {r} ({time.perf_counter() - t:.0f} s)", file=sys.stderr, flush=True)
             rows.append((name, count, r))
     cols = list(rows[0][2])

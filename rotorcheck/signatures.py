@@ -242,6 +242,11 @@ class BenignPrediction:
     predict: Callable[[np.ndarray], np.ndarray]
     model_form: ModelForm | None = None  # the prediction's own bounded error (modal anchor only)
     cheap: bool = False  # ``predict`` is a closed form (modal anchor), no model re-solved
+    #: (p,) relative standard error of each fitted parameter from the model's error in its pole sensitivities (a
+    #: parameter read off the poles through a sensitivity wrong by e is wrong by e / sensitivity of itself): the
+    #: modal anchor's POLE_SENSITIVITY_ERROR over the median |d ln(lambda) / d theta| of the fitted modes; 0 for
+    #: gains and offsets, None off the anchor
+    relative_error: np.ndarray | None = None
 
     @property
     def lo(self) -> np.ndarray:
@@ -401,7 +406,12 @@ def _modal_benign(anchor: ModalAnchor, config: RigConfig, speed_rpm: float, th: 
                          f"other modes' change by {OUT_OF_BAND_ERROR:g} of itself (1 sigma"
                          + (f"; x {widen:.2g}: the healthy sweep's modal fit leaves {anchor.misfit:.2g} of it"
                             if widen > 1 else "") + ")")
-    return BenignPrediction(params, predict, form, True)
+    rel = np.zeros(len(params))
+    for k, i in enumerate(moving):
+        typical = float(np.median(np.abs(d_ln[k])))
+        if params[i].kind == "factor" and params[i].changes_model and typical > 0:
+            rel[i] = POLE_SENSITIVITY_ERROR / typical
+    return BenignPrediction(params, predict, form, True, rel)
 
 
 @dataclass(frozen=True)

@@ -118,7 +118,8 @@ def benign_model(rig: RigConfig, f: np.ndarray, speed_rpm: float, Th: np.ndarray
             ends.append(np.abs(predict(x)))
         envelope += np.maximum(*ends)
     k = default_kappa(pred.cheap) if kappa is None else float(kappa)
-    return BenignModel(predict, lo, hi, pred.names, k, step, envelope, exact, pred.model_form, pred.cheap)
+    return BenignModel(predict, lo, hi, pred.names, k, step, envelope, exact, pred.model_form, pred.cheap,
+                       pred.relative_error)
 
 
 def in_plane(S: np.ndarray, pairs: Sequence[ChannelPair], n_freq: int) -> np.ndarray:
