@@ -142,27 +142,46 @@ def shift_sd(se: np.ndarray, loss: float, shift: np.ndarray, lo: np.ndarray, hi:
     return np.asarray(np.sqrt(se**2 + (SHIFT_ERROR * loss) ** 2 + (FORM_SHARE * shift) ** 2 + reach**2))
 
 
+def box_lsq(A: np.ndarray, b: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """(n, p): for each of n problems the ``x`` minimizing ``||A_i x - b_i||`` with ``lo <= x <= hi``: ``A`` (n, k, p),
+    ``b`` (n, k), ``p`` small. Exact by enumeration: the minimum of a convex quadratic over a box is the free
+    minimum (least norm) of one face's problem (each parameter free, at its lower or at its upper end) that lies in
+    the box; every face is solved for all n at once (3^p batched pseudo-inverses) and the best feasible kept."""
+    n, _, p = A.shape
+    best = np.full((n, p), np.nan)
+    cost = np.full(n, np.inf)
+    tol = 1e-12 * np.maximum(1.0, np.abs(hi - lo))
+    for face in np.ndindex(*(3,) * p):
+        state = np.array(face)  # 0 free, 1 at lo, 2 at hi
+        x = np.where(state == 1, lo, hi)[None, :].repeat(n, axis=0)
+        free = state == 0
+        if np.any(free):
+            r = b - np.einsum("nkp,np->nk", A[:, :, ~free], x[:, ~free])
+            Af = A[:, :, free]
+            x[:, free] = np.einsum("npk,nk->np", np.linalg.pinv(Af), r)
+        ok = np.all((x >= lo - tol) & (x <= hi + tol), axis=1)
+        res = np.einsum("nkp,np->nk", A, x) - b
+        c = np.where(ok, np.sum(res**2, axis=1), np.inf)
+        with np.errstate(invalid="ignore"):  # inf - inf where neither is feasible yet
+            better = c < cost - 1e-12 * np.where(np.isfinite(cost), np.maximum(cost, 1.0), 0.0)
+        best[better], cost[better] = np.clip(x[better], lo, hi), c[better]
+    return best
+
+
 def profile(measured: np.ndarray, se: np.ndarray, losses: np.ndarray, curves: np.ndarray, S: np.ndarray,
             lo: np.ndarray, hi: np.ndarray, step: float = PROFILE_STEP) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``(a (n,), chi2 (n,), predicted (n, k))``: the misfit of the measured shifts (k,) (standard errors ``se``)
     at every loss of a grid of ``step`` (module docstring), the benign parameters (shifts ``S`` (k, p)) in
-    ``[lo, hi]`` fitted at each loss by bounded linear least squares."""
+    ``[lo, hi]`` fitted at each loss by bounded linear least squares (:func:`box_lsq`, all losses at once)."""
     spline = interpolate.CubicSpline(losses, curves, axis=0)
     a = np.linspace(losses[0], losses[-1], round((losses[-1] - losses[0]) / step) + 1)
-    chi = np.empty(a.size)
-    pred = np.empty((a.size, measured.size))
-    for i, x in enumerate(a):
-        c = spline(x)
-        sd = shift_sd(se, float(x), c, lo, hi)
-        if S.shape[1]:
-            sol = optimize.lsq_linear(S / sd[:, None], (measured - c) / sd, bounds=(lo, hi + 1e-15))
-            theta = sol.x
-        else:
-            theta = np.zeros(0)
-        pred[i] = c + S @ theta
-        r = (measured - pred[i]) / sd
-        chi[i] = float(r @ r)
-    return a, chi, pred
+    c = spline(a)  # (n, k)
+    sd = np.array([shift_sd(se, float(x), ci, lo, hi) for x, ci in zip(a, c)])
+    theta = (box_lsq(S[None, :, :] / sd[:, :, None], (measured - c) / sd, lo, hi) if S.shape[1]
+             else np.zeros((a.size, 0)))
+    pred = c + theta @ S.T
+    r = (measured - pred) / sd
+    return a, np.sum(r**2, axis=1), pred
 
 
 def _first_fit(anchor: ModalAnchor, spline: Callable[[float], np.ndarray], frf: np.ndarray, var: np.ndarray | None,
