@@ -149,3 +149,15 @@ def test_a_state_inside_the_ranges_is_no_alarm_and_a_loss_still_is(learned, rigs
     assert back.drift.range_widen == pytest.approx(out.baseline.drift.range_widen)
     assert back.drift.on_anchor and back.benign_kappa == out.learning.kappa
     assert workflow.detect(nominal, back, drifted).verdict.verdict == "healthy"
+
+
+def test_a_damaged_sweep_among_the_healthy_ones_is_named(rigs) -> None:
+    """Five training sweeps, the one at E +1.6 % with a 10 % loss of the crack element: left out and tested against
+    the others it reads as damage, and validate's summary names it (the others do not)."""
+    nominal, truth = rigs
+    runs = [_run(truth, nominal, 40 + k, e) for k, e in enumerate(E_STATES[:3])]
+    runs += [_run(truth, nominal, 60, 0.0), _run(truth, nominal, 61, 0.016, loss=0.10)]
+    out = workflow.validate(nominal, runs, workflow.fit_noise(runs[0]))
+    assert out.learning is not None and out.healthy_run != 4
+    assert out.learning.alarmed == (4,)
+    assert "warning: sweep(s) 5," in out.learning.summary()

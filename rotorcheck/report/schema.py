@@ -130,7 +130,8 @@ class DetectionReport:
     stiffness_loss: float | None = None  # its best-fit loss (fraction)
     stiffness_loss_interval: list[float] | None = None  # certified (detect --locate), else None
     detectable_stiffness_loss: list[float] | None = None  # per candidate: 90 % power at false_alarm
-    benign_parameters: list[dict[str, Any]] | None = None  # {name, estimate, interval, unit, at_range_edge, edge_chi2}
+    benign_parameters: list[dict[str, Any]] | None = None  # {name, estimate, interval, unit, at_range_edge, edge_chi2,
+    # range}
     benign_model_error: float | None = None  # kappa: relative error of the model's benign prediction in H0
     learned_benign_directions: int | None = None
     # points the fitted benign change leaves unexplained (per point, Sidak at false_alarm over the points)

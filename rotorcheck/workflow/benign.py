@@ -30,15 +30,20 @@ from rotorcheck.workflow.measured import MeasuredRun, frf_estimate, per_pair, wi
 
 
 def benign_table(joint: JointResult, rig: RigConfig) -> list[dict[str, Any]]:
-    """The fitted benign parameters: {name, estimate, interval (95 %, linearized), unit, at_range_edge (the
-    estimate at a range end and the data pushing it beyond: :attr:`JointResult.theta_beyond_range`), edge_chi2
-    (that push, chi2 units; 0 inside the range)}; relative changes in percent, offsets in their unit."""
+    """The fitted benign parameters: {name, estimate, interval (95 %, linearized, with the model's sensitivity error),
+    unit, at_range_edge (the estimate at a range end and the data pushing it beyond:
+    :attr:`JointResult.theta_beyond_range`), edge_chi2 (that push, chi2 units; 0 inside the range), range (the
+    range the test allowed, relative to the healthy sweep: as declared, or as learned from several)}; relative
+    changes in percent, offsets in their unit."""
 
     params = {p.name: p for p in benign_parameters(rig)}
     out = []
     pushes = joint.theta_edge_chi2 if joint.theta_edge_chi2 is not None else np.zeros(len(joint.theta_names))
-    for name, x, se, edge, push in zip(joint.theta_names, joint.theta, joint.theta_se, joint.theta_beyond_range,
-                                       pushes):
+    n = len(joint.theta_names)
+    lo = np.asarray(joint.benign.lo, dtype=float) if joint.benign is not None else np.full(n, np.nan)
+    hi = np.asarray(joint.benign.hi, dtype=float) if joint.benign is not None else np.full(n, np.nan)
+    for name, x, se, edge, push, a, b in zip(joint.theta_names, joint.theta, joint.theta_se,
+                                             joint.theta_beyond_range, pushes, lo, hi):
         prm = params.get(name)
         factor = prm is None or prm.kind == "factor"
         scale, unit = (100.0, "%") if factor else (1.0, prm.unit if prm is not None else "")
@@ -46,7 +51,8 @@ def benign_table(joint: JointResult, rig: RigConfig) -> list[dict[str, Any]]:
         interval = [scale * (float(x) - half), scale * (float(x) + half)] if np.isfinite(half) else [
             float("nan"), float("nan")]
         out.append({"name": name, "estimate": scale * float(x), "interval": interval,
-                    "unit": unit, "at_range_edge": bool(edge), "edge_chi2": float(push)})
+                    "unit": unit, "at_range_edge": bool(edge), "edge_chi2": float(push),
+                    "range": [scale * float(a), scale * float(b)]})
     return out
 
 

@@ -69,6 +69,7 @@ class DriftLearning:
     allowed: int = 0  # alarms of the K - 1 left-out sweeps that noise alone explains (binomial, ALARM_LEVEL)
     determined: np.ndarray | None = None  # (p,) bool: the sweeps determine the parameter (else its range stays)
     beyond: np.ndarray | None = None  # (p,) bool: the sweeps spread beyond the declared width (no centre fits)
+    alarmed: tuple[int, ...] = ()  # the sweeps called damage, left out, at the default kappa (is each healthy?)
 
     @property
     def shift_by_name(self) -> dict[str, float]:
@@ -85,6 +86,11 @@ class DriftLearning:
         k = self.theta.shape[0]
         lines = [f"benign drift learned from {k} healthy sweeps on the modal anchor of sweep {self.reference + 1}: "
                  f"kappa = {self.kappa:g} (left-out alarms {self.alarms}; noise explains up to {self.allowed})"]
+        if self.alarmed:
+            which = ", ".join(str(k + 1) for k in self.alarmed)
+            lines.append(f"  warning: sweep(s) {which}, tested against the others at kappa {KAPPA_STEPS[0]:g}, read as "
+                         "damage: if one of them is not a healthy state, validate without it (a damaged sweep among "
+                         "the healthy ones makes the detector blinder)")
         p = len(self.names)
         det = np.ones(p, dtype=bool) if self.determined is None else self.determined
         out = np.zeros(p, dtype=bool) if self.beyond is None else self.beyond
@@ -177,10 +183,14 @@ def learn_drift_ranges(rig: RigConfig, runs: list[MeasuredRun], reference: int, 
 
     allowed = allowed_alarms(len(others), false_alarm)
     alarms: dict[float, int] = {}
+    alarmed: tuple[int, ...] = ()
     kappa = KAPPA_STEPS[-1]
     for step in KAPPA_STEPS:
-        alarms[step] = sum(left_out_alarm(k, step) for k in others)
+        called = tuple(k for k in others if left_out_alarm(k, step))
+        alarms[step] = len(called)
+        alarmed = alarmed or called
         if alarms[step] <= allowed:
             kappa = step
             break
-    return DriftLearning(names, theta, se, shift, widen, kappa, reference, alarms, allowed, determined, beyond)
+    return DriftLearning(names, theta, se, shift, widen, kappa, reference, alarms, allowed, determined, beyond,
+                         alarmed)
