@@ -60,7 +60,7 @@ def test_mean_interval_holds_its_rate() -> None:
         assert abs(cover - 0.95) < 0.012, (k, cover)
 
 
-def test_drift_centre_is_the_intersection_with_the_declared_ranges() -> None:
+def test_drift_centre_is_the_set_the_declared_ranges_allow() -> None:
     lo, hi = np.array([-0.02]), np.array([0.02])
     theta = np.array([[-0.015], [0.0], [0.015]])  # relative to the middle one
     c_lo, c_hi, beyond = drift_centre(theta, np.zeros_like(theta), lo, hi)

@@ -88,8 +88,8 @@ def validate(
     plots: Annotated[bool, typer.Option(help="Write the validation plots.")] = True,
     learn_drift: Annotated[bool | None, typer.Option(
         "--learn-drift/--no-learn-drift", help="Learn from the healthy sweeps (>= 3, drifted across the ranges) where "
-        "the machine drifts: the ranges move to the centre of the sweeps' fitted states (widened by its 95 % "
-        "interval); kappa from the sweeps left out. Default: learned when 3 or more sweeps differ beyond their "
+        "the machine drifts: the ranges move over the centres that allow every sweep's fitted state; kappa from "
+        "the sweeps left out. Default: learned when 3 or more sweeps differ beyond their "
         "noise.", show_default=False)] = None,
     update: Annotated[bool, typer.Option(
         "--update", help="Fit the rig's variability parameters to the healthy FRF (model updating) and predict "

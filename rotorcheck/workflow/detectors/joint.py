@@ -51,7 +51,7 @@ def learned_ranges_note(rig: RigConfig, baseline: Baseline) -> str:
     parts = [f"{p.name} [{100 * p.lo:+.3g}, {100 * p.hi:+.3g}] %" for p in benign_parameters(rig)
              if p.name in moved and p.kind == "factor"]
     return (f"benign ranges as learned from {len(baseline.sweep_sha256 or [])} healthy sweeps, relative to the kept "
-            f"one (moved to the sweeps' centre, widened by its 95 % interval): {', '.join(parts)}")
+            f"one (moved over the centres that allow every sweep's fitted state): {', '.join(parts)}")
 
 
 def joint_verdict(joint: JointResult, certified: Verdict) -> Verdict:
