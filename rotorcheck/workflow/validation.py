@@ -24,7 +24,6 @@ from rotorcheck.workflow.measured import (
     MeasuredRun,
     aligned_pairs,
     grid_mismatch,
-    healthy_estimate,
     healthy_reference,
     pair_experiments,
     pair_keys,
@@ -152,9 +151,9 @@ def validate(
     res.exclude(harmonics.flagged)
     keep = ~harmonics.flagged
     # several healthy sweeps: their mean when they are repeats of one state, else the most central one alone
-    ref = None if len(runs) == 1 else healthy_reference(runs, harmonics.flagged)
-    healthy = healthy_estimate(runs) if ref is None else ref.estimate
-    one = runs[0] if ref is None or ref.reference is None else runs[ref.reference]
+    ref = healthy_reference(runs, harmonics.flagged)
+    healthy = ref.estimate
+    one = runs[0] if ref.reference is None else runs[ref.reference]
     upd = None
     if update:
 
@@ -163,10 +162,10 @@ def validate(
         upd = update_parameters(rig, first.frequency_hz[keep], first.speed_rpm, healthy.frf[keep, 0])
     model_rig = updated_rig(rig, None if upd is None else upd.as_dict())
     learning = None
-    kept = None if ref is None else ref.reference  # None: one sweep, or repeats of one state (no drift)
-    if (learn_drift is not False and len(runs) >= 3 and kept is not None and enclose == "measured"
+    # ref.reference None: one sweep, or repeats of one state (no drift to learn)
+    if (learn_drift is not False and len(runs) >= 3 and ref.reference is not None and enclose == "measured"
             and benign_parameters(model_rig)):
-        learning = learn_drift_ranges(model_rig, runs, kept, exclude=harmonics.flagged)
+        learning = learn_drift_ranges(model_rig, runs, ref.reference, exclude=harmonics.flagged)
     for r in runs[1:]:
         if pair_keys(r) != pair_keys(first):
             raise InputError(r.path, "/channels", f"channel pairs differ from {first.path}'s (healthy sweeps must "
@@ -178,13 +177,13 @@ def validate(
         ModelBound(enclose, structure, parameter, first.frequency_hz, res.gamma, model.frf[:, None, None],
                    res.gamma_lower, np.asarray(res.status, dtype=str)),
         HealthyData(healthy.frf, healthy.var, healthy.dof, one.W[:, None], one.Zt[:, None],
-                    first.harmonics_removed, len(runs) if ref is None or ref.reference is None else 1,
+                    first.harmonics_removed, len(runs) if ref.reference is None else 1,
                     pair_keys(first)),
         DriftModel(None if learning is None else learning.kappa, updated_parameters=None if upd is None
                    else upd.as_dict(), range_shift=None if learning is None else learning.shift_by_name,
                    range_widen=None if learning is None else learning.widen_by_name))
     return ValidationOutcome(base, res, model, runs, rig, upd, learning, harmonics,
-                             "" if ref is None else ref.note, None if ref is None else ref.reference)
+                             ref.note, ref.reference)
 
 
 def learning_summary(outcome: ValidationOutcome) -> str:
