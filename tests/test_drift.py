@@ -116,6 +116,12 @@ def test_the_sweeps_say_where_the_kept_sweep_sits(learned) -> None:
     assert abs(lrn.shift[k] - centre) <= lrn.widen[k] and lrn.widen[k] < 0.012, (lrn.shift[k], lrn.widen[k])
     assert lrn.kappa == workflow.KAPPA_MODAL and "youngs_modulus: ranges moved by" in lrn.summary()
     assert out.baseline.drift.range_shift == pytest.approx(lrn.shift_by_name)
+    # validate --json states the ranges the detector's rig will read (workflow.rigs.baseline_rig)
+    doc = out.typed_report(workflow.fit_noise(out.runs[0]), "baseline.h5").to_dict()["learned_drift"]
+    read = {p.name: p for p in benign_parameters(workflow.baseline_rig(out.rig, out.baseline))}
+    for row in doc["parameters"]:
+        assert row["range"] == pytest.approx([100 * read[row["name"]].lo, 100 * read[row["name"]].hi], abs=1e-9)
+    assert doc["kept_sweep"] == 3 and doc["kappa"] == lrn.kappa
 
 
 def test_learning_is_refused_where_it_cannot_hold(learned, rigs) -> None:

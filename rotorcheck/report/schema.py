@@ -207,6 +207,9 @@ class ValidationReport:
     baseline: str
     # points on a shaft harmonic (status 'excluded': no part of the bound); see DetectionReport
     shaft_harmonic_points: list[dict[str, Any]] | None = None
+    # drift learned from several healthy sweeps (validate --learn-drift): {kept_sweep (1-based), kappa, rule,
+    # parameters: [{name, range (%, relative to the kept sweep, as the joint test will allow it), determined}]}
+    learned_drift: dict[str, Any] | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON document."""

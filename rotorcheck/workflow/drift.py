@@ -37,7 +37,7 @@ import numpy as np
 from scipy.special import bdtrc, stdtrit
 
 from rotorcheck.config import RigConfig
-from rotorcheck.variability import benign_at, pair_ranges, recentred_rig
+from rotorcheck.variability import benign_at, benign_parameters, pair_ranges, recentred_rig
 from rotorcheck.workflow.benign import KAPPA_MODAL, anchored_pairs, joint_detection
 from rotorcheck.workflow.measured import MeasuredRun, frf_estimate
 
@@ -82,6 +82,17 @@ class DriftLearning:
     def widen_by_name(self) -> dict[str, float]:
         """``{parameter: widening each side}``, the form stored in a baseline."""
         return {n: float(x) for n, x in zip(self.names, self.widen)}
+
+    def as_dict(self, rig: RigConfig) -> dict[str, object]:
+        """``validate --json``'s ``learned_drift``: the kept sweep (1-based), kappa, the rule, and per parameter the
+        range the joint test will allow, in %, relative to the kept sweep (``rig``: the rig as validated)."""
+        declared = {p.name: p for p in benign_parameters(rig)}
+        det = np.ones(len(self.names), dtype=bool) if self.determined is None else self.determined
+        rows = []
+        for n, c, w, d in zip(self.names, self.shift, self.widen, det):
+            p = declared[n]
+            rows.append({"name": n, "range": [100.0 * (p.lo + c - w), 100.0 * (p.hi + c + w)], "determined": bool(d)})
+        return {"kept_sweep": self.reference + 1, "kappa": self.kappa, "rule": DRIFT_RULE, "parameters": rows}
 
     def summary(self) -> str:
         """Lines for ``validate``'s output: the learned centre and widening per parameter, kappa and its check."""

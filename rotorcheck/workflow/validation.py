@@ -77,7 +77,8 @@ class ValidationOutcome:
         return ValidationReport(self.runs[0].frequency_hz, res.gamma, res.gamma_lower, [str(x) for x in res.status],
                                 float(noise_bound.value_m), noise_bound.method, self.baseline.enclose,
                                 self.model.structure, int(res.gamma.size), self.n_not_enclosed, str(baseline_path),
-                                h.points() if h is not None and h.n_flagged else None)
+                                h.points() if h is not None and h.n_flagged else None,
+                                None if self.learning is None else self.learning.as_dict(self.rig))
 
 
 #: what validation keeps the points on a shaft harmonic out of (the warning's words)
