@@ -167,8 +167,8 @@ def method_paragraphs(report: DetectionReport, ranges: Callable[[list[float]], s
                f"of the false-alarm rate {report.false_alarm:g}; the rule above) (p = {fmt_p(report.joint_p_value)}"
                f"{fit}); model-error fraction kappa = "
                f"{report.benign_model_error:g}"
-               + (f"; {learned} benign directions learned from healthy sweeps." if learned else
-                  "; no benign directions learned from healthy sweeps."))
+               + (f"; {learned} benign directions learned from healthy sweeps (a baseline of an earlier version)."
+                  if learned else "."))
     if report.joint_best_element is not None and report.verdict == "damage":
         out.append(f"The joint test's own element (its linearized statistic, not the diagnosis): "
                    f"{report.joint_best_element}.")
