@@ -155,7 +155,7 @@ def drift_centre(theta: np.ndarray, theta_se: np.ndarray, lo: np.ndarray, hi: np
 
 
 def learn_drift_ranges(rig: RigConfig, runs: list[MeasuredRun], reference: int, false_alarm: float = 0.01,
-                exclude: np.ndarray | None = None) -> DriftLearning:
+                       exclude: np.ndarray | None = None) -> DriftLearning:
     """Where the reference sweep ``runs[reference]`` sits among the machine's drifted states, from the other sweeps
     (see the module docstring). ``exclude`` (f,) bool: points on a shaft harmonic (no weight). The sweeps share the
     grid, the speed and the channel pairs (``validate`` checks it)."""
@@ -179,7 +179,8 @@ def learn_drift_ranges(rig: RigConfig, runs: list[MeasuredRun], reference: int, 
         determined &= np.array([not fitted[n][2] and np.isfinite(fitted[n][1]) for n in names])
 
     def moved_ranges(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """``(shift, widen, beyond)`` from the states of ``rows``; parameters not determined unmoved."""
+        """``(shift, widen, beyond)`` from the states of ``rows``; parameters not determined keep their declared
+        ranges about the reference."""
         c_lo, c_hi, out = drift_centre(theta[rows], se[rows], lo, hi)
         return (np.where(determined, (c_lo + c_hi) / 2.0, 0.0), np.where(determined, (c_hi - c_lo) / 2.0, 0.0),
                 out & determined)
