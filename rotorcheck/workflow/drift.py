@@ -25,8 +25,8 @@ as a single sweep is. What the other sweeps teach is where that reference sits a
    false-alarm rate (binomial, 1 %).
 
 With one sweep the ranges are read about that sweep's state; with several, about the centre of the sweeps. More sweeps
-narrow the centre's set (as the sweeps reach the ranges' ends), so the test's power grows with K instead of
-falling.
+narrow the centre's set (as the sweeps reach the ranges' ends), so the test's power grows with K (measured per truth
+variant: bench/results_independent_physics.md, round eight).
 """
 
 from __future__ import annotations
