@@ -72,9 +72,10 @@ _IO_FRF: dict[tuple[Any, ...], np.ndarray] = {}
 
 def _frf_key(config: RigConfig, freq_hz: np.ndarray, speed_rpm: float,
              pairs: Sequence[ChannelPair] | None) -> tuple[Any, ...] | None:
-    """Equal keys, equal :func:`io_frf`: the rig's content (:func:`rotorcheck.fe.assembly.config_key`), the
-    grid's bytes, the speed and the channel pairs' ports; None: not kept."""
-    content = config_key(config)
+    """Equal keys, equal :func:`io_frf`: the rig's content (:func:`rotorcheck.fe.assembly.config_key`) less its
+    ``variability`` ranges (they change no model: a baseline's learned ranges, the drift learning's trial ranges),
+    the grid's bytes, the speed and the channel pairs' ports; None: not kept."""
+    content = config_key(config, exclude={"variability"})
     if content is None:
         return None
     f = np.ascontiguousarray(np.asarray(freq_hz, dtype=float))
@@ -132,8 +133,9 @@ def _modal_sensitivity(anchor: ModalAnchor, config: RigConfig, speed_rpm: float,
     """The anchor's sensitivity to a change that gives the rig ``config`` at ``speed_rpm`` when made ``step``
     units large (the change's own size: a loss, a relative change, rpm). The changed rig's modes are kept for
     equal rigs, speeds and pairs, as :func:`io_frf`'s receptances were: detect asks for every element's
-    signature from the joint test and again from the diagnosis."""
-    content = config_key(config)
+    signature from the joint test and again from the diagnosis (the rig's benign ranges change no mode: not in the
+    key)."""
+    content = config_key(config, exclude={"variability"})
     key = None if content is None else (content, float(speed_rpm),
                                         None if pairs is None else tuple(p.key() for p in pairs))
     modes = _FE_MODES.get(key) if key is not None else None
