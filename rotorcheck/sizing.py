@@ -38,7 +38,6 @@ from rotorcheck.modal_anchor import POLE_SENSITIVITY_ERROR, ModalAnchor, PoleRef
 from rotorcheck.robust.affine import AffineModel
 
 linalg = lazy_module("scipy.linalg")
-optimize = lazy_module("scipy.optimize")
 interpolate = lazy_module("scipy.interpolate")
 special = lazy_module("scipy.special")
 
@@ -134,10 +133,11 @@ def benign_shifts(model: AffineModel, reference: np.ndarray, h: float = 1e-3) ->
     return out
 
 
-def shift_sd(se: np.ndarray, loss: float, shift: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+def shift_sd(se: np.ndarray, loss: float | np.ndarray, shift: np.ndarray, lo: np.ndarray, hi: np.ndarray
+             ) -> np.ndarray:
     """(k,): each mode's standard deviation of the measured less the predicted shift at ``loss`` (predicted
     ``shift`` (k,)): the fits' ``se``, the model's error per loss and per shift, and the benign sensitivities'
-    error over the box ``[lo, hi]`` (module docstring)."""
+    error over the box ``[lo, hi]`` (module docstring). Broadcasts: losses (n, 1) and shifts (n, k) give (n, k)."""
     reach = 2.0 * POLE_SENSITIVITY_ERROR * float(np.sum(np.maximum(np.abs(lo), np.abs(hi))))
     return np.asarray(np.sqrt(se**2 + (SHIFT_ERROR * loss) ** 2 + (FORM_SHARE * shift) ** 2 + reach**2))
 
@@ -176,7 +176,7 @@ def profile(measured: np.ndarray, se: np.ndarray, losses: np.ndarray, curves: np
     spline = interpolate.CubicSpline(losses, curves, axis=0)
     a = np.linspace(losses[0], losses[-1], round((losses[-1] - losses[0]) / step) + 1)
     c = spline(a)  # (n, k)
-    sd = np.array([shift_sd(se, float(x), ci, lo, hi) for x, ci in zip(a, c)])
+    sd = shift_sd(se, a[:, None], c, lo, hi)
     theta = (box_lsq(S[None, :, :] / sd[:, :, None], (measured - c) / sd, lo, hi) if S.shape[1]
              else np.zeros((a.size, 0)))
     pred = c + theta @ S.T
