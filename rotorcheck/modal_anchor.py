@@ -355,11 +355,13 @@ def _project(lam: np.ndarray, w: np.ndarray, target: np.ndarray, scale: np.ndarr
     Y = np.vstack([(target / scale).real, (target / scale).imag])
     if np.all(use):
         coef = np.linalg.lstsq(A, Y, rcond=None)[0]
-    else:  # pair by pair, with the modes it hears
+    else:  # pair by pair with the modes it hears: one solve per set of modes (the pairs that hear the same)
         coef = np.zeros((A.shape[1], Y.shape[1]))
-        for q in range(Y.shape[1]):
-            cols = np.r_[np.flatnonzero(use[:, q]), np.flatnonzero(use[:, q]) + m, 2 * m, 2 * m + 1]
-            coef[cols, q] = np.linalg.lstsq(A[:, cols], Y[:, q], rcond=None)[0]
+        seen, group = np.unique(use.T, axis=0, return_inverse=True)
+        for k, heard in enumerate(seen):
+            q = np.flatnonzero(group.reshape(-1) == k)
+            cols = np.r_[np.flatnonzero(heard), np.flatnonzero(heard) + m, 2 * m, 2 * m + 1]
+            coef[np.ix_(cols, q)] = np.linalg.lstsq(A[:, cols], Y[:, q], rcond=None)[0]
     return coef, (Y - A @ coef).ravel()
 
 

@@ -336,3 +336,29 @@ def test_several_pairs_of_a_spinning_rotor_keep_the_plain_misfit(rig: RigConfig)
     assert plain is not None and given is not None and plain.misfit == given.misfit > 0
     np.testing.assert_array_equal(plain.poles, given.poles)
     assert one_plain is not None and one_given is not None and one_given.misfit < one_plain.misfit
+
+
+def test_projection_pair_by_pair_with_the_modes_each_hears() -> None:
+    """The modal fit's linear part (modal_anchor._project) for pairs that hear different modes, solved once per set
+    of modes, against one least squares per pair written out here: the same residues, constants and residual."""
+    from rotorcheck.modal_anchor import _project
+
+    rng = np.random.default_rng(3)
+    lam = np.array([-2.0 + 100j, -3.0 + 180j, -4.0 + 260j])
+    w = np.linspace(50.0, 320.0, 90)
+    target = rng.standard_normal((90, 5)) + 1j * rng.standard_normal((90, 5))
+    scale = rng.uniform(0.5, 2.0, 5)
+    use = np.array([[1, 1, 0, 1, 0], [0, 1, 1, 0, 1], [1, 1, 1, 1, 0]], dtype=bool)
+    coef, resid = _project(lam, w, target, scale, use)
+    jw = 1j * w[:, None]
+    basis = np.column_stack([1 / (jw - lam) + 1 / (jw - lam.conj()), 1j / (jw - lam) - 1j / (jw - lam.conj()),
+                             np.ones_like(w), 1 / w**2])
+    A = np.vstack([basis.real, basis.imag])
+    for q in range(5):
+        y = np.r_[(target[:, q] / scale[q]).real, (target[:, q] / scale[q]).imag]
+        heard = np.flatnonzero(use[:, q])
+        cols = np.r_[heard, heard + 3, 6, 7]
+        ref = np.zeros(8)
+        ref[cols] = np.linalg.lstsq(A[:, cols], y, rcond=None)[0]
+        np.testing.assert_allclose(coef[:, q], ref, rtol=1e-9, atol=1e-12)
+        np.testing.assert_allclose(resid.reshape(180, 5)[:, q], y - A @ ref, rtol=1e-9, atol=1e-12)

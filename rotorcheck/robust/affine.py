@@ -174,10 +174,11 @@ class AffineModel:
                 terms.append((kind, *_factor(A, blocks)))
             out.append(tuple(terms))
         object.__setattr__(self, "factors", tuple(out))
-        # every matrix of Z stacked (rows K, M, D, then each parameter's terms), one matrix product per stack, per
-        # block (:attr:`blocks`): each matrix's entries on that block's DOFs
+        # every matrix of Z stacked (rows K, M, D, then each parameter's terms), one complex matrix product per
+        # stack, per block (:attr:`blocks`): each matrix's entries on that block's DOFs (held complex: the product
+        # with the complex coefficients writes Z whole, faster than its real and imaginary parts apart)
         object.__setattr__(self, "_stacks", tuple(np.stack([np.asarray(A, dtype=float)[np.ix_(d, d)].reshape(-1)
-                                                            for A in self.matrices]) for d in blocks))
+                                                            for A in self.matrices]).astype(complex) for d in blocks))
         object.__setattr__(self, "_terms", tuple((i, k) for i, prm in enumerate(self.parameters) for k, _ in prm.terms))
 
     @property
@@ -227,8 +228,8 @@ class AffineModel:
 
     def stiffness_stack(self, w: np.ndarray, theta: np.ndarray) -> StiffnessStack:
         """``Z(w_k, theta_k)`` N/m for frequencies ``w`` (m,) rad/s and parameters ``theta`` (p,) for all or (m, p)
-        one row per frequency, block by block (:class:`StiffnessStack`): per block two real matrix products over
-        the stacked matrices, the real and the imaginary part."""
+        one row per frequency, block by block (:class:`StiffnessStack`): per block one complex matrix product of the
+        terms' coefficients and the stacked matrices."""
         w = np.asarray(w, dtype=float).reshape(-1)
         th = np.broadcast_to(np.asarray(theta, dtype=float), (w.size, len(self.parameters)))
         terms: tuple[tuple[int, str], ...] = self._terms  # type: ignore[attr-defined]
@@ -244,13 +245,13 @@ class AffineModel:
                 im[:, col] = t * w
             else:
                 re[:, col] = -t * w**2
-        used = [(coef[:, rows], rows) for coef in (re, im) for rows in [np.flatnonzero(np.any(coef != 0.0, axis=0))]]
+        rows = np.flatnonzero(np.any(re != 0.0, axis=0) | np.any(im != 0.0, axis=0))
+        every = rows.size == re.shape[1]
+        coef = re + 1j * im if every else re[:, rows] + 1j * im[:, rows]
         parts = []
         for d, stack in zip(self.blocks, stacks):
-            Z = np.empty((w.size, d.size, d.size), dtype=complex)
-            for part, (coef, rows) in zip((Z.real, Z.imag), used):
-                part[...] = (coef @ stack[rows]).reshape(w.size, d.size, d.size) if rows.size else 0.0
-            parts.append(Z)
+            parts.append((coef @ (stack if every else stack[rows])).reshape(w.size, d.size, d.size) if rows.size
+                         else np.zeros((w.size, d.size, d.size), dtype=complex))
         return StiffnessStack(self.blocks, tuple(parts), int(self.K.shape[0]))
 
     def receptance(self, w: float, theta: np.ndarray) -> complex:

@@ -114,6 +114,21 @@ class LearnedDirections:
     n_sweeps: int
 
 
+def bounded_lsq(A: np.ndarray, b: np.ndarray, lb: np.ndarray, ub: np.ndarray) -> tuple[np.ndarray, float]:
+    """``(x, ||A x - b||^2)`` for the ``x`` minimizing ``||A x - b||`` with ``lb <= x <= ub`` (bounds may be
+    infinite): scipy's BVLS on the problem reduced to ``A``'s triangular factor (``A = Q R``:
+    ``||A x - b||^2 = ||R x - Q^T b||^2 + ||b - Q Q^T b||^2``, the same minimizer for a tall ``A``, thousands of
+    rows down to ``p``); the misfit of the returned ``x`` evaluated on the full problem."""
+    A, b = np.asarray(A, dtype=float), np.asarray(b, dtype=float)
+    Ar, br = A, b
+    if A.shape[0] > A.shape[1] > 0:
+        Q, Ar = np.linalg.qr(A)
+        br = Q.T @ b
+    x = np.clip(optimize.lsq_linear(Ar, br, bounds=(lb, ub), method="bvls").x, lb, ub)
+    r = A @ x - b
+    return x, float(r @ r)
+
+
 def linearized_se(J: np.ndarray, free: np.ndarray) -> np.ndarray:
     """(q,) standard errors of the unknowns of a least-squares fit from the Jacobian ``J`` (n, q) of its whitened
     residuals: the ``free`` ones (q,) bool from ``pinv(J_f^T J_f)`` with the columns scaled to unit size first (a
@@ -367,8 +382,8 @@ def joint_test(residual: np.ndarray, var_total: np.ndarray, signatures: np.ndarr
                     trial = [start] + [np.where(np.arange(lo.size) == j, v, start)
                                        for v in np.linspace(lo[j], hi[j], 9)]
                     start = min(trial, key=cost)
-        lin = optimize.lsq_linear(jac_at(start, w), whitened(start, w), bounds=(lo - start, hi - start), method="bvls")
-        x_lin = np.clip(start + lin.x, lo, hi)
+        lin, _ = bounded_lsq(jac_at(start, w), whitened(start, w), lo - start, hi - start)
+        x_lin = np.clip(start + lin, lo, hi)
         theta = min((x0, start, x_lin), key=cost)
         for _ in range(2 if kappa > 0 else 1):  # refit once with the model-error variance
             theta = refine(theta, w)
@@ -381,10 +396,10 @@ def joint_test(residual: np.ndarray, var_total: np.ndarray, signatures: np.ndarr
     # gains more than one chi-square unit, restart from its step (up to 3 times, weights held), so that
     # a nuisance misfit is not read as crack evidence
     for _ in range(3 if lo.size else 0):
-        step = optimize.lsq_linear(J, res0, bounds=(lo - theta, hi - theta), method="bvls")
-        if chi2_h0 - float(step.fun @ step.fun) <= 1.0:
+        step, chi2_step = bounded_lsq(J, res0, lo - theta, hi - theta)
+        if chi2_h0 - chi2_step <= 1.0:
             break
-        cand = refine(np.clip(theta + step.x, lo, hi), w)
+        cand = refine(np.clip(theta + step, lo, hi), w)
         rc = whitened(cand, w)
         if float(rc @ rc) >= chi2_h0 - 1e-9:
             break
@@ -415,15 +430,14 @@ def joint_test(residual: np.ndarray, var_total: np.ndarray, signatures: np.ndarr
     # where the crack would need benign values outside the ranges this is what separates them
     if lo.size:
         # both hypotheses on the same linearization inside the box: H0's own linear gain is not crack evidence
-        h0 = optimize.lsq_linear(J, res0, bounds=(lo - theta, hi - theta), method="bvls")
-        chi2_h0_lin = min(chi2_h0, float(h0.fun @ h0.fun))
+        chi2_h0_lin = min(chi2_h0, bounded_lsq(J, res0, lo - theta, hi - theta)[1])
         for e in range(len(elements)):
             A = np.column_stack([J, Sw[e]])
             lb = np.concatenate([lo - theta, [0.0]])
             ub = np.concatenate([hi - theta, [np.inf]])
-            fit = optimize.lsq_linear(A, res0, bounds=(lb, ub), method="bvls")
-            t_el[e] = max(0.0, chi2_h0_lin - float(fit.fun @ fit.fun))
-            sev[e] = float(fit.x[-1])
+            x_e, chi2_e = bounded_lsq(A, res0, lb, ub)
+            t_el[e] = max(0.0, chi2_h0_lin - chi2_e)
+            sev[e] = float(x_e[-1])
     Un = Sp / np.where(ok, nrm, 1.0)[:, None]
     C = Un @ Un.T
     C[~ok, :] = 0.0
@@ -450,8 +464,7 @@ def joint_test(residual: np.ndarray, var_total: np.ndarray, signatures: np.ndarr
                 ub[i] = 3.0 * span[i]
             else:
                 lb[i] = -3.0 * span[i]
-            freed = optimize.lsq_linear(J, res0, bounds=(lb, ub), method="bvls")
-            edge_chi2[i] = max(0.0, chi2_h0_lin - float(freed.fun @ freed.fun))
+            edge_chi2[i] = max(0.0, chi2_h0_lin - bounded_lsq(J, res0, lb, ub)[1])
         beyond = at_bound[:p] & (edge_chi2 >= EDGE_EVIDENCE)
         if np.any(beyond):
             names = ", ".join(f"{n} (chi2 {g:.3g} lower beyond it)" for n, b, g in zip(benign.names, beyond, edge_chi2)
