@@ -30,7 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from rotorcheck.robust.affine import AffineModel
+from rotorcheck.robust.affine import AffineModel, StiffnessStack
 
 
 @dataclass(frozen=True)
@@ -67,6 +67,20 @@ class Points:
         if key not in cache:
             on = (self.b != 0) | (self.c != 0)
             cache[key] = tuple(np.any(on[:, d], axis=1) for d in blocks)
+        return cache[key]
+
+    def on_blocks(self, blocks: tuple[np.ndarray, ...]) -> tuple[tuple[np.ndarray, np.ndarray, np.ndarray], ...]:
+        """Per DOF set of ``blocks``: ``(rows, b, c)``, the points whose input or output has an entry there (an index
+        array) and their inputs and outputs on those DOFs, (k, n_d) complex each (kept once made)."""
+        key = tuple(int(d[0]) for d in blocks)
+        cache: dict[tuple[int, ...], tuple[tuple[np.ndarray, np.ndarray, np.ndarray], ...]] = (
+            self.__dict__.setdefault("_on_blocks", {}))
+        if key not in cache:
+            out = []
+            for d, hit in zip(blocks, self.touched(blocks)):
+                rows = np.flatnonzero(hit)
+                out.append((rows, self.b[np.ix_(rows, d)].astype(complex), self.c[np.ix_(rows, d)].astype(complex)))
+            cache[key] = tuple(out)
         return cache[key]
 
     def take(self, idx: np.ndarray) -> Points:
@@ -186,11 +200,10 @@ def examine_points(model: AffineModel, fac: BoxFactors, pts: Points, centre: np.
     half = np.broadcast_to(np.asarray(half, dtype=float), (m, p))
     Z = model.stiffness_stack(w, centre)
     r = fac.U.shape[1]
-    u, v = (x[:, :, 0] for x in model.solve_both(Z, pts.b[:, :, None], pts.c[:, :, None]))
-    g_c = np.sum(pts.c * u, axis=1)
+    g_c, vU, uV = _centre_terms(model, fac, pts, Z)
     scale = _s_of(fac.kind, w) * half[:, fac.param]  # (m, r)
-    x = (v @ fac.U) * scale  # c^T Z^-1 U diag(scale)
-    y = u @ fac.V  # V^T Z^-1 b
+    x = vU * scale  # c^T Z^-1 U diag(scale)
+    y = uV  # V^T Z^-1 b
     # one positive scale per parameter block (commutes with delta_i I): the blocks' norms summed over their
     # columns (a parameter's columns are adjacent, fac.starts)
     share = np.zeros((m, p))
@@ -291,6 +304,31 @@ def examine_points(model: AffineModel, fac: BoxFactors, pts: Points, centre: np.
             if best > 0.0 and not each:
                 break
     return ok, margin, share, gm
+
+
+def _centre_terms(model: AffineModel, fac: BoxFactors, pts: Points, Z: StiffnessStack
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(c^T Z^-1 b (m,), c^T Z^-1 U (m, r), V^T Z^-1 b (m, r))`` at each point, block by block of ``Z``: per block,
+    the points whose input or output touches it (:meth:`Points.on_blocks`), one solve of ``[b, c]`` there (two,
+    ``Z`` and ``Z^T``, when ``Z`` is not symmetric); the three sums gathered per block (Z^-1 is block diagonal)."""
+    m, r = pts.size, fac.U.shape[1]
+    g = np.zeros(m, dtype=complex)
+    vU = np.zeros((m, r), dtype=complex)
+    uV = np.zeros((m, r), dtype=complex)
+    for d, z_all, (rows, b, c) in zip(Z.blocks, Z.parts, pts.on_blocks(Z.blocks)):
+        if not rows.size:
+            continue
+        z = z_all if rows.size == m else z_all[rows]
+        if model.symmetric:
+            X = np.linalg.solve(z, np.stack([b, c], axis=2))
+            u, v = X[:, :, 0], X[:, :, 1]
+        else:
+            u = np.linalg.solve(z, b[:, :, None])[:, :, 0]
+            v = np.linalg.solve(np.swapaxes(z, 1, 2), c[:, :, None])[:, :, 0]
+        g[rows] += np.sum(c * u, axis=1)
+        vU[rows] += v @ fac.U[d]
+        uV[rows] += u @ fac.V[d]
+    return g, vU, uV
 
 
 def point_receptances(model: AffineModel, pts: Points, theta: np.ndarray) -> np.ndarray:
