@@ -224,3 +224,30 @@ def test_the_breathing_depth_relation_reads_xy_probes_as_one_probe() -> None:
     assert one(0.05) < 0.01 and xy(0.05) < 0.01
     for d in HB_DEPTHS:
         assert xy(d) == pytest.approx(one(d), rel=0.1, abs=0.005), d
+
+
+def test_detects_diagnosis_certifies_the_same_interval_without_the_healthy_hypothesis(
+        detected_breathing_1000rpm: CliRun) -> None:
+    """detect's diagnosis of a damage verdict skips the healthy (no loss) hypothesis, whose witness at loss 0 only
+    spared the best candidate's lower-end search: on the bundled breathing crack, where that hypothesis holds a
+    witness (not excluded: no point is certified beyond benign change), element 4's certified loss interval is the
+    same with and without it, and the result says the healthy hypothesis was not tested (None)."""
+    import numpy as np
+
+    from rotorcheck import workflow
+    from rotorcheck.baseline import read_baseline
+    from rotorcheck.workflow.locating import locate_run
+    from rotorcheck.workflow.rigs import baseline_rig
+
+    out = detected_breathing_1000rpm.out
+    base = read_baseline(out / "baseline.h5")
+    cfg, _, runs = workflow.load_rig_and_runs(S / "breathing_crack_1000rpm.h5", None, out / "baseline.h5")
+    args = (baseline_rig(cfg, base), runs[0], np.asarray(base.healthy_frf), np.asarray(base.healthy_frf_var),
+            base.speed_rpm)
+    with_h = locate_run(*args, elements=(4,), certify=False, damage=None, certify_best=True)
+    without = locate_run(*args, elements=(4,), certify=False, damage=True, certify_best=True)
+    assert with_h.healthy_excluded is False and without.healthy_excluded is None
+    a, b = (next(c for c in res.candidates if c.element == 4) for res in (with_h, without))
+    assert a.status == b.status == "consistent"
+    assert a.loss_interval == pytest.approx(b.loss_interval, abs=1e-12)
+    assert a.loss_interval[0] == 0.0  # a witness at no loss: the lower end is the range's
