@@ -167,3 +167,29 @@ def test_a_damaged_sweep_among_the_healthy_ones_is_named(rigs) -> None:
     assert out.learning is not None and out.healthy_run != 4
     assert out.learning.alarmed == (4,)
     assert "warning: sweep(s) 5," in out.learning.summary()
+
+
+def test_healthy_sweeps_at_measured_speeds_within_the_tolerance_are_one_operating_point(rigs) -> None:
+    """Healthy sweeps of one operating point are never at one exact speed. Three sweeps of the truth rig at 992,
+    1000 and 1009 rpm (the shaft speed itself moved, as recorded): ``validate`` takes them (the rig's speed range
+    +-20 rpm, as detect allows a new sweep), the baseline sits at its kept sweep's speed, and a new healthy sweep at
+    1005 rpm is no alarm against it; a sweep 31 rpm away, or at standstill beside spinning ones, is refused naming
+    the speed field (and the tolerance)."""
+    nominal, truth = rigs
+    f = np.linspace(30.0, 600.0, 90)
+
+    def spun(rpm: float, seed: int) -> workflow.MeasuredRun:
+        return workflow.measured_run(simulate_rig(truth, f, rpm, seed=seed), nominal)
+
+    runs = [spun(rpm, 70 + k) for k, rpm in enumerate((992.0, 1000.0, 1009.0))]
+    out = workflow.validate(nominal, runs, workflow.fit_noise(runs[0]))
+    kept = runs[0] if out.healthy_run is None else runs[out.healthy_run]
+    assert out.baseline.speed_rpm == kept.speed_rpm
+    found = workflow.detect(nominal, out.baseline, spun(1005.0, 80))
+    assert found.verdict.verdict == "healthy", found.verdict.reason
+    with pytest.raises(workflow.InputError, match="speed tolerance") as err:
+        workflow.validate(nominal, runs + [spun(1031.0, 81)], workflow.fit_noise(runs[0]))
+    assert "@speed_rpm" in str(err.value) and "(variability: speed +-20 rpm)" in str(err.value)
+    at_rest = workflow.measured_run(simulate_rig(truth, f, 0.0, seed=82), nominal)
+    with pytest.raises(workflow.InputError, match="0 rpm differs"):
+        workflow.validate(nominal, [runs[0], at_rest], workflow.fit_noise(runs[0]))

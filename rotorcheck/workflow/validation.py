@@ -30,7 +30,7 @@ from rotorcheck.workflow.measured import (
     run_harmonics,
 )
 from rotorcheck.workflow.noise import noise_fit, noise_values
-from rotorcheck.workflow.rigs import updated_rig
+from rotorcheck.workflow.rigs import speed_tolerance, updated_rig
 
 
 @dataclass
@@ -121,15 +121,26 @@ def validate(
                          f"(got {enclose})")
     runs = [runs[0]] + [aligned_pairs(r, pair_keys(runs[0])) for r in runs[1:]]  # same pairs, rows reordered
     first = runs[0]
+    tol = speed_tolerance(rig)
     for r in runs[1:]:
         why = grid_mismatch(r.frequency_hz, first.frequency_hz)
         if why is not None:
             raise InputError(r.path, f"/runs/{r.run_id}/frequency",
                              f"grid differs from {first.path}: {why} (healthy sweeps must share the frequency grid)")
-        if r.speed_rpm != first.speed_rpm:
+        # measured speeds of one operating point differ by a few rpm: within the rig's speed tolerance (the
+        # speed range of its variability section, as detect allows a new sweep) they are one point
+        d_rpm = abs(r.speed_rpm - first.speed_rpm)
+        if d_rpm > 1e-9 and (0.0 in (r.speed_rpm, first.speed_rpm) or d_rpm > tol):
             raise InputError(r.path, f"/runs/{r.run_id}/@speed_rpm",
-                             f"{r.speed_rpm:g} rpm differs from {first.path} ({first.speed_rpm:g} rpm)")
-    model = nominal_model(rig, first.frequency_hz, first.speed_rpm)
+                             f"{r.speed_rpm:g} rpm differs from {first.path} ({first.speed_rpm:g} rpm)"
+                             + (f" beyond the rig's speed tolerance (variability: speed +-{tol:g} rpm)" if tol
+                                and 0.0 not in (r.speed_rpm, first.speed_rpm) else ""))
+    harmonics = run_harmonics(runs)
+    # several healthy sweeps: their mean when they are repeats of one state, else the most central one alone
+    ref = healthy_reference(runs, harmonics.flagged)
+    one = runs[0] if ref.reference is None else runs[ref.reference]
+    speed = one.speed_rpm  # the baseline's operating point: the sweep it keeps (the first when averaged)
+    model = nominal_model(rig, first.frequency_hz, speed)
     # 'measured' detects against the measured healthy FRF; its gamma is still the model-error bound
     # of 'system' (what validation is for: how far the nominal model is from the healthy rig)
     V: float | np.ndarray = noise_values(noise_bound)
@@ -148,19 +159,15 @@ def validate(
         res = validation.validate(model.me, [r.W for r in runs], [r.Zt for r in runs], V,
                                   enclose="system" if enclose == "measured" else enclose,
                                   structure=parameter_structure(model, enclose), fail_at=fail_at)
-    harmonics = run_harmonics(runs)
     res.exclude(harmonics.flagged)
     keep = ~harmonics.flagged
-    # several healthy sweeps: their mean when they are repeats of one state, else the most central one alone
-    ref = healthy_reference(runs, harmonics.flagged)
     healthy = ref.estimate
-    one = runs[0] if ref.reference is None else runs[ref.reference]
     upd = None
     if update:
 
         if not rig.variability:
             raise InputError(None, "--update", "the rig has no variability section: nothing to update")
-        upd = update_parameters(rig, first.frequency_hz[keep], first.speed_rpm, healthy.frf[keep, 0])
+        upd = update_parameters(rig, first.frequency_hz[keep], speed, healthy.frf[keep, 0])
     model_rig = updated_rig(rig, None if upd is None else upd.as_dict())
     learning = None
     # ref.reference None: one sweep, or repeats of one state (no drift to learn)
@@ -173,7 +180,7 @@ def validate(
                              "share their channels)")
     structure, parameter = model.structure, model.parameter or ""
     base = Baseline(
-        Provenance(rig.rig_id, rig.sha256(), [r.sha256 for r in runs], first.run_id, first.speed_rpm),
+        Provenance(rig.rig_id, rig.sha256(), [r.sha256 for r in runs], first.run_id, speed),
         noise_fit(noise_bound, structure, parameter, None if isinstance(V, float) else np.asarray(V, dtype=float)),
         ModelBound(enclose, structure, parameter, first.frequency_hz, res.gamma, model.frf[:, None, None],
                    res.gamma_lower, np.asarray(res.status, dtype=str)),
