@@ -36,6 +36,7 @@ import numpy as np
 from rotorcheck.lazy import lazy_module
 from rotorcheck.modal_anchor import POLE_SENSITIVITY_ERROR, ModalAnchor, PoleRefit, refit_poles
 from rotorcheck.robust.affine import AffineModel
+from rotorcheck.robust.bounded import box_lsq
 
 linalg = lazy_module("scipy.linalg")
 interpolate = lazy_module("scipy.interpolate")
@@ -140,32 +141,6 @@ def shift_sd(se: np.ndarray, loss: float | np.ndarray, shift: np.ndarray, lo: np
     error over the box ``[lo, hi]`` (module docstring). Broadcasts: losses (n, 1) and shifts (n, k) give (n, k)."""
     reach = 2.0 * POLE_SENSITIVITY_ERROR * float(np.sum(np.maximum(np.abs(lo), np.abs(hi))))
     return np.asarray(np.sqrt(se**2 + (SHIFT_ERROR * loss) ** 2 + (FORM_SHARE * shift) ** 2 + reach**2))
-
-
-def box_lsq(A: np.ndarray, b: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
-    """(n, p): for each of n problems the ``x`` minimizing ``||A_i x - b_i||`` with ``lo <= x <= hi``: ``A`` (n, k, p),
-    ``b`` (n, k), ``p`` small. Exact by enumeration: the minimum of a convex quadratic over a box is the free
-    minimum (least norm) of one face's problem (each parameter free, at its lower or at its upper end) that lies in
-    the box; every face is solved for all n at once (3^p batched pseudo-inverses) and the best feasible kept."""
-    n, _, p = A.shape
-    best = np.full((n, p), np.nan)
-    cost = np.full(n, np.inf)
-    tol = 1e-12 * np.maximum(1.0, np.abs(hi - lo))
-    for face in np.ndindex(*(3,) * p):
-        state = np.array(face)  # 0 free, 1 at lo, 2 at hi
-        x = np.where(state == 1, lo, hi)[None, :].repeat(n, axis=0)
-        free = state == 0
-        if np.any(free):
-            r = b - np.einsum("nkp,np->nk", A[:, :, ~free], x[:, ~free])
-            Af = A[:, :, free]
-            x[:, free] = np.einsum("npk,nk->np", np.linalg.pinv(Af), r)
-        ok = np.all((x >= lo - tol) & (x <= hi + tol), axis=1)
-        res = np.einsum("nkp,np->nk", A, x) - b
-        c = np.where(ok, np.sum(res**2, axis=1), np.inf)
-        with np.errstate(invalid="ignore"):  # inf - inf where neither is feasible yet
-            better = c < cost - 1e-12 * np.where(np.isfinite(cost), np.maximum(cost, 1.0), 0.0)
-        best[better], cost[better] = np.clip(x[better], lo, hi), c[better]
-    return best
 
 
 def profile(measured: np.ndarray, se: np.ndarray, losses: np.ndarray, curves: np.ndarray, S: np.ndarray,

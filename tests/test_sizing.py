@@ -122,27 +122,3 @@ def test_truth_rig_open_crack_sized_with_the_nominal_model(nominal_rig) -> None:
     assert size.interval[0] <= 0.10 <= size.interval[1]
     assert size.estimate == pytest.approx(0.10, abs=0.02)
     assert size.interval[1] - size.interval[0] < 0.15
-
-
-def test_box_lsq_matches_scipy_bounded_least_squares() -> None:
-    """The face enumeration against scipy.optimize.lsq_linear on 4 x 50 random problems (one direction nearly
-    flat, as a bearing at rest): never a larger misfit (relative 1e-9) and inside the box."""
-    from scipy import optimize
-
-    from rotorcheck.sizing import box_lsq
-
-    rng = np.random.default_rng(0)
-    for p in (1, 2, 3, 4):
-        A = rng.standard_normal((50, 6, p))
-        A[:, :, -1] *= 0.01
-        b = rng.standard_normal((50, 6))
-        lo, hi = -rng.uniform(0.1, 1.0, p), rng.uniform(0.1, 1.0, p)
-        X = box_lsq(A, b, lo, hi)
-        assert np.all(X >= lo) and np.all(X <= hi)
-        for i in range(50):
-            ref = optimize.lsq_linear(A[i], b[i], bounds=(lo, hi + 1e-15)).x
-            mine, theirs = np.sum((A[i] @ X[i] - b[i]) ** 2), np.sum((A[i] @ ref - b[i]) ** 2)
-            assert mine <= theirs * (1 + 1e-9) + 1e-15, (p, i, mine, theirs)
-        # the unconstrained solution where it lies inside the box
-        wide = box_lsq(A, b, np.full(p, -1e6), np.full(p, 1e6))
-        np.testing.assert_allclose(wide[0], np.linalg.lstsq(A[0], b[0], rcond=None)[0], rtol=1e-8, atol=1e-10)

@@ -39,6 +39,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from rotorcheck.lazy import lazy_module
+from rotorcheck.robust.bounded import bounded_lsq
 
 optimize = lazy_module("scipy.optimize")  # loaded when a benign nuisance is fitted (not for noise only)
 special = lazy_module("scipy.special")  # the goodness of fit's chi-square tail
@@ -112,21 +113,6 @@ class LearnedDirections:
     c_max: np.ndarray
     singular_values: np.ndarray  # whitened, all components (for the report)
     n_sweeps: int
-
-
-def bounded_lsq(A: np.ndarray, b: np.ndarray, lb: np.ndarray, ub: np.ndarray) -> tuple[np.ndarray, float]:
-    """``(x, ||A x - b||^2)`` for the ``x`` minimizing ``||A x - b||`` with ``lb <= x <= ub`` (bounds may be
-    infinite): scipy's BVLS on the problem reduced to ``A``'s triangular factor (``A = Q R``:
-    ``||A x - b||^2 = ||R x - Q^T b||^2 + ||b - Q Q^T b||^2``, the same minimizer for a tall ``A``, thousands of
-    rows down to ``p``); the misfit of the returned ``x`` evaluated on the full problem."""
-    A, b = np.asarray(A, dtype=float), np.asarray(b, dtype=float)
-    Ar, br = A, b
-    if A.shape[0] > A.shape[1] > 0:
-        Q, Ar = np.linalg.qr(A)
-        br = Q.T @ b
-    x = np.clip(optimize.lsq_linear(Ar, br, bounds=(lb, ub), method="bvls").x, lb, ub)
-    r = A @ x - b
-    return x, float(r @ r)
 
 
 def linearized_se(J: np.ndarray, free: np.ndarray) -> np.ndarray:
