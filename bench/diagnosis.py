@@ -131,10 +131,11 @@ def _interval(x: tuple[float | None, float | None] | None) -> str:
 
 def table(rows: list[dict[str, Any]], variants: list[str]) -> str:
     lines = ["| truth | channels | kind | cases | damage verdicts | rank 1 = true (detect) | rank 1 = true (locate) | "
-             "detect = locate rank 1 | says where (located / ranked / not locatable) | true element excluded | "
+             "detect = locate rank 1 | says where (located / ranked / not locatable) | located but wrong | "
+             "true element excluded | "
              "loss interval holds truth | depth interval holds truth | detect's 95 % interval holds truth (loss; "
              "depth) | depth interval width, median (certified; detect's) | healthy repeat: verdict, where shown |",
-             "|---|---|---|---:|---:|---:|---:|---:|---|---:|---:|---:|---|---|---|"]
+             "|---|---|---|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|---|---|---|"]
     for v in variants:
         for xy in (False, True):
             for kind in ("open", "breathing"):
@@ -149,6 +150,7 @@ def table(rows: list[dict[str, Any]], variants: list[str]) -> str:
                     f"{_frac([r.get('locate_rank1') == r['element'] for r in dmg])} | "
                     f"{_frac([r.get('locate_rank1') == r['detect_rank1'] for r in dmg])} | "
                     f"{said.count('located')} / {said.count('ranked')} / {said.count('not locatable')} | "
+                    f"{sum(r.get('kind_said') == 'located' and r.get('locate_rank1') != r['element'] for r in dmg)} | "
                     f"{_frac([r.get('status') == 'excluded' for r in dmg])} | "
                     f"{_frac([bool(r.get('loss_in')) for r in dmg])} | "
                     f"{_frac([bool(r.get('depth_in')) for r in dmg]) if kind == 'breathing' else ''} | "
