@@ -381,16 +381,17 @@ def joint_test(residual: np.ndarray, var_total: np.ndarray, signatures: np.ndarr
     # a bounded nonlinear fit can stop short (a flat valley, a bound): where the linearized H0 still
     # gains more than one chi-square unit, restart from its step (up to 3 times, weights held), so that
     # a nuisance misfit is not read as crack evidence
+    chi2_lin: float | None = None  # the bounded linear H0 fit's chi2 at the current theta, once solved
     for _ in range(3 if lo.size else 0):
-        step, chi2_step = bounded_lsq(J, res0, lo - theta, hi - theta)
-        if chi2_h0 - chi2_step <= 1.0:
+        step, chi2_lin = bounded_lsq(J, res0, lo - theta, hi - theta)
+        if chi2_h0 - chi2_lin <= 1.0:
             break
         cand = refine(np.clip(theta + step, lo, hi), w)
         rc = whitened(cand, w)
         if float(rc @ rc) >= chi2_h0 - 1e-9:
             break
         theta, res0, chi2_h0 = cand, rc, float(rc @ rc)
-        J = jac_at(theta, w)
+        J, chi2_lin = jac_at(theta, w), None
     at_bound = np.zeros(lo.size, dtype=bool)
     if lo.size:
         span = np.maximum(hi - lo, 1e-300)
@@ -416,7 +417,9 @@ def joint_test(residual: np.ndarray, var_total: np.ndarray, signatures: np.ndarr
     # where the crack would need benign values outside the ranges this is what separates them
     if lo.size:
         # both hypotheses on the same linearization inside the box: H0's own linear gain is not crack evidence
-        chi2_h0_lin = min(chi2_h0, bounded_lsq(J, res0, lo - theta, hi - theta)[1])
+        if chi2_lin is None:  # the restarts moved theta last (or none ran): solved here
+            chi2_lin = bounded_lsq(J, res0, lo - theta, hi - theta)[1]
+        chi2_h0_lin = min(chi2_h0, chi2_lin)
         for e in range(len(elements)):
             A = np.column_stack([J, Sw[e]])
             lb = np.concatenate([lo - theta, [0.0]])

@@ -78,7 +78,6 @@ from rotorcheck.workflow.outputs import PLOT_FORMATS, plot_formats, plot_paths
 from rotorcheck.workflow.prediction import DETECTABILITY_POINTS, detectability_for_rig, sensor_ranking_for_rig
 from rotorcheck.workflow.rigs import (
     baseline_rig,
-    baseline_updates,
     check_elements,
     load_rig,
     port_static_stiffness,
@@ -126,7 +125,6 @@ __all__ = [
     "baseline_for_speed",
     "baseline_pairs",
     "baseline_rig",
-    "baseline_updates",
     "benign_model",
     "benign_table",
     "certify_beyond_benign",

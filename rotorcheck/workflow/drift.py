@@ -55,10 +55,10 @@ DRIFT_RULE = ("ranges moved over the centres that allow every healthy sweep's fi
 
 @dataclass
 class DriftLearning:
-    """What :func:`learn_drift` learned: per benign parameter (``names``, the rig's order at the sweeps' speed) the
-    training sweeps' fitted states relative to the reference ``theta`` (K, p) (relative change for factors, the unit
-    for offsets; the reference's row zero), the ranges' shift ``shift`` (p,) and widening ``widen`` (p,) each side,
-    the model-error factor ``kappa`` and the leave-one-out alarms at each factor tried."""
+    """What :func:`learn_drift_ranges` learned: per benign parameter (``names``, the rig's order at the sweeps'
+    speed) the training sweeps' fitted states relative to the reference ``theta`` (K, p) (relative change for
+    factors, the unit for offsets; the reference's row zero), the ranges' shift ``shift`` (p,) and widening ``widen``
+    (p,) each side, the model-error factor ``kappa`` and the leave-one-out alarms at each factor tried."""
 
     names: tuple[str, ...]
     theta: np.ndarray
@@ -158,7 +158,8 @@ def learn_drift_ranges(rig: RigConfig, runs: list[MeasuredRun], reference: int, 
                        exclude: np.ndarray | None = None) -> DriftLearning:
     """Where the reference sweep ``runs[reference]`` sits among the machine's drifted states, from the other sweeps
     (see the module docstring). ``exclude`` (f,) bool: points on a shaft harmonic (no weight). The sweeps share the
-    grid, the speed and the channel pairs (``validate`` checks it)."""
+    grid and the channel pairs, and their speeds lie within twice the speed range (``validate`` checks it); each
+    sweep's measured speed offset from the reference enters its fit as a new sweep's does in ``detect``."""
     ref = runs[reference]
     speed = ref.speed_rpm
     est = frf_estimate(ref)

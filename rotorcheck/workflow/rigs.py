@@ -58,11 +58,6 @@ def updated_rig(rig: RigConfig, values: dict[str, float] | None) -> RigConfig:
     return with_benign(rig, values)[0]
 
 
-def baseline_updates(baseline: Baseline) -> dict[str, float] | None:
-    """The updated parameter values stored in a baseline, if any."""
-    return baseline.drift.updated_parameters
-
-
 def baseline_rig(rig: RigConfig, baseline: Baseline) -> RigConfig:
     """The rig as a baseline reads it: the parameter values ``validate --update`` fitted applied, and the benign
     ranges moved and widened as ``validate --learn-drift`` learned them (:mod:`rotorcheck.workflow.drift`)."""

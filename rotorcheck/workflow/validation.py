@@ -127,6 +127,9 @@ def validate(
         if why is not None:
             raise InputError(r.path, f"/runs/{r.run_id}/frequency",
                              f"grid differs from {first.path}: {why} (healthy sweeps must share the frequency grid)")
+        if pair_keys(r) != pair_keys(first):
+            raise InputError(r.path, "/channels", f"channel pairs differ from {first.path}'s (healthy sweeps must "
+                             "share their channels)")
     # measured speeds of one operating point differ by a few rpm: the rig's speed range (variability: speed +-tol)
     # is the drift about the operating point, so two of its sweeps may sit up to 2 tol apart; at rest is exact
     slow, fast = min(runs, key=lambda r: r.speed_rpm), max(runs, key=lambda r: r.speed_rpm)
@@ -175,10 +178,6 @@ def validate(
     if (learn_drift is not False and len(runs) >= 3 and ref.reference is not None and enclose == "measured"
             and benign_parameters(model_rig)):
         learning = learn_drift_ranges(model_rig, runs, ref.reference, exclude=harmonics.flagged)
-    for r in runs[1:]:
-        if pair_keys(r) != pair_keys(first):
-            raise InputError(r.path, "/channels", f"channel pairs differ from {first.path}'s (healthy sweeps must "
-                             "share their channels)")
     structure, parameter = model.structure, model.parameter or ""
     base = Baseline(
         Provenance(rig.rig_id, rig.sha256(), [r.sha256 for r in runs], first.run_id, speed),
