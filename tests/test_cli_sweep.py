@@ -109,14 +109,14 @@ def _non_increasing(h5: h5py.File) -> None:
 
 
 def _schema_version(h5: h5py.File) -> None:
-    h5.attrs["schema_version"] = np.int32(3)
+    h5.attrs["schema_version"] = np.int32(4)
 
 
 MALFORMED = {
     "missing_dataset": (_missing, f"{RUN}/output_var", "missing dataset"),
     "nan": (_nan, f"{RUN}/output_phasor", "non-finite value at index (17, 0)"),
     "non_increasing": (_non_increasing, f"{RUN}/frequency", "frequency not strictly increasing at index 41"),
-    "schema_version": (_schema_version, "/@schema_version", "unknown schema_version 3"),
+    "schema_version": (_schema_version, "/@schema_version", "unknown schema_version 4"),
 }
 
 

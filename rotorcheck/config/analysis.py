@@ -20,6 +20,14 @@ class Measurement(Strict):
     samples_per_period: int = Field(default=64, ge=8)
     unbalance: list[UnbalanceMass] = Field(default_factory=list)
     misalignment: Misalignment | None = None
+    sideband_orders: list[int] = Field(default_factory=list, description="sidebands f + k speed measured at each "
+                                       "point of a rotating sweep (orders k, nonzero; sweep contract version 3)")
+
+    @model_validator(mode="after")
+    def _orders(self) -> Measurement:
+        if any(k == 0 for k in self.sideband_orders) or len(set(self.sideband_orders)) != len(self.sideband_orders):
+            raise ValueError("sideband_orders: distinct nonzero integers")
+        return self
 
 
 class Analysis(Strict):

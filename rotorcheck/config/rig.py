@@ -309,6 +309,7 @@ _LATER_KEYS: dict[str, dict[str, Any]] = {
     "discs": {"material": None, "width": None, "outer_diameter": None, "inner_diameter": None},
     "bearings": {"n_link": None, "mxx": 0.0, "myy": 0.0, "mxy": 0.0, "myx": 0.0, "extrapolate": "hold"},
     "damping": {"scope": "system"},
+    "measurement": {"sideband_orders": []},
 }
 
 

@@ -14,7 +14,14 @@ For each step (a row of the map's step table, else found in the force: :mod:`.st
    the plain mean; ``output_var`` is the variance of that mean from the period scatter (m^2) and
    ``n_periods`` the periods used, as the sweep contract defines them;
 5. scale: force (N) = recorded x 1 or x ``gain_n_per_a``; displacement (m) = recorded / sensitivity
-   or x the length unit.
+   or x the length unit;
+6. sidebands (``analysis.sideband_orders``, a rotating run with a keyphasor): on the samples of the
+   same kept windows, the least-squares fit of known tones of :mod:`rotorcheck.signal.sidebands`
+   (``tone_set(f, Omega, orders, f / N)``, ``fit_tones``) per probe with a quadratic drift fitted
+   jointly, in local time ``t - t_ref`` (the main phasors' origin),
+   referenced to the shaft with the keyphasor's angle at ``t_ref``
+   (:func:`~rotorcheck.signal.sidebands.shaft_referenced`), scaled as the probes; NaN where a tone is
+   not separable (the sweep contract's version 3).
 
 Quirks are handled or refused with :class:`~rotorcheck.errors.InputError` naming the file, the
 channel and the time (see ``docs/ingest.md``); what was handled is listed in the run's notes.
@@ -39,6 +46,7 @@ from rotorcheck.ingest.periodfit import fit_windows, period_design, remove_drift
 from rotorcheck.ingest.record import TimeRecord
 from rotorcheck.ingest.steps import find_steps, force_crossings
 from rotorcheck.signal.lockin import average_periods, shaft_harmonic_fit
+from rotorcheck.signal.sidebands import fit_tones, shaft_referenced, tone_set
 from rotorcheck.sweep.format import Channel, Run, Sweep, utc_now_iso
 
 __all__ = ["METHOD", "IngestResult", "StepPlan", "analyse", "clipped_periods", "plan_steps"]
@@ -47,7 +55,11 @@ __all__ = ["METHOD", "IngestResult", "StepPlan", "analyse", "clipped_periods", "
 METHOD = ("per-period least-squares sine fit with DC and slope terms over floor(fs/f) samples from each period "
           "start (one pseudo-inverse per step); shaft harmonics fitted out with the keyphasor angle; "
           "variance of the mean from the period scatter")
-#: samples read at once when a step is longer (memory bound per step)
+#: the sidebands' analysis as one line (stored with the settings when ``sideband_orders`` is set)
+SIDEBAND_METHOD = ("least-squares fit of known tones (excitation, shaft harmonics, f + k Omega; rotorcheck.signal."
+                   "sidebands) with a quadratic drift, on each step's analysed samples, local time from the step "
+                   "start; times exp(-j k theta), theta the keyphasor's shaft angle at the step start")
+#: samples read at once when a step is longer (memory bound per step; the sidebands hold a step's samples)
 CHUNK_SAMPLES = 1 << 20
 
 
@@ -191,6 +203,8 @@ class _StepOut:
     var: np.ndarray
     n: int
     dof: int
+    sb_phasor: np.ndarray | None = None  # (K, n_out) m, shaft-referenced
+    sb_var: np.ndarray | None = None  # (K, n_out) m^2
 
 
 def _analyse_step(seg: TimeRecord, plan: StepPlan, cmap: ChannelMap, scales: np.ndarray,
@@ -203,6 +217,8 @@ def _analyse_step(seg: TimeRecord, plan: StepPlan, cmap: ChannelMap, scales: np.
     starts = window_starts(plan.t_first_s, plan.n_periods, f, seg.t0_s, fs)
     per_chunk = max(1, CHUNK_SAMPLES // des.length)
     phs, dcs, resid, clip, amp = [], [], [], [], []
+    orders = cmap.analysis.sideband_orders
+    wins: list[np.ndarray] = []  # the probes' window samples (n_out, P, L), for the sidebands
     min_run = max(3, math.ceil(0.02 * des.length))
     for a in range(0, plan.n_periods, per_chunk):
         s = starts[a : a + per_chunk]
@@ -215,6 +231,8 @@ def _analyse_step(seg: TimeRecord, plan: StepPlan, cmap: ChannelMap, scales: np.
         phs.append(ph)
         resid.append(res)
         amp.append(np.abs(ph[: len(ins)]))
+        if orders:
+            wins.append(block[len(ins):, off[:, None] + np.arange(des.length)[None, :]])
     ph = np.concatenate(phs, axis=1)  # (ch, N) local frames
     bad = np.concatenate(clip, axis=1)
     t_mid = seg.t0_s + (starts + 0.5 * (des.length - 1)) / fs
@@ -260,7 +278,39 @@ def _analyse_step(seg: TimeRecord, plan: StepPlan, cmap: ChannelMap, scales: np.
     else:
         mean, var, _ = average_periods(per)
         dof = 2 * (keep.size - 1)
-    return _StepOut(f, plan.t_ref_s, per, mean, var, int(keep.size), int(dof))
+    out = _StepOut(f, plan.t_ref_s, per, mean, var, int(keep.size), int(dof))
+    if orders:
+        assert pulses is not None  # the map refuses sidebands without a keyphasor or at rest
+        win = np.concatenate(wins, axis=1)[:, keep]  # (n_out, N, L)
+        out.sb_phasor, out.sb_var = _sidebands(seg, plan, win, starts[keep], scales[len(ins):], pulses, shaft_hz,
+                                               orders)
+    return out
+
+
+def _sidebands(seg: TimeRecord, plan: StepPlan, win: np.ndarray, starts: np.ndarray, scales: np.ndarray,
+               pulses: Pulses, shaft_hz: float, orders: Sequence[int]) -> tuple[np.ndarray, np.ndarray]:
+    """The shaft-referenced sidebands ``orders`` (K, n_out) m and their variances m^2 of one step from the
+    probes' kept windows ``win`` (n_out, N, L; recorded units) starting at the record indices ``starts`` (N,):
+    the tones of :func:`~rotorcheck.signal.sidebands.tone_set` (resolution ``f / N``) fitted in the local time
+    ``t - t_ref`` with a slow drift fitted jointly, times ``exp(-j k theta)`` with the keyphasor
+    angle ``theta`` at ``t_ref``, scaled; NaN where the tone is not separable."""
+    f = plan.frequency_hz
+    n_out, n_per, length = win.shape
+    tau = (seg.t0_s - plan.t_ref_s) + (starts[:, None] + np.arange(length)[None, :]).reshape(-1) / seg.fs_hz
+    tones = tone_set(f, shaft_hz, orders, f / n_per)
+    if tones.freq_hz.max() >= 0.5 * seg.fs_hz:
+        raise InputError(seg.path, "analysis.sideband_orders",
+                         f"t = {plan.t_ref_s:.6f} s (step at {f:.6g} Hz): a fitted tone at "
+                         f"{tones.freq_hz.max():.6g} Hz is above the Nyquist frequency {0.5 * seg.fs_hz:g} Hz")
+    amp, var = fit_tones(win.reshape(n_out, -1).T, tau, tones, drift_degree=2 if n_per >= 6 else 1)
+    ph = np.full((len(orders), n_out), np.nan + 1j * np.nan)
+    v = np.full((len(orders), n_out), np.nan)
+    for i, order in enumerate(orders):
+        j = tones.requested[int(order)]
+        if j >= 0:
+            ph[i], v[i] = amp[j], var[j]
+    theta = float(pulses.angle(np.array([plan.t_ref_s]))[0])
+    return shaft_referenced(ph, orders, theta) * scales[None, :], v * (scales**2)[None, :]
 
 
 def _short(seg: TimeRecord, plan: StepPlan, cmap: ChannelMap, n: int, notes: list[str]) -> None:
@@ -332,6 +382,12 @@ def analyse(records: Sequence[TimeRecord], cmap: ChannelMap, sources: Sequence[t
     if pulses[0] is not None:
         notes.append(f"speed {60 * shaft_hz:.6g} rpm from the keyphasor; largest drift within a step "
                      f"{100 * drift:.3g} % (max-min revolution over the median)")
+    orders = cmap.analysis.sideband_orders
+    if orders:
+        n_nan = sum(int(np.isnan(s.sb_var[:, 0]).sum()) for s in done if s.sb_var is not None)
+        notes.append(f"sidebands k = {', '.join(str(k) for k in orders)} read by the least-squares fit of known "
+                     "tones on each step's analysed samples, referenced to the keyphasor's shaft angle at the step "
+                     f"start; {n_nan} of {len(done) * len(orders)} not separable (NaN)")
     return _result(groups, cmap, 60.0 * shaft_hz, notes, segments, sources, keep=not fitted)
 
 
@@ -384,6 +440,11 @@ def _result(groups: list[list[_StepOut]], cmap: ChannelMap, speed_rpm: float, no
     else:
         run = Run.from_patterns(cmap.run_id, speed_rpm, freqs, mean[..., :n_in], mean[..., n_in:], var[..., n_in:],
                                 n, input_var=var[..., :n_in], period_phasor=pp, notes=text)
+    orders = cmap.analysis.sideband_orders
+    if orders:  # (f, n_exc, K, n_out), shaft-referenced
+        run.with_sidebands(np.asarray(orders, dtype=np.int32),
+                           np.array([[s.sb_phasor for s in g] for g in groups]),
+                           np.array([[s.sb_var for s in g] for g in groups]))
     channels = [Channel(c.channel, "input", c.station, c.direction, "force", "N") for c in cmap.inputs]
     channels += [Channel(p.channel, "output", p.station, p.direction, "displacement", "m") for p in cmap.probes]
     sweep = Sweep(rig_id=cmap.resolved_rig_id(), source="measured",
@@ -392,7 +453,8 @@ def _result(groups: list[list[_StepOut]], cmap: ChannelMap, speed_rpm: float, no
     attrs = {
         "ingest_sources": json.dumps([{"path": p, "sha256": h} for p, h in sources]),
         "ingest_channel_map": cmap.to_json(),
-        "ingest_settings": json.dumps({**cmap.analysis.model_dump(mode="json"), "method": METHOD}, sort_keys=True),
+        "ingest_settings": json.dumps({**cmap.analysis.model_dump(mode="json"), "method": METHOD,
+                                       **({"sideband_method": SIDEBAND_METHOD} if orders else {})}, sort_keys=True),
     }
     summary = {"run_id": run.run_id, "rig_id": sweep.rig_id, "speed_rpm": speed_rpm, "n_steps": int(n.size),
                "f_min_hz": float(freqs[0]), "f_max_hz": float(freqs[-1]), "n_periods_min": int(n.min()),

@@ -20,6 +20,8 @@ Example::
     steps:                       # optional step table (else steps are found from the force)
       - {frequency_hz: 30.0, start_s: 0.0, end_s: 2.67}
     analysis: {settle_periods: 16, min_periods: 8, shaft_orders: 4}
+    # sidebands f + k speed of each step (a rotating run with a keyphasor; sweep format version 3):
+    # analysis: {sideband_orders: [-2, -1, 1, 2]}
 
 Errors name the map file and the field (:class:`~rotorcheck.errors.InputError`, exit 2).
 """
@@ -32,7 +34,7 @@ from pathlib import Path
 from typing import Any, ClassVar, Literal
 
 import yaml
-from pydantic import Field, ValidationError, model_validator
+from pydantic import Field, StrictInt, ValidationError, model_validator
 
 from rotorcheck.config import MAX_RIG_BYTES, Strict, StrictLoader, first_error, load_config
 from rotorcheck.errors import InputError
@@ -117,7 +119,8 @@ class StepRow(Strict):
 
 
 class AnalysisSettings(Strict):
-    """How steps are analysed (see :mod:`rotorcheck.ingest.analysis`)."""
+    """How steps are analysed (see :mod:`rotorcheck.ingest.analysis`); ``sideband_orders``: the orders k
+    of the sidebands ``f + k speed`` read at every step (distinct, nonzero; [] = none)."""
 
     settle_periods: int = Field(default=16, ge=0)
     settle_s: float = Field(default=0.0, ge=0)
@@ -128,6 +131,16 @@ class AnalysisSettings(Strict):
     max_distortion: float = Field(default=0.1, gt=0, lt=1)
     step_rtol: float = Field(default=2e-3, gt=0, lt=0.5)
     keep_periods: bool = True
+    sideband_orders: list[StrictInt] = Field(default_factory=list)
+
+    @model_validator(mode="after")
+    def _orders(self) -> AnalysisSettings:
+        k = self.sideband_orders
+        if 0 in k:
+            raise ValueError(f"sideband_orders: order 0 is the excitation itself, not a sideband (got {k})")
+        if len(set(k)) != len(k):
+            raise ValueError(f"sideband_orders: an order given twice (got {k}): give distinct orders")
+        return self
 
 
 class ChannelMap(Strict):
@@ -156,6 +169,10 @@ class ChannelMap(Strict):
             raise ValueError("force: give force (one input) or forces (several, driven in patterns), not both")
         if self.keyphasor is None and self.speed_rpm is None:
             raise ValueError("speed_rpm: required when there is no keyphasor (0 for a shaft at rest)")
+        if self.analysis.sideband_orders and (self.keyphasor is None or self.speed_rpm == 0.0):
+            why = "no keyphasor" if self.keyphasor is None else "speed_rpm is 0 (shaft at rest)"
+            raise ValueError(f"analysis.sideband_orders: sidebands need a rotating shaft with a keyphasor (their "
+                             f"phase is referenced to the shaft angle); here {why}")
         names = self.channel_names()
         dup = sorted({n for n in names if names.count(n) > 1})
         if dup:

@@ -76,7 +76,22 @@ def element_span(report: DetectionReport, element: int | None) -> str:
     return f" (z = {z[element - 1]:.3g}-{z[element]:.3g} m from the first station)"
 
 
+def _sideband_decided(report: DetectionReport) -> bool:
+    """The sideband test called damage and the joint test (if it ran) did not."""
+    sb = report.sideband_test
+    if sb is None or sb.get("verdict") != "damage":
+        return False
+    return report.joint_p_value is None or report.false_alarm is None or report.joint_p_value >= report.false_alarm
+
+
 def _how_sure(report: DetectionReport) -> str:
+    sb = report.sideband_test
+    if sb is not None:
+        p_sb = f"the sideband test's p-value is {fmt_p(sb.get('p_value'))}"
+        if report.joint_statistic is None:
+            return f"{p_sb} against a stated false-alarm rate of {float(sb['false_alarm']):.2g} per sweep"
+        return (f"the joint test's p-value is {fmt_p(report.joint_p_value)} and {p_sb}, each against half the stated "
+                f"false-alarm rate of {2 * float(sb['false_alarm']):.2g} per sweep (Bonferroni)")
     if report.joint_statistic is not None and report.false_alarm is not None:
         return (f"the joint test's p-value is {fmt_p(report.joint_p_value)} against a stated false-alarm rate of "
                 f"{report.false_alarm:.2g} per sweep")
@@ -87,6 +102,9 @@ def _how_sure(report: DetectionReport) -> str:
 
 
 def _rests_on(report: DetectionReport) -> str:
+    if _sideband_decided(report):
+        return ("a healthy rotor is time-invariant (an axisymmetric shaft and supports, no crack when healthy), so "
+                "its tones at f + k x speed are noise; the stated sideband variances are the noise's")
     if report.joint_statistic is not None:
         kappa = report.benign_model_error
         return ("Gaussian noise independent between frequency points with the healthy sweep's variance; benign "
@@ -123,8 +141,11 @@ def conclusion(report: DetectionReport) -> str:
         if element is None and advice and advice.get("best"):
             added = [s for s in advice["best"]["sensors"] if s not in (advice.get("current") or {}).get("sensors", [])]
             nxt = f"add the probes {', '.join(added)} named above and sweep again, or " + nxt
-        return (f"Damage: this sweep differs from the healthy baseline beyond noise and beyond every benign change "
-                f"inside the rig's ranges; {where}. How sure: {sure}. It rests on: {rests}. Next: {nxt}.")
+        what = ("this sweep holds tones at f + k x speed beyond noise, which no benign change of a time-invariant "
+                "rotor makes: a breathing crack's signature" if _sideband_decided(report) else
+                "this sweep differs from the healthy baseline beyond noise and beyond every benign change inside the "
+                "rig's ranges")
+        return f"Damage: {what}; {where}. How sure: {sure}. It rests on: {rests}. Next: {nxt}."
     if verdict == "healthy":
         smallest = ""
         rows = (report.detectability or {}).get("elements", [])  # with the benign ranges: what drift cannot hide
@@ -157,6 +178,14 @@ def method_paragraphs(report: DetectionReport, ranges: Callable[[list[float]], s
     points unexplained after it and certified beyond it, what the sweep could reveal); ``ranges`` writes a list
     of frequencies as ranges."""
     out = [f"Rule: {report.verdict_rule}"]
+    sb = report.sideband_test
+    if sb is not None:
+        out.append(f"Sideband test (orders {', '.join(f'{int(k):+d}' for k in sb['orders'])}): T = "
+                   f"{float(sb['statistic']):.4g}, threshold {float(sb['threshold']):.4g} at false-alarm rate "
+                   f"{float(sb['false_alarm']):.2g} over {sb['n_tones']} separable tones (p = {fmt_p(sb['p_value'])}); "
+                   f"{len(sb['fault_frequencies_hz'])} points certified at the family-wise confidence"
+                   + (f": {ranges(list(sb['fault_frequencies_hz']))}" if sb['fault_frequencies_hz'] else "")
+                   + f". It {sb['assumes']}.")
     if report.joint_statistic is None:
         return out
     learned = report.learned_benign_directions or 0

@@ -147,6 +147,9 @@ class DetectionReport:
     # points on a shaft harmonic (rotorcheck.signal.harmonics): {frequency_hz, order, harmonic_hz, offset_hz,
     # resolution_hz}; status 'excluded', kept out of every certified claim
     shaft_harmonic_points: list[dict[str, Any]] | None = None
+    # the sideband test (a sweep with sidebands f + k x speed): {rule, orders, statistic, threshold, p_value,
+    # false_alarm, n_tones, verdict, fault_frequencies_hz, assumes} (rotorcheck.workflow.detectors.sideband)
+    sideband_test: dict[str, Any] | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """The report.json document (arrays as numpy; :func:`rotorcheck.report.reports.render_json`)."""

@@ -241,6 +241,7 @@ def step_settings(config: RigConfig, keep_periods: bool = True) -> StepSettings:
         output_noise_std=m.output_noise_std,
         input_noise_std=m.input_noise_std,
         keep_periods=keep_periods,
+        sideband_orders=tuple(m.sideband_orders),
     )
 
 
@@ -280,7 +281,8 @@ def simulate_rig(
     band = float(np.max(f)) if f.size else None
     rp = at_shaft_angle(rig_plant(config, speed_rpm, fault, n_harmonics, band), speed_rpm, shaft_angle_rad)
     st = settings if settings is not None else step_settings(config)
-    res = simulate_fast(rp.plant, f, st, rp.disturbances, rng=seed)
+    res = simulate_fast(rp.plant, f, st, rp.disturbances, rng=seed, speed_rpm=speed_rpm,
+                        shaft_angle_rad=shaft_angle_rad)
     what, n_per = _what(fault), _periods(st)
     notes = (f"{what}; seed {seed}; {n_per} periods; noise std {st.output_noise_std} m/sample; "
              f"shaft angle at start {np.degrees(shaft_angle_rad):.6g} deg")
@@ -337,7 +339,7 @@ def simulate_rig_patterns(
         plants = [_turned_plant(p, speed_rpm, shaft_angle_rad) for p in plants]
         dist = _turned_tones(dist, speed_rpm, shaft_angle_rad)
     st = settings if settings is not None else step_settings(config)
-    res = simulate_fast_patterns(plants, f, st, dist, rng=seed)
+    res = simulate_fast_patterns(plants, f, st, dist, rng=seed, speed_rpm=speed_rpm, shaft_angle_rad=shaft_angle_rad)
     what, n_per = _what(fault), _periods(st)
     channels = port_channels(config, actuators, sens)
     notes = (f"{what}; seed {seed}; {len(actuators)} actuators driven one at a time "

@@ -45,11 +45,13 @@ import numpy as np
 
 from rotorcheck.fe.frf import Receptance
 from rotorcheck.signal.lockin import average_periods, tone_lockin, white_noise_phasor_var
+from rotorcheck.signal.sidebands import point_times, tone_design, tone_phasors, tone_set, tone_variance
 from rotorcheck.sweep.format import Channel, Run
 
 __all__ = [
     "PatternSweepResult",
     "Plant",
+    "Sidebands",
     "StepSettings",
     "SteppedSineResult",
     "TimeRecord",
@@ -58,6 +60,7 @@ __all__ = [
     "local_tones",
     "lti_plant",
     "matrix_plant",
+    "measure_sidebands",
     "point_start_times",
     "receptance_plant",
     "receptance_plants",
@@ -110,7 +113,9 @@ class StepSettings:
     noise std per sample; alternatively ``output_phasor_noise_std`` / ``input_phasor_noise_std``:
     ``sqrt(E|n|^2)`` of the per-period phasor noise (overrides the per-sample values);
     ``keep_periods``: keep per-period phasors; ``t_start_s``: absolute start time (s);
-    ``dwell_s``: idle time between points (s; drive off, disturbances and state continue).
+    ``dwell_s``: idle time between points (s; drive off, disturbances and state continue);
+    ``sideband_orders``: the sidebands ``f + k speed`` measured at each point of a rotating run (the least-squares
+    fit of :mod:`rotorcheck.signal.sidebands` on the point's samples; needs ``samples_per_period``).
     """
 
     n_periods: int | Sequence[int] = 64
@@ -125,6 +130,7 @@ class StepSettings:
     keep_periods: bool = False
     t_start_s: float = 0.0
     dwell_s: float = 0.0
+    sideband_orders: tuple[int, ...] = ()
 
 
 @dataclass
@@ -171,6 +177,7 @@ class SteppedSineResult:
     period_input: np.ndarray | None = None
     period_output: np.ndarray | None = None
     records: list[TimeRecord] | None = field(default=None, repr=False)
+    sidebands: Sidebands | None = None
 
     def to_run(
         self,
@@ -189,7 +196,7 @@ class SteppedSineResult:
             pp = np.full((nf, p, len(channels)), np.nan + 1j * np.nan, dtype=np.complex128)
             pp[:, :, ins] = self.period_input
             pp[:, :, outs] = self.period_output
-        return Run.from_phasors(
+        run = Run.from_phasors(
             run_id,
             speed_rpm,
             self.frequency_hz,
@@ -200,6 +207,8 @@ class SteppedSineResult:
             period_phasor=pp,
             notes=notes,
         )
+        sb = self.sidebands
+        return run if sb is None else run.with_sidebands(sb.order, sb.phasor[:, None], sb.var[:, None])
 
 
 # ------------------------------------------------------------------------------------------
@@ -398,11 +407,16 @@ def simulate_fast(
     settings: StepSettings | None = None,
     disturbances: Sequence[Tone] = (),
     rng: np.random.Generator | int | None = 0,
+    speed_rpm: float = 0.0,
+    shaft_angle_rad: float = 0.0,
 ) -> SteppedSineResult:
     """Stepped-sine sweep by the closed-form tone lock-in plus per-period phasor noise.
 
     ``disturbances``: fixed output tones (m) in absolute time, e.g. the 1X/2X synchronous
     responses at ``k * speed_rpm / 60`` Hz. ``rng``: a Generator or a seed (deterministic).
+    With ``settings.sideband_orders`` and ``speed_rpm`` > 0 the sidebands are measured too
+    (:func:`measure_sidebands`; ``shaft_angle_rad`` the shaft angle at t = 0, as the plant was turned),
+    their noise drawn after every other draw (the other results do not change).
     """
     st = settings or StepSettings()
     f = _freqs(frequency_hz)
@@ -423,7 +437,64 @@ def simulate_fast(
         inp, out = _point(plant, fj, force, t0[j], settle[j], int(n[j]), m, d_freq, d_amp, gen, var_in, var_out)
         per_in.append(inp)
         per_out.append(out)
-    return _assemble(f, t0, n, per_in, per_out, st.keep_periods)
+    res = _assemble(f, t0, n, per_in, per_out, st.keep_periods)
+    if st.sideband_orders and speed_rpm != 0.0:
+        forces = np.array([_force(st.force_amplitude, fj) for fj in f])
+        sb = measure_sidebands([plant], f, forces, t0[:, None], settle[:, None], n, st, var_out, d_freq, d_amp,
+                               speed_rpm, shaft_angle_rad, gen)
+        res.sidebands = Sidebands(sb.order, sb.phasor[:, 0], sb.var[:, 0])
+    return res
+
+
+@dataclass(frozen=True)
+class Sidebands:
+    """Measured sidebands: ``order`` (K,), ``phasor`` ((f, K, n_out) or (f, n_exc, K, n_out)) m, shaft-referenced,
+    NaN where not separable; ``var`` the same shape, m^2 (the sweep contract's version 3)."""
+
+    order: np.ndarray
+    phasor: np.ndarray
+    var: np.ndarray
+
+
+def measure_sidebands(plants: Sequence[Plant], f: np.ndarray, forces: np.ndarray, t0: np.ndarray, settle: np.ndarray,
+                      n: np.ndarray, st: StepSettings, var_out: np.ndarray, d_freq: np.ndarray, d_amp: np.ndarray,
+                      speed_rpm: float, shaft_angle_rad: float, gen: np.random.Generator) -> Sidebands:
+    """The sidebands ``settings.sideband_orders`` of every point (f,) and pattern (one plant each; ``t0`` (f, n_exc)
+    s the points' start times, ``settle`` (f, n_exc) and ``n`` (f,) their periods), as the least-squares fit of
+    :mod:`rotorcheck.signal.sidebands` reads them from the point's samples: the fit of the noise-free tones
+    (the plant's, scaled by ``forces`` (f,), and the disturbances) plus Gaussian noise with the fit's exact
+    covariance (white noise, ``var_out`` the per-period phasor variance ``4 sigma^2 / M``), drawn from ``gen``;
+    the noise is drawn apart from the lock-in's (the two are uncorrelated for tones apart by more than the
+    resolution)."""
+    m = st.samples_per_period
+    if m is None:
+        raise ValueError("sidebands are read from the samples: give samples_per_period")
+    orders = [int(k) for k in st.sideband_orders]
+    shaft_hz = abs(speed_rpm) / 60.0
+    nf, ne, kk, n_out = f.size, len(plants), len(orders), plants[0].n_out
+    sigma2 = np.asarray(var_out, dtype=float) * m / 4.0  # per-sample noise variance (n_out,)
+    phasor = np.full((nf, ne, kk, n_out), np.nan + 1j * np.nan)
+    var = np.full((nf, ne, kk, n_out), np.nan)
+    for j, fj in enumerate(f):
+        tones = tone_set(float(fj), shaft_hz, orders, float(fj) / float(n[j]))
+        for e, plant in enumerate(plants):
+            tau = point_times(float(fj), int(settle[j, e]), int(n[j]), m)
+            freqs, amps = local_tones(plant, float(fj), complex(forces[j]), float(t0[j, e]), d_freq, d_amp)
+            clean = np.real(np.exp(2j * np.pi * np.outer(tau, freqs)) @ amps)  # (samples, n_out)
+            x = tone_design(tau, tones.freq_hz)
+            cov = np.linalg.inv(x.T @ x)
+            coef = cov @ (x.T @ clean)
+            z = gen.standard_normal((x.shape[1], n_out)) * np.sqrt(sigma2)[None, :]
+            amp = tone_phasors(coef + np.linalg.cholesky(cov) @ z, tones)
+            dvar = tone_variance(cov, tones)
+            theta = shaft_angle_rad + 2.0 * np.pi * shaft_hz * float(t0[j, e])
+            for i, k in enumerate(orders):
+                idx = tones.requested[k]
+                if idx < 0:
+                    continue
+                phasor[j, e, i] = amp[idx] * np.exp(-1j * k * theta)
+                var[j, e, i] = dvar[idx] * sigma2
+    return Sidebands(np.asarray(orders, dtype=np.int32), phasor, var)
 
 
 def disturbance_arrays(disturbances: Sequence[Tone], n_out: int) -> tuple[np.ndarray, np.ndarray]:
@@ -503,6 +574,7 @@ class PatternSweepResult:
     t0_s: np.ndarray
     period_input: np.ndarray | None = None
     period_output: np.ndarray | None = None
+    sidebands: Sidebands | None = None
 
     def to_run(
         self,
@@ -522,7 +594,7 @@ class PatternSweepResult:
             pp = np.full((nf, ne, p, len(channels)), np.nan + 1j * np.nan, dtype=np.complex128)
             pp[..., ins] = self.period_input
             pp[..., outs] = self.period_output
-        return Run.from_patterns(
+        run = Run.from_patterns(
             run_id,
             speed_rpm,
             self.frequency_hz,
@@ -534,6 +606,8 @@ class PatternSweepResult:
             period_phasor=pp,
             notes=notes,
         )
+        sb = self.sidebands
+        return run if sb is None else run.with_sidebands(sb.order, sb.phasor, sb.var)
 
 
 def simulate_fast_patterns(
@@ -542,6 +616,8 @@ def simulate_fast_patterns(
     settings: StepSettings | None = None,
     disturbances: Sequence[Tone] = (),
     rng: np.random.Generator | int | None = 0,
+    speed_rpm: float = 0.0,
+    shaft_angle_rad: float = 0.0,
 ) -> PatternSweepResult:
     """Stepped-sine sweep with several inputs driven one at a time (:func:`simulate_fast` per point).
 
@@ -551,7 +627,7 @@ def simulate_fast_patterns(
     and ``n_periods`` periods on the shared timeline (frequency-major; ``settings.n_periods`` per
     frequency applies to every pattern). Disturbances, noise and lock-in as in
     :func:`simulate_fast`; input noise on the driven input only. ``rng``: a Generator or a seed;
-    draws in the order point by point (input noise, then output noise).
+    draws in the order point by point (input noise, then output noise); sidebands as :func:`simulate_fast`.
     """
     if len(plants) == 0:
         raise ValueError("no plants (one per input)")
@@ -592,6 +668,11 @@ def simulate_fast_patterns(
             if pin is not None and pout is not None:
                 pin[j, e, :nj] = full_in
                 pout[j, e, :nj] = out
+    sidebands = None
+    if st.sideband_orders and speed_rpm != 0.0:
+        forces = np.array([_force(st.force_amplitude, fj) for fj in f])
+        sidebands = measure_sidebands(plants, f, forces, t0.reshape(nf, ne), settle.reshape(nf, ne), n, st, var_out,
+                                      d_freq, d_amp, speed_rpm, shaft_angle_rad, gen)
     return PatternSweepResult(
         frequency_hz=f,
         input_phasor=mi,
@@ -602,4 +683,5 @@ def simulate_fast_patterns(
         t0_s=t0.reshape(nf, ne),
         period_input=pin,
         period_output=pout,
+        sidebands=sidebands,
     )

@@ -7,8 +7,8 @@ its local time (:func:`rotorcheck.sim.simulator.local_tones`), the force ``Re{F 
 rig adds is modelled too: a sample clock not locked to the excitation (``fs_hz``), probes recorded in
 volts (``sensitivity_v_per_m``) with a DC offset and a slow linear drift, an actuator current (A =
 N / ``gain_n_per_a``) when asked, and a keyphasor: a pulse per revolution whose rising edge (a linear
-ramp over a few samples) is at shaft angle 0 (shaft angle ``theta0 + Omega t``, as
-:func:`rotorcheck.sim.rig_sim.at_shaft_angle`). Seeded, deterministic.
+ramp over a few samples, centred: its mid-level crossing) is at shaft angle 0 (shaft angle
+``theta0 + 2 pi Omega t``, as :func:`rotorcheck.sim.rig_sim.at_shaft_angle`). Seeded, deterministic.
 
 Writers: :func:`write_record` (mat v5, mat v7.3, TDMS, WAV, CSV, UFF58 type 1, HDF5, Parquet when pyarrow is
 installed) and :func:`channel_map_dict` (the matching channel map, with the exact step table).
@@ -87,12 +87,15 @@ class SimulatedRecord:
 
 
 def _keyphasor(t: np.ndarray, speed_rpm: float, theta0: float, spec: RecordSpec) -> np.ndarray:
-    """Pulse train (V): high from angle 0 (a ramp of ``kp_ramp_samples`` samples) for ``kp_width`` of a turn."""
+    """Pulse train (V): high for ``kp_width`` of a turn, its rising edge a ramp of ``kp_ramp_samples`` samples
+    centred on shaft angle 0 (so that a crossing of the mid-level, where a keyphasor reader marks the pulse, is
+    at angle 0)."""
     if speed_rpm == 0.0:
         return np.zeros(t.size)
     om = 2.0 * np.pi * speed_rpm / 60.0
-    frac = np.mod((theta0 + om * t) / (2.0 * np.pi), 1.0)
     ramp = spec.kp_ramp_samples * om / (2.0 * np.pi * spec.fs_hz)  # a turn's fraction per ramp
+    # the turn's fraction from half a ramp before angle 0
+    frac = np.mod((theta0 + om * t) / (2.0 * np.pi) + 0.5 * ramp, 1.0)
     up = np.clip(frac / ramp, 0.0, 1.0)
     down = np.clip((spec.kp_width - frac) / ramp, 0.0, 1.0)
     return spec.kp_high_v * np.minimum(up, down)

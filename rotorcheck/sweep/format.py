@@ -1,4 +1,5 @@
-"""The HDF5 sweep file, versions 1 and 2 (``/work/shared/spec/sweep-format.md``): the data model.
+"""The HDF5 sweep file, versions 1, 2 and 3 (``/work/shared/spec/sweep-format.md``; version 3 in
+``docs/sweep-format-v3.md``): the data model.
 
 Layout (the contract)::
 
@@ -16,11 +17,26 @@ Layout (the contract)::
                       [, input_var (f, n_exc, n_in) N^2] [, period_phasor (f, n_exc, p, n_chan)];
                       frf (f, n_out, n_in) = Y X^+ [, frf_var (f, n_out, n_in) (m/N)^2].
                       An FRF-only run holds frequency, frf [, frf_var] and the attr noise_source.
+                      version 3: version 2 plus, on a run with phasors, the three datasets
+                      sideband_order (K) int32, sideband_phasor (f, n_exc, K, n_out) complex128 m and
+                      sideband_var (f, n_exc, K, n_out) float64 m^2 (all or none): the output tone
+                      at f + k speed/60 of each pattern, referenced to the shaft (below).
 
 Column conventions: the ``i``-th column of ``input_phasor`` is the ``i``-th channel of role
 ``"input"`` in channel-table order (likewise outputs); in version 1 ``frf[:, o, i] =
 output_phasor[:, o] / input_phasor[:, i]``; the last axis of ``period_phasor`` follows the full
 channel table, rows past ``n_periods`` are NaN.
+
+Sidebands (version 3). ``sideband_phasor[j, e, i, o]`` is output ``o``'s tone at ``f_j + k_i n / 60`` Hz
+(``k_i = sideband_order[i]``, a nonzero integer; n the run's speed, rpm; a negative frequency is the
+tone at ``|f_j + k_i n / 60|`` with the conjugate phasor) while pattern ``e`` drives at ``f_j``, in the
+point's local time (the excitation's phasor convention) times ``exp(-j k_i theta_j)``, ``theta_j`` the
+shaft angle (rad, key-phasor mark = 0) at the point's time origin: so referenced, a linear
+time-periodic rotor gives the same phasor whatever angle the shaft had when the point began.
+``sideband_var`` is the variance of that estimate (``E|dS|^2``). A tone that the record cannot
+separate from another one it holds (the excitation, another sideband, a shaft harmonic k n / 60,
+k = 1 .. 4: closer than the resolution ``f / N``) is NaN in both. A time-invariant rotor has no
+sidebands: their phasors are noise.
 
 The in-memory :class:`Run` (one data model for both versions)
 ----------------------------------------------------------------
@@ -40,6 +56,10 @@ attribute              shape                     meaning
 ``n_periods_exc``      (f, n_exc) or None        periods averaged
 ``period_phasor_exc``  (f, n_exc, p, n_chan)     optional per-period phasors (NaN padded)
 ``noise_source``       str or None               FRF-only runs: "measured" | "assumed: <rule>"
+``sideband_order``     (K,) int or None          version 3: the orders k of the sidebands
+``sideband_phasor_exc`` (f, n_exc, K, n_out)     m, shaft-referenced tone at f + k n/60 (NaN: not
+                                                 separable)
+``sideband_var_exc``   (f, n_exc, K, n_out)      m^2, its variance
 =====================  ========================  ======================================
 
 The phasor arrays are all ``None`` for an FRF-only run (:attr:`Run.is_frf_only`). A version-1 run is
@@ -73,10 +93,12 @@ SCHEMA = "rotorcheck.sweep"
 SCHEMA_VERSION_V1 = 1
 #: the version-2 layout (pattern axis, FRF-only runs)
 SCHEMA_VERSION_V2 = 2
+#: the version-3 layout (version 2 and the shaft-referenced sidebands of a rotating run)
+SCHEMA_VERSION_V3 = 3
 #: the newest version this package reads and writes
-SCHEMA_VERSION = SCHEMA_VERSION_V2
+SCHEMA_VERSION = SCHEMA_VERSION_V3
 #: versions the reader knows
-SCHEMA_VERSIONS = (SCHEMA_VERSION_V1, SCHEMA_VERSION_V2)
+SCHEMA_VERSIONS = (SCHEMA_VERSION_V1, SCHEMA_VERSION_V2, SCHEMA_VERSION_V3)
 EXCITATION = "stepped_sine"
 PHASOR_CONVENTION = "x(t) = Re{X exp(j 2 pi f t)}, peak"
 SOURCES = ("simulated", "measured")
@@ -89,6 +111,9 @@ CHANNEL_FIELDS = ("name", "role", "node", "direction", "quantity", "unit")
 RUN_DATASETS = ("frequency", "input_phasor", "output_phasor", "output_var", "n_periods", "frf")
 #: optional datasets of a version-2 run
 RUN_OPTIONAL_V2 = ("input_var", "frf_var", "period_phasor")
+#: the optional datasets of a version-3 run (all three or none) and the :class:`Run` attributes holding them
+SIDEBAND_ATTRS = {"sideband_order": "sideband_order", "sideband_phasor": "sideband_phasor_exc",
+                  "sideband_var": "sideband_var_exc"}
 #: required datasets of a version-2 FRF-only run (``frf_var`` optional)
 FRF_ONLY_DATASETS = ("frequency", "frf")
 #: the phasor datasets (file names) and the :class:`Run` attributes holding them with the pattern axis
@@ -208,6 +233,9 @@ class Run:
     noise_source: str | None = None
     notes: str = ""
     origin: str = field(default="<memory>", repr=False, compare=False)
+    sideband_order: np.ndarray | None = None
+    sideband_phasor_exc: np.ndarray | None = None
+    sideband_var_exc: np.ndarray | None = None
 
     # ---------------------------------------------------------------- constructors
 
@@ -388,6 +416,31 @@ class Run:
         return (self.is_frf_only or self.n_exc != 1 or self.input_var_exc is not None
                 or self.frf_var is not None or self.noise_source is not None)
 
+    @property
+    def has_sidebands(self) -> bool:
+        """True when the run holds sideband phasors (version 3)."""
+        return self.sideband_order is not None and self.sideband_phasor_exc is not None
+
+    def with_sidebands(self, order: np.ndarray, phasor_exc: np.ndarray, var_exc: np.ndarray) -> Run:
+        """This run (the same object) holding the sidebands ``order`` (K,), ``phasor_exc`` (f, n_exc, K, n_out) m
+        and ``var_exc`` m^2 (module docstring: shaft-referenced, NaN where not separable)."""
+        self.sideband_order = np.asarray(order, dtype=np.int32).reshape(-1)
+        self.sideband_phasor_exc = np.asarray(phasor_exc, dtype=np.complex128)
+        self.sideband_var_exc = np.asarray(var_exc, dtype=np.float64)
+        return self
+
+    def sideband_frf(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """The sideband receptances ``S_k = Y_k X^+`` (f, K, n_out, n_in) m/N and their variances (m/N)^2
+        (:func:`ls_frf`, :func:`ls_frf_var` per order, the input phasors at ``f``), None without sidebands."""
+        if not self.has_sidebands or self.input_phasor_exc is None:
+            return None
+        assert self.sideband_phasor_exc is not None and self.sideband_var_exc is not None
+        y = np.asarray(self.sideband_phasor_exc)
+        v = np.asarray(self.sideband_var_exc)
+        frf = np.stack([ls_frf(self.input_phasor_exc, y[:, :, k]) for k in range(y.shape[2])], axis=1)
+        var = np.stack([ls_frf_var(self.input_phasor_exc, v[:, :, k]) for k in range(v.shape[2])], axis=1)
+        return frf, var
+
     def frf_variance(self) -> np.ndarray | None:
         """``frf_var`` if stored, else propagated from the phasors (:func:`ls_frf_var`; for one
         pattern ``output_var / |input_phasor|^2``), else None (FRF-only without variance)."""
@@ -479,7 +532,10 @@ class Run:
 
 
 def sweep_schema_version(sweep: Sweep) -> int:
-    """The version a writer uses: 2 where any run needs it (:attr:`Run.needs_v2`), else 1."""
+    """The version a writer uses: 3 where any run holds sidebands, 2 where any run needs it (:attr:`Run.needs_v2`),
+    else 1."""
+    if any(getattr(r, a) is not None for r in sweep.runs.values() for a in SIDEBAND_ATTRS.values()):
+        return SCHEMA_VERSION_V3
     return SCHEMA_VERSION_V2 if any(r.needs_v2 for r in sweep.runs.values()) else SCHEMA_VERSION_V1
 
 
@@ -580,6 +636,8 @@ __all__ = [
     "SCHEMA_VERSIONS",
     "SCHEMA_VERSION_V1",
     "SCHEMA_VERSION_V2",
+    "SCHEMA_VERSION_V3",
+    "SIDEBAND_ATTRS",
     "SOURCES",
     "Channel",
     "FrfTable",

@@ -48,6 +48,7 @@ from rotorcheck.sweep.format import (
     SCHEMA,
     SCHEMA_VERSION_V1,
     SCHEMA_VERSIONS,
+    SIDEBAND_ATTRS,
     Channel,
     Run,
     Sweep,
@@ -184,7 +185,7 @@ def _read_run_v2(file: str, g: h5py.Group, where: str, run_id: str, speed: Any, 
     noise = None
     if "noise_source" in g.attrs:
         noise = check_text(file, f"{where}@noise_source", _attr(file, g, "noise_source", where), "noise_source")
-    names = (*RUN_DATASETS, *RUN_OPTIONAL_V2)
+    names = (*RUN_DATASETS, *RUN_OPTIONAL_V2, *SIDEBAND_ATTRS)
     data = {name: _read_ds(file, g, name, where) for name in names if name in g}
     if "frequency" not in data:
         raise SweepFormatError(file, f"{where}/frequency", "missing dataset")
@@ -200,6 +201,7 @@ def _read_run_v2(file: str, g: h5py.Group, where: str, run_id: str, speed: Any, 
         notes=notes,
         origin=file,
         **{PATTERN_ATTRS[n]: data.get(n) for n in PATTERN_ATTRS},
+        **{SIDEBAND_ATTRS[n]: data.get(n) for n in SIDEBAND_ATTRS},
     )
 
 
@@ -419,6 +421,9 @@ DATASET_UNITS = {
     "frf": "m/N",
     "frf_var": "m^2/N^2",
     "period_phasor": "N (input channels), m (output channels)",
+    "sideband_order": "1",
+    "sideband_phasor": "m",
+    "sideband_var": "m^2",
 }
 #: the axes after ``frequency`` of each run dataset (``pattern``/``period`` get their length appended);
 #: in version 2 the phasor datasets (:data:`PATTERN_ATTRS`) have ``pattern`` first
@@ -431,6 +436,8 @@ _AXES = {
     "frf": ("output", "input"),
     "frf_var": ("output", "input"),
     "period_phasor": ("period", "channel"),
+    "sideband_phasor": ("pattern", "order", "output"),
+    "sideband_var": ("pattern", "order", "output"),
 }
 #: ``long_name`` of the channel-name coordinates
 _LABEL_NAMES = {"channel": "channel name (/channels/name)", "input": "input channel name (force, N)",
@@ -449,6 +456,8 @@ def _label_for_netcdf(h5: h5py.File, version: int, channels: list[Channel]) -> N
     for g in h5["runs"].values():
         local = Dimensions(g)
         freq = local.coordinate(g["frequency"], DATASET_UNITS["frequency"])
+        if "sideband_order" in g:  # the order axis's coordinate (version 3)
+            order = local.coordinate(g["sideband_order"], DATASET_UNITS["sideband_order"])
         for name, axes in _AXES.items():
             if name not in g:
                 continue
@@ -458,6 +467,8 @@ def _label_for_netcdf(h5: h5py.File, version: int, channels: list[Channel]) -> N
             for axis, dname in enumerate(dims, start=1):
                 if dname in names:
                     scales.append(local.labels(dname, names[dname], {"long_name": _LABEL_NAMES[dname]}))
+                elif dname == "order":
+                    scales.append(order)
                 else:  # the pattern and period axes: lengths per run, shared by the file's runs at the root
                     scales.append(root.plain(dname, int(ds.shape[axis]), suffix=True))
             attach(ds, scales, DATASET_UNITS[name])
@@ -533,6 +544,9 @@ def _write_run_v2(g: h5py.Group, run: Run) -> None:
         ("frf", run.frf, np.complex128),
         ("frf_var", run.frf_var, np.float64),
         ("period_phasor", run.period_phasor_exc, np.complex128),
+        ("sideband_order", run.sideband_order, np.int32),
+        ("sideband_phasor", run.sideband_phasor_exc, np.complex128),
+        ("sideband_var", run.sideband_var_exc, np.float64),
     )
     for name, a, dt in arrays:
         if a is not None:

@@ -25,6 +25,8 @@ from rotorcheck.sweep.format import (
     RUN_DATASETS,
     SCHEMA_VERSION_V1,
     SCHEMA_VERSION_V2,
+    SCHEMA_VERSION_V3,
+    SIDEBAND_ATTRS,
     SOURCES,
     Channel,
     Run,
@@ -180,7 +182,8 @@ def validate_run(
     """
     base = f"/runs/{run.run_id}"
     if version is None:
-        version = SCHEMA_VERSION_V2 if run.needs_v2 else SCHEMA_VERSION_V1
+        has_sb = any(getattr(run, a) is not None for a in SIDEBAND_ATTRS.values())
+        version = SCHEMA_VERSION_V3 if has_sb else SCHEMA_VERSION_V2 if run.needs_v2 else SCHEMA_VERSION_V1
     v1 = version == SCHEMA_VERSION_V1
     if not isinstance(run.run_id, str) or not _RUN_ID.match(run.run_id):
         raise SweepFormatError(
@@ -321,6 +324,7 @@ def validate_run(
             raise SweepFormatError(
                 file, f"{base}/{name}", f"negative variance {float(var[idx]):.9g} at index {show(name, idx)}"
             )
+    _validate_sidebands(file, base, run, version, frf_only, nf, n_exc, n_out, exact_dtypes)
     if frf_only:
         return
     nper = arrays["n_periods"]
@@ -346,6 +350,57 @@ def validate_run(
         _validate_periods(
             file, base, np.asarray(pp), arrays, n_chan, channels, exact_dtypes, period_rtol, v1
         )
+
+
+def _validate_sidebands(file: str, base: str, run: Run, version: int, frf_only: bool, nf: int, n_exc: int,
+                        n_out: int, exact_dtypes: bool) -> None:
+    """The version-3 sidebands: all three datasets or none, on a run with phasors; ``sideband_order`` (K,) distinct
+    nonzero integers; ``sideband_phasor`` and ``sideband_var`` (f, n_exc, K, n_out), NaN at the same places (a tone
+    not separable), the variances > 0 elsewhere."""
+    given = {name: getattr(run, attr) for name, attr in SIDEBAND_ATTRS.items()}
+    have = [name for name, a in given.items() if a is not None]
+    if not have:
+        return
+    if version < SCHEMA_VERSION_V3:
+        raise SweepFormatError(file, f"{base}/{have[0]}", f"not part of schema_version {version} (needs version 3)")
+    if frf_only:
+        raise SweepFormatError(file, f"{base}/{have[0]}", "an FRF-only run (no input/output phasors) cannot hold it")
+    for name, a in given.items():
+        if a is None:
+            raise SweepFormatError(file, f"{base}/{name}", f"missing dataset (the sidebands need all of "
+                                   f"{', '.join(SIDEBAND_ATTRS)})")
+    kinds = {"sideband_order": (np.int32, "iu"), "sideband_phasor": (np.complex128, "c"),
+             "sideband_var": (np.float64, "f")}
+    arr = {name: np.asarray(a) for name, a in given.items()}
+    for name, (dt, ok_kinds) in kinds.items():
+        a = arr[name]
+        if (exact_dtypes and a.dtype != dt) or a.dtype.kind not in ok_kinds:
+            raise SweepFormatError(file, f"{base}/{name}", f"wrong dtype {dtype_name(a)}, expected {np.dtype(dt)}")
+    order = arr["sideband_order"]
+    if order.ndim != 1 or order.size < 1:
+        raise SweepFormatError(file, f"{base}/sideband_order", f"wrong shape {order.shape}, expected (K,) with K >= 1")
+    if np.any(order == 0) or np.unique(order).size != order.size:
+        raise SweepFormatError(file, f"{base}/sideband_order",
+                               f"orders must be distinct nonzero integers, got {order.tolist()}")
+    if run.speed_rpm == 0:
+        raise SweepFormatError(file, f"{base}/sideband_order", "a run at standstill (speed_rpm 0) has no sidebands")
+    shp = (nf, n_exc, order.size, n_out)
+    for name in ("sideband_phasor", "sideband_var"):
+        if arr[name].shape != shp:
+            raise SweepFormatError(file, f"{base}/{name}", f"wrong shape {arr[name].shape}, expected {shp} "
+                                   f"(f={nf}, n_exc={n_exc}, K={order.size} from sideband_order, n_out={n_out})")
+    ph, var = arr["sideband_phasor"], arr["sideband_var"]
+    nan_ph, nan_var = np.isnan(ph), np.isnan(var)
+    if np.any(nan_ph != nan_var):
+        idx = tuple(int(v) for v in np.argwhere(nan_ph != nan_var)[0])
+        raise SweepFormatError(file, f"{base}/sideband_var", f"NaN in one of sideband_phasor and sideband_var but "
+                               f"not the other at index {idx} (NaN in both marks a tone that was not separable)")
+    bad = ~nan_var & ~(np.isfinite(var) & (var > 0))
+    bad |= ~nan_ph & ~np.isfinite(ph)
+    if np.any(bad):
+        idx = tuple(int(v) for v in np.argwhere(bad)[0])
+        raise SweepFormatError(file, f"{base}/sideband_var", f"a sideband at index {idx} has phasor {ph[idx]} and "
+                               f"variance {var[idx]}: the variance must be > 0 and both finite (or both NaN)")
 
 
 def _check_frf_v1(

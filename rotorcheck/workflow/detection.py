@@ -28,6 +28,7 @@ from rotorcheck.workflow.benign import benign_table
 from rotorcheck.workflow.detectors import Detection, DetectorSettings, make_detector
 from rotorcheck.workflow.detectors.base import HARMONICS_KEPT_OUT
 from rotorcheck.workflow.detectors.joint import joint_pairs
+from rotorcheck.workflow.detectors.sideband import sideband_false_alarm
 from rotorcheck.workflow.directional import DirectionalDamage, damage_per_direction
 from rotorcheck.workflow.locating import locate_damage
 from rotorcheck.workflow.measured import (
@@ -289,6 +290,16 @@ class DetectionOutcome:
                         "witness_im": [dxy.bound.im_inner[:, k, 0], dxy.bound.im_inner[:, k, 1]],
                         "bound_confidence": m.confidence if m is not None else None})}
                 for k, d in enumerate("xy")}
+        sb = self.found.sideband if self.found.detector != "sideband" else self.found
+        sbf = self.run.sidebands
+        if sb is not None and sb.statistic is not None and sb.threshold is not None and sbf is not None:
+            n_tones = int(np.sum(np.isfinite(sbf.frf) & np.isfinite(sbf.var)))
+            rep.sideband_test = {
+                "rule": sb.rule, "orders": [int(k) for k in sbf.order], "statistic": sb.statistic,
+                "threshold": sb.threshold, "p_value": sb.p_value, "n_tones": n_tones,
+                "false_alarm": sideband_false_alarm(sb.threshold, n_tones),  # the rate its threshold was set at
+                "verdict": sb.verdict.verdict, "fault_frequencies_hz": [float(x) for x in sb.frequency_hz[sb.fault]],
+                "assumes": sb.notes[-1] if sb.notes else ""}
         c = self.beyond_benign
         if c is not None:
             rep.beyond_benign_rule, rep.beyond_benign_status = c.rule, [str(x) for x in c.status]

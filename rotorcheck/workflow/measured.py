@@ -28,6 +28,30 @@ from rotorcheck.workflow.frf import MeasuredFRF
 from rotorcheck.workflow.rigs import rig_for
 
 
+@dataclass(frozen=True)
+class SidebandFRF:
+    """A run's sideband receptances (sweep contract version 3), in band, per channel pair: ``frequency_hz`` (f,)
+    the excitation frequencies (the run's own grid, kept when the run is resampled); ``order`` (K,) the orders k of
+    the tones at ``f + k speed / 60``; ``frf`` (f, K, P) m/N, shaft-referenced, NaN where the record could not
+    separate the tone; ``var`` (f, K, P) (m/N)^2 its variance."""
+
+    frequency_hz: np.ndarray
+    order: np.ndarray
+    frf: np.ndarray
+    var: np.ndarray
+
+
+def _sidebands(run: Any, cols: list[tuple[int, int]], keep: np.ndarray) -> SidebandFRF | None:
+    """The run's sideband receptances for the pairs ``cols`` at the points ``keep`` (None without sidebands)."""
+    sb = run.sideband_frf()
+    if sb is None:
+        return None
+    frf, var = sb  # (f, K, n_out, n_in)
+    return SidebandFRF(np.asarray(run.frequency)[keep], np.asarray(run.sideband_order),
+                       np.stack([frf[:, :, o, i] for o, i in cols], axis=2)[keep],
+                       np.stack([var[:, :, o, i] for o, i in cols], axis=2)[keep])
+
+
 @dataclass
 class MeasuredRun:
     """One run of a sweep file restricted to the rig's analysis band (SISO: actuator -> sensor)."""
@@ -55,6 +79,7 @@ class MeasuredRun:
     dof_pairs: np.ndarray | None = None
     noise_source: str = ""  # an FRF-only run: where its variance came from ("measured" | "assumed: ...")
     resampled_from: int = 0  # points of the file's grid when interpolated onto another grid (0: not)
+    sidebands: SidebandFRF | None = None  # the sideband receptances where the sweep holds them (version 3)
 
     @property
     def n_pairs(self) -> int:
@@ -161,6 +186,7 @@ def measured_run(sweep: Sweep, config: RigConfig, run_id: str | None = None, pat
         frequency_hz=f[keep], W=W[keep], Zt=Z[keep],
         output_var=var[keep], n_periods=run.n_periods[keep], band_hz=(lo, hi),
         n_dropped=int(np.count_nonzero(~keep)), dof=dof[keep], harmonics_removed=removed, pairs=tuple(pairs),
+        sidebands=_sidebands(run, cols, keep),
     )
 
 
@@ -260,7 +286,7 @@ def _multi_pair_run(sweep: Any, run: Any, pairs: list[Any], cols: list[tuple[int
         frequency_hz=f[keep], W=X[rows, e0, i0][keep], Zt=(frf[:, 0] * X[rows, e0, i0][keep]),
         output_var=var[:, 0] * np.abs(X[rows, e0, i0][keep]) ** 2, n_periods=n_per[rows, e0][keep], band_hz=band,
         n_dropped=int(np.count_nonzero(~keep)), dof=dof[:, 0], harmonics_removed=removed, pairs=tuple(pairs),
-        frf_pairs=frf, var_pairs=var, dof_pairs=dof,
+        frf_pairs=frf, var_pairs=var, dof_pairs=dof, sidebands=_sidebands(run, cols, keep),
     )
 
 

@@ -170,8 +170,8 @@ def test_frf_inconsistent(sweep_file: Path) -> None:
 
 def test_unknown_schema_version(sweep_file: Path) -> None:
     with h5py.File(sweep_file, "r+") as h5:
-        h5.attrs["schema_version"] = np.int32(3)
-    _refused(sweep_file, "/@schema_version", r"unknown schema_version 3 \(this reader knows 1, 2\)")
+        h5.attrs["schema_version"] = np.int32(4)
+    _refused(sweep_file, "/@schema_version", r"unknown schema_version 4 \(this reader knows 1, 2, 3\)")
 
 
 def test_version_1_layout_under_schema_version_2(sweep_file: Path) -> None:

@@ -4,6 +4,7 @@
 - :mod:`~rotorcheck.workflow.detectors.certified`: per-point certified test against the measured healthy FRF.
 - :mod:`~rotorcheck.workflow.detectors.joint`: the joint GLR with benign change as bounded nuisance.
 - :mod:`~rotorcheck.workflow.detectors.enclosure`: the model-centred tests (``system``, ``data``).
+- :mod:`~rotorcheck.workflow.detectors.sideband`: a breathing crack's sidebands f + k x speed against noise.
 - :mod:`~rotorcheck.workflow.detectors.registry`: :data:`DETECTORS` by ``--rule`` name, :func:`make_detector`.
 """
 

@@ -48,7 +48,8 @@ class Detection:
     per-point rule without a sweep statistic); ``points``: the per-point evidence over the f points
     (``gamma_required``, ``gamma_healthy``, ``fault``, ``status``); ``ratio`` (f,): the statistic that decided
     per point, against a threshold of 1; ``notes``: what the reader must know. The detector's own results
-    stay typed beside it (``measured``, ``joint``, ``beyond_benign``).
+    stay typed beside it (``measured``, ``joint``, ``beyond_benign``; ``sideband``: the sideband test's own detection
+    where it ran beside the joint test).
     """
 
     detector: str
@@ -66,6 +67,7 @@ class Detection:
     joint: JointResult | None = None
     beyond_benign: BoxCertificate | None = None
     harmonics: ShaftHarmonics | None = None  # points on a shaft harmonic: status 'excluded', in no claim
+    sideband: Detection | None = None  # the sideband test beside the joint test (a sweep with sidebands)
 
     @property
     def fault(self) -> np.ndarray:

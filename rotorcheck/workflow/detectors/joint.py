@@ -4,10 +4,16 @@ re-solved at the parameters, with a model-error allowance), a crack signature pe
 alternative (:mod:`rotorcheck.robust.joint`). The per-point certified test runs first and stays as where in
 frequency the data depart; each point is also certified beyond every benign change where it can be
 (:func:`rotorcheck.workflow.benign.certify_beyond_benign`).
+
+A rotating sweep that holds sidebands (version 3) is also tested for them
+(:mod:`rotorcheck.workflow.detectors.sideband`: a breathing crack's tones at f + k x speed, which no benign
+change makes): the false-alarm rate is split in half between the two tests (Bonferroni: together at most the
+stated rate) and either one's damage verdict is the sweep's.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from typing import ClassVar
 
 import numpy as np
@@ -20,6 +26,7 @@ from rotorcheck.variability import benign_parameters
 from rotorcheck.workflow.benign import anchored_pairs, certify_beyond_benign, joint_detection
 from rotorcheck.workflow.detectors.base import Detection, DetectorSettings
 from rotorcheck.workflow.detectors.certified import CertifiedDetector
+from rotorcheck.workflow.detectors.sideband import SidebandDetector
 from rotorcheck.workflow.measured import MeasuredRun
 from rotorcheck.workflow.rigs import baseline_rig
 
@@ -111,13 +118,26 @@ class JointDetector:
             found.notes.append(note)
         if b.drift.range_shift is not None:
             found.notes.append(learned_ranges_note(rig, b))
+        with_sidebands = run.sidebands is not None and run.speed_rpm != 0.0
+        alpha = self.settings.false_alarm / (2.0 if with_sidebands else 1.0)
         # a baseline of an earlier version that learned drift on the model re-solved is tested so
-        joint = joint_detection(rig, th, var, run, kappa, learned_directions(b), self.settings.false_alarm,
+        joint = joint_detection(rig, th, var, run, kappa, learned_directions(b), alpha,
                                 b.speed_rpm, b.benign_correction, exclude=out, modal=b.drift.on_anchor)
         found.detector, found.rule, found.joint = self.name, JOINT_RULE, joint
         found.verdict = joint_verdict(joint, found.verdict)
         found.statistic, found.threshold, found.p_value = joint.statistic, joint.threshold, joint.p_value
         found.notes.extend(joint.notes)
+        if with_sidebands:
+            sb = SidebandDetector(dataclasses.replace(self.settings, false_alarm=alpha)).detect(run)
+            found.sideband = sb
+            found.rule = (f"{JOINT_RULE}; or {sb.rule} (each at half the false-alarm rate "
+                          f"{self.settings.false_alarm:g}: Bonferroni)")
+            if sb.verdict.verdict == "damage" and found.verdict.verdict != "damage":
+                v = found.verdict
+                found.verdict = Verdict("damage", f"sideband test: {sb.verdict.reason}; {v.reason}", v.n_points,
+                                        v.n_fault, v.n_undecided, v.longest_run, v.threshold)
+            else:
+                found.notes.append(f"sideband test: {sb.verdict.reason}")
         if self.settings.verdict_only:
             return found
         certified = certify_beyond_benign(rig, th, var, run, joint, b.speed_rpm, exclude=out)

@@ -13,10 +13,11 @@ from rotorcheck.workflow.detectors.base import Detector, DetectorSettings
 from rotorcheck.workflow.detectors.certified import CertifiedDetector
 from rotorcheck.workflow.detectors.enclosure import DataEnclosure, SystemEnclosure
 from rotorcheck.workflow.detectors.joint import JointDetector
+from rotorcheck.workflow.detectors.sideband import SidebandDetector
 
 #: every detector by its ``--rule`` name
 DETECTORS: dict[str, type[Detector]] = {d.name: d for d in (JointDetector, CertifiedDetector, SystemEnclosure,
-                                                            DataEnclosure)}
+                                                            DataEnclosure, SidebandDetector)}
 #: the ``--rule`` choices
 RULES = tuple(DETECTORS)
 
