@@ -7,8 +7,11 @@ the samples' 262-point grid (the least-squares fit of :mod:`rotorcheck.signal.si
 neither the model nor a healthy sweep, so the number of healthy sweeps cannot change its power.
 
 Cells: false alarms on healthy drifted sweeps (the stated rate: 1 %); breathing cracks (Mayes-Davies, the truth
-rig's crack law) of depth 2.5 / 5 / 7.5 % of the diameter in elements 2, 4, 6 and 8 (``--per-element`` sweeps
-each). ``python -m bench.sideband_power [--variants truth,dampers] [--healthy 100] [--per-element 5]``.
+rig's crack law) of depth 4 / 5 / 7.5 / 10 % of the diameter in elements 2-8 (``--per-element`` sweeps each).
+Each sweep is read three ways: the test as ``detect --rule sideband`` runs it (the scan over windows, 1 %); as the
+default runs it beside the joint test (the scan at half the rate, 0.5 %: the default calls damage at least then);
+and the sum over every point alone (1 %, the first version, for comparison).
+``python -m bench.sideband_power [--variants truth,dampers] [--healthy 100] [--per-element 3]``.
 """
 
 from __future__ import annotations
@@ -26,27 +29,30 @@ from bench.detection_power import GRID
 from bench.truth_variants import VARIANTS, nominal, truth_variant
 from rotorcheck import workflow
 from rotorcheck.config import RigConfig
+from rotorcheck.signal.sidebands import SCAN_WIDTHS, sideband_points, sideband_scan
 from rotorcheck.sim.rig_sim import simulate_rig, step_settings
 from rotorcheck.variability import with_benign
-from rotorcheck.workflow.detectors import DetectorSettings
-from rotorcheck.workflow.detectors.sideband import SidebandDetector
 
 ORDERS = (-2, -1, 1, 2)
-DEPTHS = (0.025, 0.05, 0.075)
-ELEMENTS = (2, 4, 6, 8)
+DEPTHS = (0.04, 0.05, 0.075, 0.1)
+ELEMENTS = (2, 3, 4, 5, 6, 7, 8)
+#: the three readings of a sweep (columns): name, scan widths, false-alarm rate
+READINGS = (("--rule sideband", SCAN_WIDTHS, 0.01), ("in the default (0.5 %)", SCAN_WIDTHS, 0.005),
+            ("sum over every point", (0,), 0.01))
 SPEED = 1000.0
 
 
-def called(truth: RigConfig, nom: RigConfig, seed: int, fault: str | None) -> tuple[bool, float]:
-    """One drifted sweep: (called damage, T / threshold)."""
+def called(truth: RigConfig, nom: RigConfig, seed: int, fault: str | None) -> tuple[bool, ...]:
+    """One drifted sweep: called damage under each of :data:`READINGS`."""
     values = _inside(np.random.default_rng([seed, 17]))
     cfg, d_rpm, _, _ = with_benign(truth, values)  # a gain scales the sidebands and their noise alike
     st = dataclasses.replace(step_settings(cfg), sideband_orders=ORDERS)
     angle = float(np.random.default_rng([seed, 99]).uniform(0.0, 2.0 * np.pi))
     sw = simulate_rig(cfg, GRID, SPEED + d_rpm, fault=fault, seed=seed, settings=st, shaft_angle_rad=angle)
-    det = SidebandDetector(DetectorSettings()).detect(workflow.measured_run(sw, nom))
-    assert det.statistic is not None and det.threshold is not None
-    return det.verdict.verdict == "damage", det.statistic / det.threshold
+    sb = workflow.measured_run(sw, nom).sidebands
+    assert sb is not None
+    t, n = sideband_points(sb.frf, sb.var)
+    return tuple(sideband_scan(t, n, widths).p_value < alpha for _, widths, alpha in READINGS)
 
 
 def run_variant(name: str, healthy: int, per_element: int, log: Any) -> dict[str, Any]:
@@ -54,24 +60,21 @@ def run_variant(name: str, healthy: int, per_element: int, log: Any) -> dict[str
     truth = truth_variant(name, nom)
     out: dict[str, Any] = {}
     t = time.perf_counter()
-    fa = [called(truth, nom, 7_000_000 + k, None)[0] for k in range(healthy)]
-    out["healthy"] = (sum(fa), healthy)
-    log(f"{name}: healthy {sum(fa)}/{healthy} called damage ({time.perf_counter() - t:.0f} s)")
+    fa = np.array([called(truth, nom, 7_000_000 + k, None) for k in range(healthy)])
+    out["healthy"] = (fa.sum(axis=0), healthy)
+    log(f"{name}: healthy called damage {fa.sum(axis=0)}/{healthy} ({time.perf_counter() - t:.0f} s)")
     for depth in DEPTHS:
-        hits = n = 0
-        per: dict[int, int] = {}
+        rows = []
         for el in ELEMENTS:
             faults = dict(truth.faults)
             faults["loc"] = truth.faults["breathing_crack"].model_copy(  # type: ignore[union-attr]
                 update={"element": el, "depth": depth})
             cfg = truth.model_copy(update={"faults": faults})
-            h = sum(called(cfg, nom, 7_100_000 + int(depth * 1e4) * 100 + el * 10 + k, "loc")[0]
-                    for k in range(per_element))
-            per[el] = h
-            hits += h
-            n += per_element
-        out[depth] = (hits, n, per)
-        log(f"{name}: depth {100 * depth:g} %: {hits}/{n} {per} ({time.perf_counter() - t:.0f} s)")
+            rows += [called(cfg, nom, 7_100_000 + int(depth * 1e4) * 100 + el * 10 + k, "loc")
+                     for k in range(per_element)]
+        hits = np.array(rows)
+        out[depth] = (hits.sum(axis=0), len(rows))
+        log(f"{name}: depth {100 * depth:g} %: {hits.sum(axis=0)}/{len(rows)} ({time.perf_counter() - t:.0f} s)")
     return out
 
 
@@ -79,7 +82,7 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--variants", default=",".join(VARIANTS))
     ap.add_argument("--healthy", type=int, default=100)
-    ap.add_argument("--per-element", type=int, default=5)
+    ap.add_argument("--per-element", type=int, default=3)
     args = ap.parse_args(argv)
 
     def log(msg: str) -> None:
@@ -87,13 +90,15 @@ def main(argv: list[str] | None = None) -> int:
 
     names = [v.strip() for v in args.variants.split(",") if v.strip()]
     res = {v: run_variant(v, args.healthy, args.per_element, log) for v in names}
-    print("| | " + " | ".join(names) + " |")
-    print("|---|" + "---:|" * len(names))
-    print("| healthy, drift inside the ranges: called damage | " + " | ".join(
-        f"{res[v]['healthy'][0]} / {res[v]['healthy'][1]}" for v in names) + " |")
-    for depth in DEPTHS:
-        print(f"| breathing {100 * depth:g} % depth, elements {', '.join(map(str, ELEMENTS))}: detected | "
-              + " | ".join(f"{res[v][depth][0]} / {res[v][depth][1]}" for v in names) + " |")
+    for i, (reading, _, alpha) in enumerate(READINGS):
+        print(f"\n{reading} (false-alarm rate {alpha:g})\n")
+        print("| | " + " | ".join(names) + " |")
+        print("|---|" + "---:|" * len(names))
+        print("| healthy, drift inside the ranges: called damage | " + " | ".join(
+            f"{res[v]['healthy'][0][i]} / {res[v]['healthy'][1]}" for v in names) + " |")
+        for depth in DEPTHS:
+            print(f"| breathing {100 * depth:g} % depth, elements {ELEMENTS[0]}-{ELEMENTS[-1]}: detected | "
+                  + " | ".join(f"{res[v][depth][0][i]} / {res[v][depth][1]}" for v in names) + " |")
     return 0
 
 

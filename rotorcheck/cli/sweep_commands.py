@@ -160,6 +160,17 @@ def ingest(
     return EXIT_OK
 
 
+def sideband_orders(text: str) -> tuple[int, ...]:
+    """``--sidebands``: distinct nonzero integers, comma separated ("" for none)."""
+    try:
+        orders = tuple(int(k) for k in split_list([text]))
+    except ValueError:
+        raise InputError(None, "--sidebands", f"expected integers such as -2,-1,1,2, got {text!r}") from None
+    if any(k == 0 for k in orders) or len(set(orders)) != len(orders):
+        raise InputError(None, "--sidebands", f"orders must be distinct nonzero integers, got {text!r}")
+    return orders
+
+
 @app.command()
 def simulate(
     output: Annotated[Path, typer.Argument(help="Sweep file to write (HDF5).")],
@@ -184,6 +195,9 @@ def simulate(
     crack_depth: Annotated[float | None, typer.Option(
         "--crack-depth", help="Depth of the --fault crack as a fraction of the shaft diameter (e.g. 0.1).")] = None,
     keep_periods: Annotated[bool, typer.Option(help="Store the per-period phasors.")] = True,
+    sidebands: Annotated[str | None, typer.Option(
+        "--sidebands", help="Sideband orders k to measure at f + k x speed, e.g. -2,-1,1,2 (a rotating sweep; "
+                            "format version 3). Default: the rig's measurement.sideband_orders.")] = None,
     actuator: Annotated[list[str] | None, typer.Option(
         "--actuator", "--actuators", help="A force input at a station and direction, e.g. 8x (several: repeat or "
                                          "8x,8y; driven one at a time). Default: the rig's actuator.")] = None,
@@ -245,6 +259,10 @@ def simulate(
         st = dataclasses.replace(st, n_periods=periods)
     if noise is not None:
         st = dataclasses.replace(st, output_noise_std=noise)
+    if sidebands is not None:
+        st = dataclasses.replace(st, sideband_orders=sideband_orders(sidebands))
+    if st.sideband_orders and speed == 0.0:
+        raise InputError(None, "--sidebands", "a sweep at standstill has no sidebands (give --speed)")
     grid = np.linspace(f_min, f_max, points)
     with progress(f"simulating {points} points at {speed:g} rpm" + (f" with {fault}" if fault else "")):
         if actuator or sensor:

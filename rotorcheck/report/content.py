@@ -180,9 +180,11 @@ def method_paragraphs(report: DetectionReport, ranges: Callable[[list[float]], s
     out = [f"Rule: {report.verdict_rule}"]
     sb = report.sideband_test
     if sb is not None:
-        out.append(f"Sideband test (orders {', '.join(f'{int(k):+d}' for k in sb['orders'])}): T = "
-                   f"{float(sb['statistic']):.4g}, threshold {float(sb['threshold']):.4g} at false-alarm rate "
-                   f"{float(sb['false_alarm']):.2g} over {sb['n_tones']} separable tones (p = {fmt_p(sb['p_value'])}); "
+        p_sb = fmt_p(sb["p_value"])
+        out.append(f"Sideband test (orders {', '.join(f'{int(k):+d}' for k in sb['orders'])}; "
+                   f"{sb['n_tones']} separable tones): the strongest window's T = {float(sb['statistic']):.4g}, its "
+                   f"threshold {float(sb['threshold']):.4g} at false-alarm rate {float(sb['false_alarm']):.2g} "
+                   f"(Bonferroni over the windows; p {p_sb if p_sb.startswith('<') else '= ' + p_sb}); "
                    f"{len(sb['fault_frequencies_hz'])} points certified at the family-wise confidence"
                    + (f": {ranges(list(sb['fault_frequencies_hz']))}" if sb['fault_frequencies_hz'] else "")
                    + f". It {sb['assumes']}.")

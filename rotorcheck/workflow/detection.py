@@ -28,7 +28,6 @@ from rotorcheck.workflow.benign import benign_table
 from rotorcheck.workflow.detectors import Detection, DetectorSettings, make_detector
 from rotorcheck.workflow.detectors.base import HARMONICS_KEPT_OUT
 from rotorcheck.workflow.detectors.joint import joint_pairs
-from rotorcheck.workflow.detectors.sideband import sideband_false_alarm
 from rotorcheck.workflow.directional import DirectionalDamage, damage_per_direction
 from rotorcheck.workflow.locating import locate_damage
 from rotorcheck.workflow.measured import (
@@ -297,7 +296,7 @@ class DetectionOutcome:
             rep.sideband_test = {
                 "rule": sb.rule, "orders": [int(k) for k in sbf.order], "statistic": sb.statistic,
                 "threshold": sb.threshold, "p_value": sb.p_value, "n_tones": n_tones,
-                "false_alarm": sideband_false_alarm(sb.threshold, n_tones),  # the rate its threshold was set at
+                "false_alarm": sb.false_alarm,
                 "verdict": sb.verdict.verdict, "fault_frequencies_hz": [float(x) for x in sb.frequency_hz[sb.fault]],
                 "assumes": sb.notes[-1] if sb.notes else ""}
         c = self.beyond_benign

@@ -63,6 +63,7 @@ class Detection:
     threshold: float | None = None
     p_value: float | None = None
     notes: list[str] = field(default_factory=list)
+    false_alarm: float | None = None  # the per-sweep rate the sweep-level test was held to (where there is one)
     measured: MeasuredDetection | None = None
     joint: JointResult | None = None
     beyond_benign: BoxCertificate | None = None

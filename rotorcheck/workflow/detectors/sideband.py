@@ -4,20 +4,17 @@ A rotor whose stiffness does not turn with the shaft (no crack; E, bearings, gai
 like) is time-invariant: driven at ``f`` it responds at ``f`` only. A breathing crack opens and closes once a
 turn and makes the rotor time-periodic, so the response also holds tones at ``f + k Omega`` (``Omega`` the shaft
 frequency). A sweep of version 3 stores them (:mod:`rotorcheck.signal.sidebands`). Their test needs no model,
-no drift model and no healthy sweep; only the noise::
-
-    T = sum over the separable tones (point, order k, channel pair) of 2 |S|^2 / var(S)
-
-``S`` the sideband receptance (m/N), ``var(S)`` its variance. For a time-invariant rotor each ``S`` is circular
-complex Gaussian noise, so ``2 |S|^2 / var`` is chi-square with 2 degrees of freedom and ``T ~ chi2(2 n)``
-(``n`` tones, independent). Verdict: damage when ``T > chi2_{1 - alpha}(2 n)`` at the stated false-alarm rate
-``alpha``. Per point: the point's own ``T_j ~ chi2(2 n_j)`` at the family-wise ``confidence`` over the points
-(Bonferroni) certifies the point.
+no drift model and no healthy sweep; only the noise: per point ``T_j = sum of 2 |S|^2 / var(S)`` over its
+separable tones (order k, channel pair), ``chi2(2 n_j)`` without a crack; the sums over windows of 2, 8 and 32
+adjacent points and over every point (:func:`rotorcheck.signal.sidebands.sideband_scan`), each window's p-value
+times the number of windows (Bonferroni). Verdict: damage when that p-value is below the false-alarm rate.
+Per point: ``T_j`` at the family-wise ``confidence`` over the points (Bonferroni) certifies the point.
 
 Assumptions, stated with the verdict: a healthy rotor is time-invariant (an axisymmetric shaft and supports; a
 shaft with different bending stiffness in two directions, or a crack already in the healthy machine, also makes
 sidebands, at 2 x speed); the variances are the noise's (estimated with many degrees of freedom: treated as
-known); the tones are not separable (NaN) where the record cannot tell them apart and are left out.
+known); the tones of one point are nearly independent (a tone closer than the resolution to another is left
+out).
 """
 
 from __future__ import annotations
@@ -31,29 +28,17 @@ from rotorcheck.config import RigConfig
 from rotorcheck.errors import InputError
 from rotorcheck.lazy import lazy_module
 from rotorcheck.robust.validation import STATUS_EXCLUDED, STATUS_FAULT, STATUS_OK, DetectionResult, Verdict
+from rotorcheck.signal.sidebands import sideband_points, sideband_scan
 from rotorcheck.workflow.detectors.base import Detection, DetectorSettings
 from rotorcheck.workflow.measured import MeasuredRun
 
 special = lazy_module("scipy.special")  # the chi-square tails
 
 #: the rule in words (the report's ``rule``)
-SIDEBAND_RULE = ("sidebands f + k x speed against a time-invariant rotor: T = sum of 2|S|^2/var(S) over the "
-                 "separable tones ~ chi2(2n) without a crack; damage when T exceeds its 1 - alpha quantile")
-
-
-def sideband_statistic(frf: np.ndarray, var: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Per point (f,) the statistic ``sum 2|S|^2/var`` over its separable tones and their count, from the sideband
-    receptances ``frf`` (f, ...) m/N and variances ``var`` (f, ...) (m/N)^2 (NaN: left out)."""
-    s = np.asarray(frf).reshape(np.shape(frf)[0], -1)
-    v = np.asarray(var, dtype=float).reshape(s.shape)
-    ok = np.isfinite(s) & np.isfinite(v) & (v > 0)
-    z = np.where(ok, 2.0 * np.abs(np.where(ok, s, 0.0)) ** 2 / np.where(ok, v, 1.0), 0.0)
-    return z.sum(axis=1), ok.sum(axis=1)
-
-
-def sideband_false_alarm(threshold: float, n_tones: int) -> float:
-    """The false-alarm rate a threshold on ``T ~ chi2(2 n_tones)`` was set at."""
-    return float(special.chdtrc(2 * n_tones, threshold))
+SIDEBAND_RULE = ("sidebands f + k x speed against a time-invariant rotor: in windows of 2, 8 and 32 adjacent points "
+                 "and over every point, T = sum of 2|S|^2/var(S) over the separable tones ~ chi2(2n) without a crack; "
+                 "damage when the smallest window p-value times the number of windows (Bonferroni) is below the "
+                 "false-alarm rate")
 
 
 class SidebandDetector:
@@ -80,17 +65,16 @@ class SidebandDetector:
                              "the sweep holds no sidebands (sweep version 3, a rotating run): --rule sideband needs "
                              "them (simulate with measurement.sideband_orders, ingest with sideband_orders)")
         alpha = self.settings.false_alarm
-        t_point, n_point = sideband_statistic(sb.frf, sb.var)
-        n = int(n_point.sum())
+        t_point, n_point = sideband_points(sb.frf, sb.var)
         f = sb.frequency_hz
-        if n == 0:
+        scan = sideband_scan(t_point, n_point)
+        if scan.n_tones == 0:
             verdict = Verdict("inconclusive", "no sideband could be separated at any point", f.size, 0, f.size, 0, 0)
             points = DetectionResult(np.full(f.size, np.nan), np.full(f.size, np.nan), np.zeros(f.size),
                                      np.zeros(f.size, bool), np.full(f.size, STATUS_EXCLUDED, dtype="<U13"), 0.0)
-            return Detection(self.name, f, verdict, SIDEBAND_RULE, points, np.zeros(f.size), "no sideband")
-        t = float(t_point.sum())
-        thr = float(special.chdtri(2 * n, alpha))
-        p = float(special.chdtrc(2 * n, t))
+            return Detection(self.name, f, verdict, SIDEBAND_RULE, points, np.zeros(f.size), "no sideband",
+                             false_alarm=alpha)
+        thr = scan.threshold(alpha)
         tested = n_point > 0
         n_tested = int(tested.sum())
         a_point = (1.0 - self.settings.confidence) / max(n_tested, 1)
@@ -99,20 +83,24 @@ class SidebandDetector:
         status = np.where(~tested, STATUS_EXCLUDED, np.where(fault, STATUS_FAULT, STATUS_OK)).astype("<U13")
         ratio = np.where(tested, t_point / thr_point, 0.0)
         orders = ", ".join(f"{int(k):+d}" for k in sb.order)
-        if t > thr:
-            reason = (f"sidebands (orders {orders}) beyond noise: T = {t:.4g} > {thr:.4g} = chi2_(1-{alpha:g})"
-                      f"({2 * n}), p = {p:.3g}; a time-invariant rotor (benign drift included) makes none")
+        lo, hi = scan.points
+        where = f"{f[lo]:.4g}-{f[hi - 1]:.4g} Hz ({hi - lo} points)"
+        stat = (f"T = {scan.statistic:.4g} on {scan.dof} dof over {where}, p = {scan.p_value:.3g} after "
+                f"{scan.n_windows} windows (Bonferroni)")
+        if scan.p_value < alpha:
+            reason = (f"sidebands (orders {orders}) beyond noise: {stat} < {alpha:g}; a time-invariant rotor (benign "
+                      "drift included) makes none")
             verdict = Verdict("damage", reason, f.size, int(fault.sum()), 0, 0, 0)
         else:
-            reason = (f"sidebands (orders {orders}) within noise: T = {t:.4g} <= {thr:.4g} = chi2_(1-{alpha:g})"
-                      f"({2 * n}), p = {p:.3g}")
+            reason = f"sidebands (orders {orders}) within noise: the strongest window {stat} >= {alpha:g}"
             verdict = Verdict("healthy", reason, f.size, int(fault.sum()), 0, 0, 0)
-        notes = [f"{n} separable sideband tones over {n_tested} of {f.size} points (orders {orders}); a tone closer "
-                 "than the lock-in's resolution to the excitation, a shaft harmonic or another sideband is left out",
+        notes = [f"{scan.n_tones} separable sideband tones over {n_tested} of {f.size} points (orders {orders}); a "
+                 "tone closer than the lock-in's resolution to the excitation, a shaft harmonic or another sideband "
+                 "is left out",
                  "assumes the healthy rotor is time-invariant (axisymmetric shaft and supports, no crack in the "
                  "healthy machine) and the stated variances are the noise's"]
         dist = np.where(tested, t_point, np.nan)
         points = DetectionResult(dist, dist, np.where(tested, thr_point, np.nan), fault, status, 0.0)
         return Detection(self.name, f, verdict, SIDEBAND_RULE, points, ratio,
-                         "sideband statistic T_j / its family-wise threshold", statistic=t, threshold=thr,
-                         p_value=p, notes=notes)
+                         "sideband statistic T_j / its family-wise threshold", statistic=scan.statistic, threshold=thr,
+                         p_value=scan.p_value, notes=notes, false_alarm=alpha)
