@@ -55,22 +55,23 @@ def called(truth: RigConfig, nom: RigConfig, seed: int, fault: str | None) -> tu
     return tuple(sideband_scan(t, n, widths).p_value < alpha for _, widths, alpha in READINGS)
 
 
-def run_variant(name: str, healthy: int, per_element: int, log: Any) -> dict[str, Any]:
+def run_variant(name: str, healthy: int, per_element: int, log: Any, depths: tuple[float, ...] = DEPTHS,
+                seed0: int = 0) -> dict[str, Any]:
     nom = nominal()
     truth = truth_variant(name, nom)
     out: dict[str, Any] = {}
     t = time.perf_counter()
-    fa = np.array([called(truth, nom, 7_000_000 + k, None) for k in range(healthy)])
+    fa = np.array([called(truth, nom, seed0 + 7_000_000 + k, None) for k in range(healthy)])
     out["healthy"] = (fa.sum(axis=0), healthy)
     log(f"{name}: healthy called damage {fa.sum(axis=0)}/{healthy} ({time.perf_counter() - t:.0f} s)")
-    for depth in DEPTHS:
+    for depth in depths:
         rows = []
         for el in ELEMENTS:
             faults = dict(truth.faults)
             faults["loc"] = truth.faults["breathing_crack"].model_copy(  # type: ignore[union-attr]
                 update={"element": el, "depth": depth})
             cfg = truth.model_copy(update={"faults": faults})
-            rows += [called(cfg, nom, 7_100_000 + int(depth * 1e4) * 100 + el * 10 + k, "loc")
+            rows += [called(cfg, nom, seed0 + 7_100_000 + int(depth * 1e4) * 100 + el * 10 + k, "loc")
                      for k in range(per_element)]
         hits = np.array(rows)
         out[depth] = (hits.sum(axis=0), len(rows))
@@ -83,20 +84,26 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--variants", default=",".join(VARIANTS))
     ap.add_argument("--healthy", type=int, default=100)
     ap.add_argument("--per-element", type=int, default=3)
+    ap.add_argument("--depths", default=",".join(f"{d:g}" for d in DEPTHS), help="crack depths ('' for none)")
+    ap.add_argument("--seed-by-variant", action="store_true",
+                    help="other seeds per variant (a healthy rotor's sidebands are noise alone: with the same seeds "
+                         "every variant draws the same healthy sweeps)")
     args = ap.parse_args(argv)
+    depths = tuple(float(x) for x in args.depths.split(",") if x.strip())
 
     def log(msg: str) -> None:
         print(msg, file=sys.stderr, flush=True)
 
     names = [v.strip() for v in args.variants.split(",") if v.strip()]
-    res = {v: run_variant(v, args.healthy, args.per_element, log) for v in names}
+    res = {v: run_variant(v, args.healthy, args.per_element, log, depths,
+                          100_000_000 * (1 + list(VARIANTS).index(v)) if args.seed_by_variant else 0) for v in names}
     for i, (reading, _, alpha) in enumerate(READINGS):
         print(f"\n{reading} (false-alarm rate {alpha:g})\n")
         print("| | " + " | ".join(names) + " |")
         print("|---|" + "---:|" * len(names))
         print("| healthy, drift inside the ranges: called damage | " + " | ".join(
             f"{res[v]['healthy'][0][i]} / {res[v]['healthy'][1]}" for v in names) + " |")
-        for depth in DEPTHS:
+        for depth in depths:
             print(f"| breathing {100 * depth:g} % depth, elements {ELEMENTS[0]}-{ELEMENTS[-1]}: detected | "
                   + " | ".join(f"{res[v][depth][0][i]} / {res[v][depth][1]}" for v in names) + " |")
     return 0

@@ -16,7 +16,8 @@ method ``noise_bound_per_point_m`` (f) m (``noise_bound_m`` is then its maximum)
 test (several healthy sweeps): ``benign_directions`` (q, f) complex m/N (benign directions learned
 from the healthy sweeps' spread), ``benign_direction_bound`` (q,) (bound on each coefficient's real
 and imaginary part) and the root attributes ``benign_kappa`` (relative error of the model's benign
-prediction carried in H0; absent: the default) and ``n_healthy`` (healthy sweeps);
+prediction carried in H0; absent: the default) and ``n_healthy`` (healthy sweeps); ``healthy_sideband_p_value``
+(the healthy sweeps' sideband scan, where they held sidebands);
 ``benign_correction`` (p, f) complex m/N per unit parameter (the healthy sweeps' correction of the
 model's benign change, one row per benign parameter in the order of the rig's variability section at
 the baseline's speed).
@@ -100,7 +101,9 @@ class ModelBound:
 class HealthyData:
     """The measured healthy FRF (f, P) m/N: mean over ``n_healthy`` sweeps, the variance of that mean (m^2/N^2)
     and its real degrees of freedom (inf: stated); the first sweep's phasors (N, m); the shaft orders removed;
-    the channel pairs as ``[output, input]`` labels (None: made before pairs were stored)."""
+    the channel pairs as ``[output, input]`` labels (None: made before pairs were stored); ``sideband_p_value``:
+    the sideband scan's p-value of the healthy sweeps (their smallest; None: no healthy sweep held sidebands), the
+    check that the healthy rotor is time-invariant (:mod:`rotorcheck.signal.sidebands`)."""
 
     frf: np.ndarray | None = None
     var: np.ndarray | None = None
@@ -110,6 +113,7 @@ class HealthyData:
     shaft_orders_removed: int = 0
     n_healthy: int = 1
     channel_pairs: list[list[str]] | None = None
+    sideband_p_value: float | None = None
 
 
 @dataclass
@@ -238,6 +242,8 @@ def _write_into(h5: h5py.Group, baseline: Baseline) -> None:
     h5.attrs["sweep_sha256"] = ",".join(pv.sweep_sha256)
     h5.attrs["shaft_orders_removed"] = int(baseline.healthy.shaft_orders_removed)
     h5.attrs["n_healthy"] = int(baseline.healthy.n_healthy)
+    if baseline.healthy.sideband_p_value is not None:
+        h5.attrs["healthy_sideband_p_value"] = float(baseline.healthy.sideband_p_value)
     if baseline.drift.kappa is not None:
         h5.attrs["benign_kappa"] = float(baseline.drift.kappa)
     for name, part, key in _TEXT_ATTRS:
@@ -595,7 +601,8 @@ def _read_from(h5: h5py.Group, p: Path, where: str) -> Baseline:
     pairs = _json_attr(h5, p, where, "channel_pairs", list)
     healthy = HealthyData(data("healthy_frf"), data("healthy_frf_var"), data("healthy_frf_dof"), data("input_phasor"),
                           data("output_phasor"), count("shaft_orders_removed", 0), count("n_healthy", 1),
-                          None if pairs is None else [[str(x) for x in pr] for pr in pairs])
+                          None if pairs is None else [[str(x) for x in pr] for pr in pairs],
+                          number("healthy_sideband_p_value") if "healthy_sideband_p_value" in h5.attrs else None)
     drift = DriftModel(number("benign_kappa") if "benign_kappa" in h5.attrs else None,
                        data("benign_directions"), data("benign_direction_bound"), data("benign_correction"),
                        _number_dict(h5, p, where, "updated_parameters"),

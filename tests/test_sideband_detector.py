@@ -155,3 +155,38 @@ def test_detect_uses_the_sidebands_beside_the_joint_test(sideband_sweeps: Path, 
     code, doc = _detect(tmp_path, baseline, samples_dir() / "crack_rig" / "breathing_crack_1000rpm.h5", "--rule",
                         "sideband")
     assert code == 2 and "sideband_phasor" in doc["_output"] and "no sidebands" in doc["_output"]
+
+
+def test_a_healthy_sweep_with_sidebands_turns_the_sideband_test_off(tmp_path: Path) -> None:
+    """validate on a 'healthy' sweep that holds sidebands (a 30 % crack already there): the baseline records the
+    scan's p-value (file round trip), validate warns, and detect tests the main line alone at the full rate, saying
+    why; a healthy sweep with sidebands gives a p-value above 0.01 and keeps the test."""
+    rig = load_config(configs_dir() / "crack_rig.yaml")
+    grid = np.linspace(30.0, 200.0, 60)
+
+    def sweep(depth: float, seed: int) -> workflow.MeasuredRun:
+        truth = _truth_with_crack(depth) if depth else load_config(configs_dir() / "crack_rig_truth.yaml")
+        st = dataclasses.replace(step_settings(truth), sideband_orders=ORDERS)
+        sw = simulate_rig(truth, grid, 1000.0, fault="c" if depth else None, seed=seed, settings=st)
+        return workflow.measured_run(sw, rig)
+
+    cracked = sweep(0.3, 1)
+    out = workflow.validate(rig, [cracked], workflow.fit_noise(cracked))
+    p = out.baseline.healthy.sideband_p_value
+    assert p is not None and p < 1e-10
+    assert "not time-invariant" in workflow.sideband_warning(out)
+    from rotorcheck.baseline import read_baseline, write_baseline
+
+    write_baseline(out.baseline, tmp_path / "b.h5")
+    assert read_baseline(tmp_path / "b.h5").healthy.sideband_p_value == pytest.approx(p)
+    det = workflow.detect(rig, out.baseline, sweep(0.3, 2))
+    assert det.found.sideband is None and det.found.joint is not None
+    assert det.found.joint.false_alarm == pytest.approx(0.01)
+    assert any("not tested" in n for n in det.found.notes)
+    healthy = sweep(0.0, 3)
+    out_h = workflow.validate(rig, [healthy], workflow.fit_noise(healthy))
+    assert out_h.baseline.healthy.sideband_p_value is not None and out_h.baseline.healthy.sideband_p_value > 0.01
+    assert workflow.sideband_warning(out_h) == ""
+    det_h = workflow.detect(rig, out_h.baseline, sweep(0.0, 4))
+    assert det_h.found.sideband is not None and det_h.found.joint is not None
+    assert det_h.found.joint.false_alarm == pytest.approx(0.005)

@@ -40,6 +40,8 @@ CASES = (
     ("breathing_crack_1000rpm", "crack_rig/healthy_1000rpm.h5", "crack_rig/breathing_crack_1000rpm.h5"),
     ("repeat_healthy_1000rpm", "crack_rig/healthy_1000rpm.h5", "crack_rig/healthy_1000rpm_repeat.h5"),
     ("free_running_healthy_2000rpm", "crack_rig/healthy_2000rpm.h5", "crack_rig/healthy_2000rpm_repeat.h5"),
+    ("sidebands_shallow_crack_1000rpm", "crack_rig_sidebands/healthy_1000rpm.h5",
+     "crack_rig_sidebands/breathing_crack_10pct_1000rpm.h5"),
     # x and y probes at stations 6 and 2, forces in x and y at station 8 (8 channel pairs)
     ("xy_open_crack_0rpm", "crack_rig_xy/healthy_0rpm.h5", "crack_rig_xy/open_crack_0rpm.h5"),
     ("xy_repeat_healthy_1000rpm", "crack_rig_xy/healthy_1000rpm.h5", "crack_rig_xy/healthy_1000rpm_repeat.h5"),

@@ -38,6 +38,8 @@ CASES: tuple[tuple[str, str, str, str, str], ...] = (
      "crack_rig/healthy_1000rpm_repeat.h5", "measured"),
     ("free_running_2000rpm_measured", "crack_rig.yaml", "crack_rig/healthy_2000rpm.h5",
      "crack_rig/healthy_2000rpm_repeat.h5", "measured"),
+    ("sidebands_10pct_1000rpm_measured", "crack_rig.yaml", "crack_rig_sidebands/healthy_1000rpm.h5",
+     "crack_rig_sidebands/breathing_crack_10pct_1000rpm.h5", "measured"),
     ("three_mass_trial3_measured", "three_mass_trial3.yaml", "three_mass/healthy.h5", "three_mass/damaged.h5",
      "measured"),
     ("open_crack_0rpm_system", "crack_rig.yaml", "crack_rig/healthy_0rpm.h5", "crack_rig/open_crack_0rpm.h5", "system"),
@@ -120,6 +122,10 @@ def run_case(name: str, rig: str, healthy: str, new: str, enclose: str, work: Pa
         "probe_damage_re": d.real[probe].tolist(),
         "probe_damage_im": d.imag[probe].tolist(),
         **_anchored(rep, probe),
+        **({} if not rep.get("sideband_test") else {
+            "sideband_verdict": rep["sideband_test"]["verdict"],
+            "sideband_statistic": rep["sideband_test"]["statistic"],
+            "sideband_p_value": rep["sideband_test"]["p_value"]}),
     }
 
 

@@ -149,6 +149,8 @@ def validate(
         for line in (outcome.healthy_note, workflow.update_summary(outcome), workflow.learning_summary(outcome)):
             if line:
                 err.print(line)
+        if workflow.sideband_warning(outcome):
+            err.print(f"[yellow]warning[/]: {escape(workflow.sideband_warning(outcome))}")
         with progress("writing plots"):
             files = (workflow.validation_plots(outcome, plot_dir, at, formats, out / "baseline.h5", frf_unit)
                      if plots else [])

@@ -36,7 +36,7 @@ def _warn_harmonics(run: dict[str, Any]) -> None:
 
 @app.command()
 def info(
-    sweep: Annotated[Path, typer.Argument(help="Sweep file (HDF5, rotorcheck.sweep v1 or v2).")],
+    sweep: Annotated[Path, typer.Argument(help="Sweep file (HDF5, rotorcheck.sweep v1, v2 or v3).")],
     as_json: JsonOpt = False,
     confidence: Annotated[float, typer.Option(help="Family-wise confidence of the noise bound.")] = 0.99,
 ) -> int:
@@ -82,6 +82,12 @@ def info(
             f"{noise['pooled_bound_m']:.3g} m pooled ({noise['excess_scatter_points']} points with excess scatter)"
             + cleaned
         )
+        sb = run.get("sidebands")
+        if sb:
+            p_sb = sb["scan_p_value"]
+            err.print(f"run {run['run_id']}: sidebands k = {', '.join(f'{k:+d}' for k in sb['orders'])}: "
+                      f"{sb['n_tones']} separable tones ({sb['n_not_separable']} not); against a time-invariant "
+                      f"rotor the scan's p = {p_sb:.3g} ({'beyond noise' if p_sb < 0.01 else 'noise'})")
         _warn_harmonics(run)
     if as_json:
         emit_json(doc)

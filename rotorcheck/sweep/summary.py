@@ -21,6 +21,7 @@ import numpy as np
 from rotorcheck.robust.noise import noise_bound_from_variance, noise_bound_pooled
 from rotorcheck.signal.harmonics import lockin_resolution_hz, shaft_harmonic_points
 from rotorcheck.signal.lockin import SHAFT_ORDERS, remove_shaft_harmonics
+from rotorcheck.signal.sidebands import sideband_points, sideband_scan
 from rotorcheck.sweep.format import Run, Sweep, sweep_schema_version
 
 __all__ = ["sidak_noise_bound", "summarize"]
@@ -104,6 +105,19 @@ def _harmonics(run: Run) -> dict[str, Any]:
     return {"shaft_harmonic_points": h.points(), "shaft_harmonics_warning": h.warning(HARMONICS_KEPT_OUT)}
 
 
+def _sidebands(run: Run) -> dict[str, Any] | None:
+    """The run's sidebands (version 3): orders, separable tones, and the scan's p-value against a time-invariant
+    rotor (:func:`rotorcheck.signal.sidebands.sideband_scan`); None without sidebands."""
+    sb = run.sideband_frf()
+    if sb is None:
+        return None
+    t, n = sideband_points(sb[0], sb[1])
+    scan = sideband_scan(t, n)
+    total = int(np.size(sb[0]))
+    return {"orders": [int(k) for k in np.asarray(run.sideband_order)], "n_tones": scan.n_tones,
+            "n_not_separable": total - scan.n_tones, "scan_p_value": scan.p_value}
+
+
 def summarize(sweep: Sweep, confidence: float = 0.99) -> dict[str, Any]:
     """Runs, speeds, grids, channels and noise estimates of a (validated) sweep.
 
@@ -112,9 +126,9 @@ def summarize(sweep: Sweep, confidence: float = 0.99) -> dict[str, Any]:
     and the Sidak family-wise bound at ``confidence``; ``n_exc`` (patterns per frequency, None for
     an FRF-only run), ``frf_only`` and ``noise_source``; ``shaft_harmonic_points`` (the points within the
     lock-in's resolution of 1X..4X, :mod:`rotorcheck.signal.harmonics`) and ``shaft_harmonics_warning`` ('' when
-    none). ``shared_grid`` tells whether all runs
-    share the frequency grid bit for bit; ``schema_version`` is the version the sweep is (or would
-    be) written in.
+    none); ``sidebands`` (version 3: orders, ``n_tones``, ``n_not_separable``, ``scan_p_value``; None without).
+    ``shared_grid`` tells whether all runs share the frequency grid bit for bit; ``schema_version`` is the version
+    the sweep is (or would be) written in.
     """
     runs = []
     grids = []
@@ -153,7 +167,7 @@ def summarize(sweep: Sweep, confidence: float = 0.99) -> dict[str, Any]:
             })
         entry.update({"n_exc": run.n_exc if not run.is_frf_only else None,
                       "frf_only": run.is_frf_only,
-                      "noise_source": run.noise_source, **_harmonics(run)})
+                      "noise_source": run.noise_source, **_harmonics(run), "sidebands": _sidebands(run)})
         runs.append(entry)
     shared = all(g.shape == grids[0].shape and np.array_equal(g, grids[0]) for g in grids)
     all_f = np.concatenate(grids)

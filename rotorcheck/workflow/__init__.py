@@ -91,6 +91,7 @@ from rotorcheck.workflow.validation import (
     ValidationOutcome,
     learning_summary,
     parameter_structure,
+    sideband_warning,
     update_summary,
     validate,
 )
@@ -175,6 +176,7 @@ __all__ = [
     "rig_for",
     "rig_with_crack_depth",
     "sensor_ranking_for_rig",
+    "sideband_warning",
     "speed_tolerance",
     "sweep_detectability",
     "uncertainty_disk",

@@ -298,7 +298,7 @@ class DetectionOutcome:
                 "threshold": sb.threshold, "p_value": sb.p_value, "n_tones": n_tones,
                 "false_alarm": sb.false_alarm,
                 "verdict": sb.verdict.verdict, "fault_frequencies_hz": [float(x) for x in sb.frequency_hz[sb.fault]],
-                "assumes": sb.notes[-1] if sb.notes else ""}
+                "assumes": "; ".join(n for n in sb.notes if "assume" in n)}
         c = self.beyond_benign
         if c is not None:
             rep.beyond_benign_rule, rep.beyond_benign_status = c.rule, [str(x) for x in c.status]

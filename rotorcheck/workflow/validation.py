@@ -17,6 +17,7 @@ from rotorcheck.robust.mu import Structure
 from rotorcheck.robust.noise import NoiseBound
 from rotorcheck.robust.validation import STATUS_EXCLUDED, ValidationResult
 from rotorcheck.signal.harmonics import ShaftHarmonics
+from rotorcheck.signal.sidebands import HEALTHY_SIDEBAND_ALPHA, sideband_points, sideband_scan
 from rotorcheck.updating import Update, update_parameters
 from rotorcheck.variability import benign_parameters
 from rotorcheck.workflow.drift import DriftLearning, learn_drift_ranges
@@ -186,12 +187,31 @@ def validate(
                    res.gamma_lower, np.asarray(res.status, dtype=str)),
         HealthyData(healthy.frf, healthy.var, healthy.dof, one.W[:, None], one.Zt[:, None],
                     first.harmonics_removed, len(runs) if ref.reference is None else 1,
-                    pair_keys(first)),
+                    pair_keys(first), healthy_sideband_p_value(runs)),
         DriftModel(None if learning is None else learning.kappa, updated_parameters=None if upd is None
                    else upd.as_dict(), range_shift=None if learning is None else learning.shift_by_name,
                    range_widen=None if learning is None else learning.widen_by_name))
     return ValidationOutcome(base, res, model, runs, rig, upd, learning, harmonics,
                              ref.note, ref.reference)
+
+
+def healthy_sideband_p_value(runs: list[MeasuredRun]) -> float | None:
+    """The sideband scan's smallest p-value over the healthy runs that hold sidebands (None: none does): small, the
+    healthy rotor is not time-invariant (an asymmetric shaft, a crack already there) and the sideband test has no
+    zero to test against."""
+    ps = [sideband_scan(*sideband_points(r.sidebands.frf, r.sidebands.var)).p_value for r in runs
+          if r.sidebands is not None and r.speed_rpm != 0.0]
+    return min(ps) if ps else None
+
+
+def sideband_warning(outcome: ValidationOutcome, alpha: float = HEALTHY_SIDEBAND_ALPHA) -> str:
+    """A warning when the healthy sweeps' sidebands are beyond noise ('' otherwise)."""
+    p = outcome.baseline.healthy.sideband_p_value
+    if p is None or p >= alpha:
+        return ""
+    return (f"the healthy sweeps hold sidebands f + k x speed beyond noise (scan p = {p:.3g} < {alpha:g}): the rotor "
+            "is not time-invariant when healthy (a shaft with unequal bending stiffness, a crack already there?); "
+            "detect will not use the sideband test against this baseline")
 
 
 def learning_summary(outcome: ValidationOutcome) -> str:

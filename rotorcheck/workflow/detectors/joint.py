@@ -8,7 +8,8 @@ frequency the data depart; each point is also certified beyond every benign chan
 A rotating sweep that holds sidebands (version 3) is also tested for them
 (:mod:`rotorcheck.workflow.detectors.sideband`: a breathing crack's tones at f + k x speed, which no benign
 change makes): the false-alarm rate is split in half between the two tests (Bonferroni: together at most the
-stated rate) and either one's damage verdict is the sweep's.
+stated rate) and either one's damage verdict is the sweep's; not when the baseline's healthy sweeps held
+sidebands beyond noise (the healthy rotor is then not time-invariant: said in the notes).
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ from rotorcheck.baseline import Baseline
 from rotorcheck.config import RigConfig
 from rotorcheck.robust.joint import JOINT_RULE, JointResult, LearnedDirections
 from rotorcheck.robust.validation import Verdict
+from rotorcheck.signal.sidebands import HEALTHY_SIDEBAND_ALPHA
 from rotorcheck.variability import benign_parameters
 from rotorcheck.workflow.benign import anchored_pairs, certify_beyond_benign, joint_detection
 from rotorcheck.workflow.detectors.base import Detection, DetectorSettings
@@ -119,6 +121,11 @@ class JointDetector:
         if b.drift.range_shift is not None:
             found.notes.append(learned_ranges_note(rig, b))
         with_sidebands = run.sidebands is not None and run.speed_rpm != 0.0
+        p_healthy = b.healthy.sideband_p_value
+        if with_sidebands and p_healthy is not None and p_healthy < HEALTHY_SIDEBAND_ALPHA:
+            with_sidebands = False
+            found.notes.append(f"the sidebands were not tested: the healthy sweeps' own were beyond noise (scan p = "
+                               f"{p_healthy:.3g}), so the healthy rotor is not time-invariant")
         alpha = self.settings.false_alarm / (2.0 if with_sidebands else 1.0)
         # a baseline of an earlier version that learned drift on the model re-solved is tested so
         joint = joint_detection(rig, th, var, run, kappa, learned_directions(b), alpha,
@@ -129,6 +136,9 @@ class JointDetector:
         found.notes.extend(joint.notes)
         if with_sidebands:
             sb = SidebandDetector(dataclasses.replace(self.settings, false_alarm=alpha)).detect(run)
+            if p_healthy is None:
+                sb.notes.append("the healthy sweeps held no sidebands: that the healthy rotor makes none is assumed, "
+                                "not checked")
             found.sideband = sb
             found.rule = (f"{JOINT_RULE}; or {sb.rule} (each at half the false-alarm rate "
                           f"{self.settings.false_alarm:g}: Bonferroni)")
