@@ -38,7 +38,9 @@ CLI_MD_SAMPLES = (
 EXTRA_SAMPLES = ("crack_rig/healthy_2000rpm.h5", "crack_rig/healthy_2000rpm_repeat.h5",
                  # issue 12: x/y probes at stations 6 and 2, forces in x and y at station 8
                  "crack_rig_xy/healthy_0rpm.h5", "crack_rig_xy/open_crack_0rpm.h5", "crack_rig_xy/healthy_1000rpm.h5",
-                 "crack_rig_xy/breathing_crack_1000rpm.h5", "crack_rig_xy/healthy_1000rpm_repeat.h5")
+                 "crack_rig_xy/breathing_crack_1000rpm.h5", "crack_rig_xy/healthy_1000rpm_repeat.h5",
+                 # round ten: the sidebands f + k x speed (format version 3)
+                 "crack_rig_sidebands/healthy_1000rpm.h5", "crack_rig_sidebands/breathing_crack_10pct_1000rpm.h5")
 
 # what each bundled file must hold: (speed rpm, grid, seed named in the run notes, fault)
 EXPECTED = {
@@ -76,6 +78,21 @@ def test_cli_md_bundled_names_exist_and_catalogue_matches() -> None:
     assert sorted(s.path for s in samples.SAMPLES) == sorted(CLI_MD_SAMPLES + EXTRA_SAMPLES)
     on_disk = sorted(p.relative_to(SAMPLE_DIR).as_posix() for p in SAMPLE_DIR.rglob("*.h5"))
     assert on_disk == sorted(CLI_MD_SAMPLES + EXTRA_SAMPLES)
+
+
+@pytest.mark.parametrize("name, seed, fault", [("crack_rig_sidebands/healthy_1000rpm.h5", 111, None),
+                                               ("crack_rig_sidebands/breathing_crack_10pct_1000rpm.h5", 112,
+                                                "breathing_crack")])
+def test_sideband_samples_are_version_3_with_the_orders_and_seeds_they_say(name: str, seed: int,
+                                                                            fault: str | None) -> None:
+    sw = read_sweep(SAMPLE_DIR / name)
+    run = next(iter(sw.runs.values()))
+    assert run.speed_rpm == 1000.0 and f"seed {seed};" in run.notes
+    assert (f"fault {fault!r}" in sw.generator) if fault else ("healthy" in sw.generator)
+    np.testing.assert_array_equal(run.sideband_order, samples.SIDEBANDS)
+    assert run.sideband_phasor_exc is not None and run.sideband_phasor_exc.shape == (run.frequency.size, 1, 4, 1)
+    with h5py.File(SAMPLE_DIR / name, "r") as h5:
+        assert int(h5.attrs["schema_version"]) == 3
 
 
 def test_bundled_samples_total_under_2_mb() -> None:
