@@ -19,6 +19,7 @@ from shared_runs import CliRun
 from rotorcheck import workflow
 from rotorcheck.cli import main
 from rotorcheck.config import RigConfig, load_config
+from rotorcheck.errors import InputError
 from rotorcheck.resources import configs_dir, samples_dir
 from rotorcheck.signal.sidebands import sideband_points, sideband_scan
 from rotorcheck.sim.rig_sim import simulate_rig, step_settings
@@ -190,3 +191,14 @@ def test_a_healthy_sweep_with_sidebands_turns_the_sideband_test_off(tmp_path: Pa
     det_h = workflow.detect(rig, out_h.baseline, sweep(0.0, 4))
     assert det_h.found.sideband is not None and det_h.found.joint is not None
     assert det_h.found.joint.false_alarm == pytest.approx(0.005)
+
+
+def test_rule_sideband_refuses_a_resampled_run() -> None:
+    """A run interpolated onto another grid keeps its sidebands on its own grid: --rule sideband refuses it,
+    naming the run's frequency dataset (the default rule tests them beside the joint test)."""
+    run = _run(load_config(configs_dir() / "crack_rig_truth.yaml"), None, 1.0, grid=GRID[:10])
+    moved = workflow.resample_run(run, np.linspace(GRID[0], GRID[9], 7))
+    assert moved.sidebands is not None and moved.sidebands.frequency_hz.size == 10
+    with pytest.raises(InputError) as e:
+        SidebandDetector(DetectorSettings()).detect(moved)
+    assert "/frequency" in str(e.value) and "--resample" in str(e.value)

@@ -64,6 +64,10 @@ class SidebandDetector:
             raise InputError(run.path, f"/runs/{run.run_id}/sideband_phasor",
                              "the sweep holds no sidebands (sweep version 3, a rotating run): --rule sideband needs "
                              "them (simulate with measurement.sideband_orders, ingest with sideband_orders)")
+        if sb.frequency_hz.shape != run.frequency_hz.shape:
+            raise InputError(run.path, f"/runs/{run.run_id}/frequency", "--rule sideband reads the sweep on its own "
+                             "grid: the sidebands cannot be interpolated (run without --resample, or use the default "
+                             "rule, which tests them beside the joint test)")
         alpha = self.settings.false_alarm
         t_point, n_point = sideband_points(sb.frf, sb.var)
         f = sb.frequency_hz
