@@ -19,13 +19,21 @@ Separable. A tone closer than the window's resolution ``1 / T`` (``T = N / f`` s
 it (order of priority: the excitation, the shaft harmonics, then the sidebands by ``|k|``) is not fitted:
 the window cannot tell the two apart. Its estimate is NaN.
 
-Test. Without a crack each separable sideband receptance ``S`` (m/N) is circular complex Gaussian noise, so
-``2 |S|^2 / var(S)`` is chi-square with 2 degrees of freedom. :func:`sideband_points` sums them per point
-(``T_j ~ chi2(2 n_j)``); :func:`sideband_scan` looks for sidebands where they are: a breathing crack's
-sidebands are strong near the resonances that ``f`` or ``f + k Omega`` meets and absent elsewhere, so the sums
-over windows of :data:`SCAN_WIDTHS` adjacent points (and over every point) are tested, each window's
-``chi2`` p-value times the number of windows tested (Bonferroni over windows and widths: valid whatever the
-dependence between windows, so the stated false-alarm rate is an upper bound).
+Test. Without a crack each separable sideband receptance ``S`` (m/N) is complex Gaussian noise with the
+fit's covariance; ``2 |S|^2 / var(S)`` summed over a point's ``n_j`` tones is ``u^T u`` for the normalised real
+vector ``u`` (cosine and sine parts over ``sqrt(var/2)``), whose covariance ``W`` the window fixes: the tones of one
+point are correlated where they are close (at 600 Hz, 64 periods are 0.107 s and the sidebands 16.7 Hz apart are
+1.8 resolution widths apart: ``lambda_max(W)`` = 1.33). Since ``u^T u <= lambda_max(W) u^T W^-1 u`` and
+``u^T W^-1 u ~ chi2(2 n_j)``, :func:`sideband_points` divides each point's sum by ``lambda_max(W)``
+(:func:`correlation_scale`; the shaft reference and the conjugations are rotations and reflections of ``u``:
+they leave the eigenvalues alone, so the stored phasors' angle is not needed): ``T_j`` is then at most
+``chi2(2 n_j)`` in distribution, a conservative test.
+
+Scan. :func:`sideband_scan` looks for sidebands where they are: a breathing crack's sidebands are strong near the
+resonances that ``f`` or ``f + k Omega`` meets and absent elsewhere, so the sums over windows of
+:data:`SCAN_WIDTHS` adjacent points (and over every point) are tested, each window's ``chi2`` p-value times the
+number of windows tested (Bonferroni over windows and widths: valid whatever the dependence between windows, so
+the stated false-alarm rate is an upper bound).
 
 Shaft reference. The fit's phasors are in the point's local time; :func:`shaft_referenced` multiplies the
 sideband of order ``k`` by ``exp(-j k theta)``, ``theta`` the shaft angle (rad, key-phasor mark 0) at
@@ -69,6 +77,9 @@ FITTED_ORDERS = 4
 #: found 10-16 of 21 breathing cracks of 4 % depth with drift where the sum over every point alone found 5-14,
 #: bench/results_sideband.md)
 SCAN_WIDTHS = (2, 8, 32, 0)
+#: samples per period with which the detector rebuilds the fit's covariance (the correlation between tones depends
+#: on the window, N periods of f; the sampling changes it little once M f / 2 is above the highest tone)
+COVARIANCE_SAMPLES = 16
 #: the healthy sweeps' sidebands beyond noise at this rate: the healthy rotor is not time-invariant, and the
 #: sideband test is not used against that baseline
 HEALTHY_SIDEBAND_ALPHA = 0.01
@@ -171,14 +182,42 @@ def shaft_referenced(phasor: np.ndarray, orders: Sequence[int], theta_rad: float
     return np.asarray(phasor) * np.exp(-1j * k * float(theta_rad))[:, None]
 
 
-def sideband_points(frf: np.ndarray, var: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Per point (f,) the sum of ``2 |S|^2 / var`` over its separable tones and their count, from the sideband
-    receptances ``frf`` (f, ...) m/N and variances ``var`` (f, ...) (m/N)^2 (NaN: left out)."""
+def correlation_scale(f_hz: float, speed_hz: float, orders: Sequence[int], n_periods: int,
+                      samples: int = COVARIANCE_SAMPLES) -> float:
+    """``lambda_max(W)`` at one point (module docstring): the largest eigenvalue of the normalised covariance of the
+    separable ``orders``' cosine and sine estimates of the fit over ``n_periods`` periods of ``f_hz`` at shaft
+    frequency ``speed_hz`` (Hz); 1 where no order is separable."""
+    tones = tone_set(f_hz, speed_hz, orders, f_hz / n_periods)
+    idx = [tones.requested[int(k)] for k in orders if tones.requested[int(k)] >= 0]
+    if not idx:
+        return 1.0
+    x = tone_design(point_times(f_hz, 0, n_periods, samples), tones.freq_hz)
+    cov = np.linalg.inv(x.T @ x)
+    g = tones.freq_hz.size
+    cols = [1 + i for i in idx] + [1 + g + i for i in idx]
+    half = np.array([(cov[1 + i, 1 + i] + cov[1 + g + i, 1 + g + i]) / 2.0 for i in idx] * 2)
+    w = cov[np.ix_(cols, cols)] / np.sqrt(np.outer(half, half))
+    return float(max(1.0, np.linalg.eigvalsh(w).max()))
+
+
+def correlation_scales(frequency_hz: np.ndarray, speed_hz: float, orders: Sequence[int], n_periods: np.ndarray
+                       ) -> np.ndarray:
+    """:func:`correlation_scale` at every point (f,) (``n_periods`` (f,): the periods each point averaged)."""
+    n = np.broadcast_to(np.asarray(n_periods), np.shape(frequency_hz))
+    return np.array([correlation_scale(float(f), speed_hz, orders, int(k)) for f, k in zip(frequency_hz, n)])
+
+
+def sideband_points(frf: np.ndarray, var: np.ndarray, scale: np.ndarray | None = None
+                    ) -> tuple[np.ndarray, np.ndarray]:
+    """Per point (f,) the sum of ``2 |S|^2 / var`` over its separable tones divided by ``scale`` (f,) (the point's
+    :func:`correlation_scale`; None: 1, tones taken as independent) and their count, from the sideband receptances
+    ``frf`` (f, ...) m/N and variances ``var`` (f, ...) (m/N)^2 (NaN: left out)."""
     s = np.asarray(frf).reshape(np.shape(frf)[0], -1)
     v = np.asarray(var, dtype=float).reshape(s.shape)
     ok = np.isfinite(s) & np.isfinite(v) & (v > 0)
     z = np.where(ok, 2.0 * np.abs(np.where(ok, s, 0.0)) ** 2 / np.where(ok, v, 1.0), 0.0)
-    return z.sum(axis=1), ok.sum(axis=1)
+    t = z.sum(axis=1)
+    return (t if scale is None else t / np.asarray(scale, dtype=float)), ok.sum(axis=1)
 
 
 @dataclass(frozen=True)

@@ -22,6 +22,7 @@ from rotorcheck.robust.measured import frf_estimate as _est
 from rotorcheck.robust.noise import point_miss
 from rotorcheck.signal.harmonics import ShaftHarmonics, lockin_resolution_hz, shaft_harmonic_points
 from rotorcheck.signal.lockin import SHAFT_ORDERS, fit_shaft_harmonics, remove_shaft_harmonics
+from rotorcheck.signal.sidebands import correlation_scales, sideband_points
 from rotorcheck.sweep.format import Sweep, ls_frf, ls_frf_var
 from rotorcheck.sweep.hdf5io import read_sweep, sweep_sha256
 from rotorcheck.workflow.frf import MeasuredFRF
@@ -39,6 +40,15 @@ class SidebandFRF:
     order: np.ndarray
     frf: np.ndarray
     var: np.ndarray
+    speed_hz: float = 0.0
+    n_periods: np.ndarray | None = None  # (f,) periods each point averaged (the fewest over the patterns)
+
+    def statistic(self) -> tuple[np.ndarray, np.ndarray]:
+        """Per point (f,) ``sum 2|S|^2/var`` over its separable tones, divided by the tones' correlation scale (a
+        conservative chi-square; :func:`rotorcheck.signal.sidebands.sideband_points`), and the tones' count."""
+        scale = (None if self.n_periods is None else
+                 correlation_scales(self.frequency_hz, self.speed_hz, [int(k) for k in self.order], self.n_periods))
+        return sideband_points(self.frf, self.var, scale)
 
 
 def _sidebands(run: Any, cols: list[tuple[int, int]], keep: np.ndarray) -> SidebandFRF | None:
@@ -49,7 +59,8 @@ def _sidebands(run: Any, cols: list[tuple[int, int]], keep: np.ndarray) -> Sideb
     frf, var = sb  # (f, K, n_out, n_in)
     return SidebandFRF(np.asarray(run.frequency)[keep], np.asarray(run.sideband_order),
                        np.stack([frf[:, :, o, i] for o, i in cols], axis=2)[keep],
-                       np.stack([var[:, :, o, i] for o, i in cols], axis=2)[keep])
+                       np.stack([var[:, :, o, i] for o, i in cols], axis=2)[keep], abs(float(run.speed_rpm)) / 60.0,
+                       np.min(np.asarray(run.n_periods_exc), axis=1)[keep])
 
 
 @dataclass

@@ -17,7 +17,7 @@ from rotorcheck.robust.mu import Structure
 from rotorcheck.robust.noise import NoiseBound
 from rotorcheck.robust.validation import STATUS_EXCLUDED, ValidationResult
 from rotorcheck.signal.harmonics import ShaftHarmonics
-from rotorcheck.signal.sidebands import HEALTHY_SIDEBAND_ALPHA, sideband_points, sideband_scan
+from rotorcheck.signal.sidebands import HEALTHY_SIDEBAND_ALPHA, sideband_scan
 from rotorcheck.updating import Update, update_parameters
 from rotorcheck.variability import benign_parameters
 from rotorcheck.workflow.drift import DriftLearning, learn_drift_ranges
@@ -199,7 +199,7 @@ def healthy_sideband_p_value(runs: list[MeasuredRun]) -> float | None:
     """The sideband scan's smallest p-value over the healthy runs that hold sidebands (None: none does): small, the
     healthy rotor is not time-invariant (an asymmetric shaft, a crack already there) and the sideband test has no
     zero to test against."""
-    ps = [sideband_scan(*sideband_points(r.sidebands.frf, r.sidebands.var)).p_value for r in runs
+    ps = [sideband_scan(*r.sidebands.statistic()).p_value for r in runs
           if r.sidebands is not None and r.speed_rpm != 0.0]
     return min(ps) if ps else None
 

@@ -5,7 +5,8 @@ like) is time-invariant: driven at ``f`` it responds at ``f`` only. A breathing 
 turn and makes the rotor time-periodic, so the response also holds tones at ``f + k Omega`` (``Omega`` the shaft
 frequency). A sweep of version 3 stores them (:mod:`rotorcheck.signal.sidebands`). Their test needs no model,
 no drift model and no healthy sweep; only the noise: per point ``T_j = sum of 2 |S|^2 / var(S)`` over its
-separable tones (order k, channel pair), ``chi2(2 n_j)`` without a crack; the sums over windows of 2, 8 and 32
+separable tones (order k, channel pair) divided by the tones' correlation scale, at most ``chi2(2 n_j)`` in
+distribution without a crack (:func:`rotorcheck.signal.sidebands.sideband_points`); the sums over windows of 2, 8 and 32
 adjacent points and over every point (:func:`rotorcheck.signal.sidebands.sideband_scan`), each window's p-value
 times the number of windows (Bonferroni). Verdict: damage when that p-value is below the false-alarm rate.
 Per point: ``T_j`` at the family-wise ``confidence`` over the points (Bonferroni) certifies the point.
@@ -28,7 +29,7 @@ from rotorcheck.config import RigConfig
 from rotorcheck.errors import InputError
 from rotorcheck.lazy import lazy_module
 from rotorcheck.robust.validation import STATUS_EXCLUDED, STATUS_FAULT, STATUS_OK, DetectionResult, Verdict
-from rotorcheck.signal.sidebands import sideband_points, sideband_scan
+from rotorcheck.signal.sidebands import sideband_scan
 from rotorcheck.workflow.detectors.base import Detection, DetectorSettings
 from rotorcheck.workflow.measured import MeasuredRun
 
@@ -69,7 +70,7 @@ class SidebandDetector:
                              "grid: the sidebands cannot be interpolated (run without --resample, or use the default "
                              "rule, which tests them beside the joint test)")
         alpha = self.settings.false_alarm
-        t_point, n_point = sideband_points(sb.frf, sb.var)
+        t_point, n_point = sb.statistic()
         f = sb.frequency_hz
         scan = sideband_scan(t_point, n_point)
         if scan.n_tones == 0:
