@@ -168,12 +168,15 @@ def ingest(
 
 def sideband_orders(text: str) -> tuple[int, ...]:
     """``--sidebands``: distinct nonzero integers, comma separated ("" for none)."""
+    from rotorcheck.config.analysis import sideband_order_problem  # lazy: pydantic only when the command runs
+
     try:
         orders = tuple(int(k) for k in split_list([text]))
     except ValueError:
         raise InputError(None, "--sidebands", f"expected integers such as -2,-1,1,2, got {text!r}") from None
-    if any(k == 0 for k in orders) or len(set(orders)) != len(orders):
-        raise InputError(None, "--sidebands", f"orders must be distinct nonzero integers, got {text!r}")
+    why = sideband_order_problem(orders)
+    if why:
+        raise InputError(None, "--sidebands", f"orders must be distinct nonzero integers: {why}")
     return orders
 
 

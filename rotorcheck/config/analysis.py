@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 from pydantic import Field, model_validator
 
 from rotorcheck.config.base import Strict
@@ -25,9 +27,20 @@ class Measurement(Strict):
 
     @model_validator(mode="after")
     def _orders(self) -> Measurement:
-        if any(k == 0 for k in self.sideband_orders) or len(set(self.sideband_orders)) != len(self.sideband_orders):
-            raise ValueError("sideband_orders: distinct nonzero integers")
+        why = sideband_order_problem(self.sideband_orders)
+        if why:
+            raise ValueError(f"sideband_orders: {why}")
         return self
+
+
+def sideband_order_problem(orders: Sequence[int]) -> str | None:
+    """Why ``orders`` are not sideband orders k of ``f + k speed`` (None when they are: distinct and nonzero)."""
+    k = [int(x) for x in orders]
+    if 0 in k:
+        return f"order 0 is the excitation itself, not a sideband (got {k})"
+    if len(set(k)) != len(k):
+        return f"an order given twice (got {k}): give distinct orders"
+    return None
 
 
 class Analysis(Strict):

@@ -46,7 +46,7 @@ from rotorcheck.ingest.periodfit import fit_windows, period_design, remove_drift
 from rotorcheck.ingest.record import TimeRecord
 from rotorcheck.ingest.steps import find_steps, force_crossings
 from rotorcheck.signal.lockin import average_periods, shaft_harmonic_fit
-from rotorcheck.signal.sidebands import fit_tones, shaft_referenced, tone_set
+from rotorcheck.signal.sidebands import fit_tones, requested_orders, shaft_referenced, tone_set
 from rotorcheck.sweep.format import Channel, Run, Sweep, utc_now_iso
 
 __all__ = ["METHOD", "IngestResult", "StepPlan", "analyse", "clipped_periods", "plan_steps"]
@@ -303,12 +303,7 @@ def _sidebands(seg: TimeRecord, plan: StepPlan, win: np.ndarray, starts: np.ndar
                          f"t = {plan.t_ref_s:.6f} s (step at {f:.6g} Hz): a fitted tone at "
                          f"{tones.freq_hz.max():.6g} Hz is above the Nyquist frequency {0.5 * seg.fs_hz:g} Hz")
     amp, var = fit_tones(win.reshape(n_out, -1).T, tau, tones, drift_degree=2 if n_per >= 6 else 1)
-    ph = np.full((len(orders), n_out), np.nan + 1j * np.nan)
-    v = np.full((len(orders), n_out), np.nan)
-    for i, order in enumerate(orders):
-        j = tones.requested[int(order)]
-        if j >= 0:
-            ph[i], v[i] = amp[j], var[j]
+    ph, v = requested_orders(amp, tones, orders), requested_orders(var, tones, orders)
     theta = float(pulses.angle(np.array([plan.t_ref_s]))[0])
     return shaft_referenced(ph, orders, theta) * scales[None, :], v * (scales**2)[None, :]
 

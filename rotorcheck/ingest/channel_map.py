@@ -37,6 +37,7 @@ import yaml
 from pydantic import Field, StrictInt, ValidationError, model_validator
 
 from rotorcheck.config import MAX_RIG_BYTES, Strict, StrictLoader, first_error, load_config
+from rotorcheck.config.analysis import sideband_order_problem
 from rotorcheck.errors import InputError
 from rotorcheck.fileio import read_bounded_text
 
@@ -135,11 +136,9 @@ class AnalysisSettings(Strict):
 
     @model_validator(mode="after")
     def _orders(self) -> AnalysisSettings:
-        k = self.sideband_orders
-        if 0 in k:
-            raise ValueError(f"sideband_orders: order 0 is the excitation itself, not a sideband (got {k})")
-        if len(set(k)) != len(k):
-            raise ValueError(f"sideband_orders: an order given twice (got {k}): give distinct orders")
+        why = sideband_order_problem(self.sideband_orders)
+        if why:
+            raise ValueError(f"sideband_orders: {why}")
         return self
 
 

@@ -54,15 +54,21 @@ from rotorcheck.signal.lockin import SHAFT_ORDERS
 special = lazy_module("scipy.special")  # the chi-square tails
 
 __all__ = [
+    "COVARIANCE_SAMPLES",
     "FITTED_ORDERS",
+    "HEALTHY_SIDEBAND_ALPHA",
     "SCAN_WIDTHS",
     "SidebandScan",
     "ToneSet",
+    "correlation_scale",
+    "correlation_scales",
     "fit_tones",
     "point_times",
+    "requested_orders",
     "shaft_referenced",
     "sideband_points",
     "sideband_scan",
+    "sideband_statistic",
     "tone_covariance",
     "tone_design",
     "tone_phasors",
@@ -165,7 +171,7 @@ def fit_tones(y: np.ndarray, tau_s: np.ndarray, tones: ToneSet, drift_degree: in
     coef, *_ = np.linalg.lstsq(x, yy, rcond=None)
     dof = x.shape[0] - x.shape[1]
     s2 = np.sum((yy - x @ coef) ** 2, axis=0) / max(dof, 1)
-    return tone_phasors(coef, tones), tone_covariance(tau_s, tones, drift_degree)[:, None] * s2[None, :]
+    return tone_phasors(coef, tones), tone_variance(np.linalg.inv(x.T @ x), tones)[:, None] * s2[None, :]
 
 
 def tone_covariance(tau_s: np.ndarray, tones: ToneSet, drift_degree: int = 0) -> np.ndarray:
@@ -173,6 +179,19 @@ def tone_covariance(tau_s: np.ndarray, tones: ToneSet, drift_degree: int = 0) ->
     sample; a drift of degree ``drift_degree`` fitted too)."""
     x = tone_design(tau_s, tones.freq_hz, drift_degree)
     return tone_variance(np.linalg.inv(x.T @ x), tones)
+
+
+def requested_orders(values: np.ndarray, tones: ToneSet, orders: Sequence[int]) -> np.ndarray:
+    """The rows (K, ...) of ``values`` (g, ...; one row per fitted tone) that hold the requested ``orders``, NaN where
+    an order was not separable."""
+    v = np.asarray(values)
+    dtype = np.result_type(v.dtype, np.float64)
+    out = np.full((len(orders), *v.shape[1:]), np.nan + 1j * np.nan if dtype.kind == "c" else np.nan, dtype=dtype)
+    for i, k in enumerate(orders):
+        j = tones.requested[int(k)]
+        if j >= 0:
+            out[i] = v[j]
+    return out
 
 
 def shaft_referenced(phasor: np.ndarray, orders: Sequence[int], theta_rad: float) -> np.ndarray:
@@ -195,7 +214,7 @@ def correlation_scale(f_hz: float, speed_hz: float, orders: Sequence[int], n_per
     cov = np.linalg.inv(x.T @ x)
     g = tones.freq_hz.size
     cols = [1 + i for i in idx] + [1 + g + i for i in idx]
-    half = np.array([(cov[1 + i, 1 + i] + cov[1 + g + i, 1 + g + i]) / 2.0 for i in idx] * 2)
+    half = np.tile(tone_variance(cov, tones)[idx] / 2.0, 2)
     w = cov[np.ix_(cols, cols)] / np.sqrt(np.outer(half, half))
     return float(max(1.0, np.linalg.eigvalsh(w).max()))
 
@@ -205,6 +224,14 @@ def correlation_scales(frequency_hz: np.ndarray, speed_hz: float, orders: Sequen
     """:func:`correlation_scale` at every point (f,) (``n_periods`` (f,): the periods each point averaged)."""
     n = np.broadcast_to(np.asarray(n_periods), np.shape(frequency_hz))
     return np.array([correlation_scale(float(f), speed_hz, orders, int(k)) for f, k in zip(frequency_hz, n)])
+
+
+def sideband_statistic(frf: np.ndarray, var: np.ndarray, frequency_hz: np.ndarray, speed_hz: float,
+                       orders: Sequence[int], n_periods: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`sideband_points` of the sideband receptances ``frf`` (f, ...) m/N and variances ``var`` (m/N)^2 of a
+    run at ``frequency_hz`` (f,), shaft frequency ``speed_hz`` (Hz), ``n_periods`` (f,) a point, each point's sum
+    divided by its :func:`correlation_scale` (the conservative chi-square the tests use)."""
+    return sideband_points(frf, var, correlation_scales(frequency_hz, speed_hz, orders, n_periods))
 
 
 def sideband_points(frf: np.ndarray, var: np.ndarray, scale: np.ndarray | None = None

@@ -45,7 +45,15 @@ import numpy as np
 
 from rotorcheck.fe.frf import Receptance
 from rotorcheck.signal.lockin import average_periods, tone_lockin, white_noise_phasor_var
-from rotorcheck.signal.sidebands import point_times, tone_design, tone_phasors, tone_set, tone_variance
+from rotorcheck.signal.sidebands import (
+    point_times,
+    requested_orders,
+    shaft_referenced,
+    tone_design,
+    tone_phasors,
+    tone_set,
+    tone_variance,
+)
 from rotorcheck.sweep.format import Channel, Run
 
 __all__ = [
@@ -477,23 +485,22 @@ def measure_sidebands(plants: Sequence[Plant], f: np.ndarray, forces: np.ndarray
     var = np.full((nf, ne, kk, n_out), np.nan)
     for j, fj in enumerate(f):
         tones = tone_set(float(fj), shaft_hz, orders, float(fj) / float(n[j]))
+        design: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = {}  # by settle periods
         for e, plant in enumerate(plants):
-            tau = point_times(float(fj), int(settle[j, e]), int(n[j]), m)
+            s_je = int(settle[j, e])
+            if s_je not in design:  # the patterns of one frequency share their window: one design
+                tau = point_times(float(fj), s_je, int(n[j]), m)
+                x = tone_design(tau, tones.freq_hz)
+                cov = np.linalg.inv(x.T @ x)
+                design[s_je] = (tau, x, cov, np.linalg.cholesky(cov))
+            tau, x, cov, chol = design[s_je]
             freqs, amps = local_tones(plant, float(fj), complex(forces[j]), float(t0[j, e]), d_freq, d_amp)
             clean = np.real(np.exp(2j * np.pi * np.outer(tau, freqs)) @ amps)  # (samples, n_out)
-            x = tone_design(tau, tones.freq_hz)
-            cov = np.linalg.inv(x.T @ x)
-            coef = cov @ (x.T @ clean)
             z = gen.standard_normal((x.shape[1], n_out)) * np.sqrt(sigma2)[None, :]
-            amp = tone_phasors(coef + np.linalg.cholesky(cov) @ z, tones)
-            dvar = tone_variance(cov, tones)
+            amp = tone_phasors(cov @ (x.T @ clean) + chol @ z, tones)
             theta = shaft_angle_rad + 2.0 * np.pi * shaft_hz * float(t0[j, e])
-            for i, k in enumerate(orders):
-                idx = tones.requested[k]
-                if idx < 0:
-                    continue
-                phasor[j, e, i] = amp[idx] * np.exp(-1j * k * theta)
-                var[j, e, i] = dvar[idx] * sigma2
+            phasor[j, e] = shaft_referenced(requested_orders(amp, tones, orders), orders, theta)
+            var[j, e] = requested_orders(tone_variance(cov, tones)[:, None] * sigma2[None, :], tones, orders)
     return Sidebands(np.asarray(orders, dtype=np.int32), phasor, var)
 
 

@@ -21,7 +21,7 @@ import numpy as np
 from rotorcheck.robust.noise import noise_bound_from_variance, noise_bound_pooled
 from rotorcheck.signal.harmonics import lockin_resolution_hz, shaft_harmonic_points
 from rotorcheck.signal.lockin import SHAFT_ORDERS, remove_shaft_harmonics
-from rotorcheck.signal.sidebands import correlation_scales, sideband_points, sideband_scan
+from rotorcheck.signal.sidebands import sideband_scan, sideband_statistic
 from rotorcheck.sweep.format import Run, Sweep, sweep_schema_version
 
 __all__ = ["sidak_noise_bound", "summarize"]
@@ -112,10 +112,8 @@ def _sidebands(run: Run) -> dict[str, Any] | None:
     if sb is None:
         return None
     orders = [int(k) for k in np.asarray(run.sideband_order)]
-    scale = correlation_scales(np.asarray(run.frequency), abs(float(run.speed_rpm)) / 60.0, orders,
-                               np.min(np.asarray(run.n_periods_exc), axis=1))
-    t, n = sideband_points(sb[0], sb[1], scale)
-    scan = sideband_scan(t, n)
+    scan = sideband_scan(*sideband_statistic(sb[0], sb[1], np.asarray(run.frequency), abs(float(run.speed_rpm)) / 60.0,
+                                             orders, np.min(np.asarray(run.n_periods_exc), axis=1)))
     total = int(np.size(sb[0]))
     return {"orders": orders, "n_tones": scan.n_tones,
             "n_not_separable": total - scan.n_tones, "scan_p_value": scan.p_value}

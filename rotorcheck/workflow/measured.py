@@ -22,7 +22,7 @@ from rotorcheck.robust.measured import frf_estimate as _est
 from rotorcheck.robust.noise import point_miss
 from rotorcheck.signal.harmonics import ShaftHarmonics, lockin_resolution_hz, shaft_harmonic_points
 from rotorcheck.signal.lockin import SHAFT_ORDERS, fit_shaft_harmonics, remove_shaft_harmonics
-from rotorcheck.signal.sidebands import correlation_scales, sideband_points
+from rotorcheck.signal.sidebands import sideband_points, sideband_statistic
 from rotorcheck.sweep.format import Sweep, ls_frf, ls_frf_var
 from rotorcheck.sweep.hdf5io import read_sweep, sweep_sha256
 from rotorcheck.workflow.frf import MeasuredFRF
@@ -46,9 +46,10 @@ class SidebandFRF:
     def statistic(self) -> tuple[np.ndarray, np.ndarray]:
         """Per point (f,) ``sum 2|S|^2/var`` over its separable tones, divided by the tones' correlation scale (a
         conservative chi-square; :func:`rotorcheck.signal.sidebands.sideband_points`), and the tones' count."""
-        scale = (None if self.n_periods is None else
-                 correlation_scales(self.frequency_hz, self.speed_hz, [int(k) for k in self.order], self.n_periods))
-        return sideband_points(self.frf, self.var, scale)
+        if self.n_periods is None:
+            return sideband_points(self.frf, self.var)
+        return sideband_statistic(self.frf, self.var, self.frequency_hz, self.speed_hz, [int(k) for k in self.order],
+                                  self.n_periods)
 
 
 def _sidebands(run: Any, cols: list[tuple[int, int]], keep: np.ndarray) -> SidebandFRF | None:
