@@ -232,3 +232,19 @@ def test_correlated_tones_are_scaled_to_a_conservative_chi_square() -> None:
         q = stats.chi2.isf(a, 8)
         assert (t / lam > q).mean() <= a
     assert 1.5 * 1e-4 < (t > stats.chi2.isf(1e-4, 8)).mean() < 2.2 * 1e-4
+
+
+def test_the_default_tests_the_sidebands_of_a_resampled_run_on_their_own_grid() -> None:
+    """A new sweep on another grid, resampled onto the baseline's (detect --resample): the default rule still tests
+    its sidebands, on the sweep's own grid (before the mend this raised the --rule sideband refusal); a 30 % crack
+    is damage by the sideband test."""
+    rig = load_config(configs_dir() / "crack_rig.yaml")
+    grid = np.linspace(30.0, 120.0, 30)
+    healthy = _run(load_config(configs_dir() / "crack_rig_truth.yaml"), None, 1.0, seed=5, grid=grid)
+    base = workflow.validate(rig, [healthy], workflow.fit_noise(healthy)).baseline
+    own = np.linspace(30.0, 121.0, 37)
+    new = workflow.resample_run(_run(_truth_with_crack(0.3), "c", 1.0, seed=6, grid=own), grid)
+    det = workflow.detect(rig, base, new)
+    sb = det.found.sideband
+    assert sb is not None and sb.frequency_hz.size == own.size
+    assert sb.verdict.verdict == "damage" and det.verdict.verdict == "damage"

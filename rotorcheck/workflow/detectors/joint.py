@@ -135,7 +135,8 @@ class JointDetector:
         found.statistic, found.threshold, found.p_value = joint.statistic, joint.threshold, joint.p_value
         found.notes.extend(joint.notes)
         if with_sidebands:
-            sb = SidebandDetector(dataclasses.replace(self.settings, false_alarm=alpha)).detect(run)
+            # on the sidebands' own grid: a run resampled onto the baseline's keeps them as measured
+            sb = SidebandDetector(dataclasses.replace(self.settings, false_alarm=alpha)).test(run)
             if p_healthy is None:
                 sb.notes.append("the healthy sweeps held no sidebands: that the healthy rotor makes none is assumed, "
                                 "not checked")

@@ -59,16 +59,23 @@ class SidebandDetector:
         """Nothing to hold: the test uses the new sweep alone."""
 
     def detect(self, run: MeasuredRun) -> Detection:
-        """The verdict of :data:`SIDEBAND_RULE` for ``run`` and its points certified at the family-wise confidence."""
+        """:meth:`test` as the sweep's detection (``--rule sideband``): its per-point evidence is the run's, so a run
+        resampled onto another grid is refused (its sidebands stay on the sweep's own grid)."""
+        sb = run.sidebands
+        if sb is not None and sb.frequency_hz.shape != run.frequency_hz.shape:
+            raise InputError(run.path, f"/runs/{run.run_id}/frequency", "--rule sideband reads the sweep on its own "
+                             "grid: the sidebands cannot be interpolated (run without --resample, or use the default "
+                             "rule, which tests them beside the joint test)")
+        return self.test(run)
+
+    def test(self, run: MeasuredRun) -> Detection:
+        """The verdict of :data:`SIDEBAND_RULE` for ``run`` and its points certified at the family-wise confidence, on
+        the sidebands' own grid (``Detection.frequency_hz``)."""
         sb = run.sidebands
         if sb is None:
             raise InputError(run.path, f"/runs/{run.run_id}/sideband_phasor",
                              "the sweep holds no sidebands (sweep version 3, a rotating run): --rule sideband needs "
                              "them (simulate with measurement.sideband_orders, ingest with sideband_orders)")
-        if sb.frequency_hz.shape != run.frequency_hz.shape:
-            raise InputError(run.path, f"/runs/{run.run_id}/frequency", "--rule sideband reads the sweep on its own "
-                             "grid: the sidebands cannot be interpolated (run without --resample, or use the default "
-                             "rule, which tests them beside the joint test)")
         alpha = self.settings.false_alarm
         t_point, n_point = sb.statistic()
         f = sb.frequency_hz
