@@ -417,6 +417,11 @@ class Run:
                 or self.frf_var is not None or self.noise_source is not None)
 
     @property
+    def needs_v3(self) -> bool:
+        """True when the run holds any of the version-3 sideband datasets (the checks then ask for all three)."""
+        return any(getattr(self, a) is not None for a in SIDEBAND_ATTRS.values())
+
+    @property
     def has_sidebands(self) -> bool:
         """True when the run holds sideband phasors (version 3)."""
         return self.sideband_order is not None and self.sideband_phasor_exc is not None
@@ -436,10 +441,12 @@ class Run:
             return None
         assert self.sideband_phasor_exc is not None and self.sideband_var_exc is not None
         y = np.asarray(self.sideband_phasor_exc)
-        v = np.asarray(self.sideband_var_exc)
-        frf = np.stack([ls_frf(self.input_phasor_exc, y[:, :, k]) for k in range(y.shape[2])], axis=1)
-        var = np.stack([ls_frf_var(self.input_phasor_exc, v[:, :, k]) for k in range(v.shape[2])], axis=1)
-        return frf, var
+        nf, ne, kk, n_out = y.shape
+        # every order's outputs as more outputs of one least-squares solve (one pseudo-inverse per frequency)
+        frf = ls_frf(self.input_phasor_exc, y.reshape(nf, ne, kk * n_out))
+        var = ls_frf_var(self.input_phasor_exc, np.asarray(self.sideband_var_exc).reshape(nf, ne, kk * n_out))
+        n_in = frf.shape[2]
+        return frf.reshape(nf, kk, n_out, n_in), var.reshape(nf, kk, n_out, n_in)
 
     def frf_variance(self) -> np.ndarray | None:
         """``frf_var`` if stored, else propagated from the phasors (:func:`ls_frf_var`; for one
@@ -534,7 +541,7 @@ class Run:
 def sweep_schema_version(sweep: Sweep) -> int:
     """The version a writer uses: 3 where any run holds sidebands, 2 where any run needs it (:attr:`Run.needs_v2`),
     else 1."""
-    if any(getattr(r, a) is not None for r in sweep.runs.values() for a in SIDEBAND_ATTRS.values()):
+    if any(r.needs_v3 for r in sweep.runs.values()):
         return SCHEMA_VERSION_V3
     return SCHEMA_VERSION_V2 if any(r.needs_v2 for r in sweep.runs.values()) else SCHEMA_VERSION_V1
 

@@ -182,8 +182,7 @@ def validate_run(
     """
     base = f"/runs/{run.run_id}"
     if version is None:
-        has_sb = any(getattr(run, a) is not None for a in SIDEBAND_ATTRS.values())
-        version = SCHEMA_VERSION_V3 if has_sb else SCHEMA_VERSION_V2 if run.needs_v2 else SCHEMA_VERSION_V1
+        version = SCHEMA_VERSION_V3 if run.needs_v3 else SCHEMA_VERSION_V2 if run.needs_v2 else SCHEMA_VERSION_V1
     v1 = version == SCHEMA_VERSION_V1
     if not isinstance(run.run_id, str) or not _RUN_ID.match(run.run_id):
         raise SweepFormatError(
